@@ -1,0 +1,19 @@
+//! The coordinator: validates and plans a scenario, runs it over agent processes, and
+//! writes the outputs. The binary's `main` calls [`run_cli`].
+
+pub mod cli;
+pub mod error;
+pub mod logging;
+pub mod output;
+pub mod plan;
+pub mod validate;
+
+pub use error::CliError;
+
+/// Carry out one command line.
+pub fn run_cli(cli: cli::Cli) -> Result<(), CliError> {
+    match cli.command {
+        cli::Command::Validate(args) => validate::run(&args),
+        cli::Command::Plan(args) => plan::run(&args),
+    }
+}

@@ -1,0 +1,23 @@
+//! `coordinator plan [SCENARIO] [--out FILE]`: the centre path as CSV.
+
+use std::io::Write;
+
+use anyhow::Context;
+
+use crate::cli::PlanArgs;
+use crate::error::CliError;
+use crate::output;
+use crate::validate::load_and_plan;
+
+/// Run `plan`.
+pub fn run(args: &PlanArgs) -> Result<(), CliError> {
+    let (_, path) = load_and_plan(args.scenario.as_deref())?;
+    let csv = output::path_csv(&path).context("formatting the path")?;
+    match &args.out {
+        Some(file) => output::write_atomically(file, &csv)?,
+        None => std::io::stdout()
+            .write_all(&csv)
+            .context("writing the path to standard output")?,
+    }
+    Ok(())
+}

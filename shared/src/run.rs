@@ -1,0 +1,394 @@
+//! The record of a run: what every agent did at every step, the faults, and the figures
+//! the paper reports (deviation, Fig. 9) plus the safety figures (clearance).
+//!
+//! [`Recorder`] holds the world state during a run and is shared by the reference
+//! simulation and the coordinator, so both keep their books the same way.
+
+use serde::Serialize;
+
+use crate::geometry::{DiskGrid, Point, Pose};
+use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
+use crate::scenario::Scenario;
+use crate::turn::{Body, MAX_WAYPOINTS, Move, MoveStatus};
+
+/// One agent at the end of one step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AgentStep {
+    /// Where the agent stands.
+    pub position: Point,
+    /// Its ideal slot at this step.
+    pub slot: Point,
+    /// The best point it chose (its position when it did not move).
+    pub best: Point,
+    /// `||position - slot||`, in metres.
+    pub deviation_m: f64,
+    /// Distance to the nearest other body (obstacle or agent) minus both radii, in metres.
+    pub clearance_m: f64,
+    /// What it did this step.
+    pub status: MoveStatus,
+    /// Whether it still belongs to the formation (its process is alive).
+    pub alive: bool,
+    /// The polyline it followed this step (its position alone when it did not move).
+    pub waypoints: Vec<Point>,
+}
+
+/// Every agent at the end of one step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// Step number; step 0 is the formation at the start pose.
+    pub step: usize,
+    /// The formation centre.
+    pub centre: Pose,
+    /// One entry per agent, in agent order.
+    pub agents: Vec<AgentStep>,
+}
+
+impl Step {
+    /// Smallest clearance between any two bodies at the end of the step, in metres.
+    pub fn min_clearance_m(&self) -> f64 {
+        self.agents
+            .iter()
+            .map(|a| a.clearance_m)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Mean deviation of the live agents (the paper's red curve in Fig. 9); 0 when none
+    /// is alive.
+    pub fn mean_deviation_m(&self) -> f64 {
+        let live: Vec<f64> = self
+            .agents
+            .iter()
+            .filter(|a| a.alive)
+            .map(|a| a.deviation_m)
+            .collect();
+        if live.is_empty() {
+            0.0
+        } else {
+            live.iter().sum::<f64>() / live.len() as f64
+        }
+    }
+}
+
+/// What went wrong with an agent, and when.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Fault {
+    /// The agent.
+    pub agent: usize,
+    /// The step it happened in.
+    pub step: usize,
+    /// What happened, as a short name (`rejected`, `missed`, `dead`, `respawned`, ...).
+    pub kind: String,
+    /// Details for people.
+    pub detail: String,
+}
+
+/// A whole run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Run {
+    /// The scenario's name.
+    pub scenario: String,
+    /// The formation centre's poses, one per step.
+    pub centre_path: Vec<Pose>,
+    /// Every step recorded, starting with step 0.
+    pub steps: Vec<Step>,
+    /// Every fault, in order.
+    pub faults: Vec<Fault>,
+    /// Whether the run went through the whole centre path.
+    pub completed: bool,
+}
+
+/// The figures of a run (the `summary.json` keys that do not depend on timing).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Number of agents.
+    pub agents: usize,
+    /// Number of steps recorded after step 0.
+    pub steps: usize,
+    /// Whether the run went through the whole centre path.
+    pub completed: bool,
+    /// Number of (step, agent) records in which the agent overlaps another body (an
+    /// obstacle or an agent) at the end of the step: 0 in a safe run.
+    pub collisions: usize,
+    /// Smallest clearance between two bodies over the run, in metres.
+    pub min_clearance_m: f64,
+    /// Mean of the per-step mean deviation of the live agents, in metres.
+    pub mean_deviation_m: f64,
+    /// Largest deviation of a live agent over the run, in metres.
+    pub max_deviation_m: f64,
+    /// Mean deviation at the last step, in metres.
+    pub final_mean_deviation_m: f64,
+    /// Every fault.
+    pub faults: Vec<Fault>,
+}
+
+impl Run {
+    /// The run's figures.
+    pub fn summary(&self) -> Summary {
+        let moving = &self.steps[self.steps.len().min(1)..];
+        let mean_deviation_m = if moving.is_empty() {
+            0.0
+        } else {
+            moving.iter().map(Step::mean_deviation_m).sum::<f64>() / moving.len() as f64
+        };
+        let collisions = self
+            .steps
+            .iter()
+            .map(|s| {
+                s.agents
+                    .iter()
+                    .filter(|a| a.clearance_m < -SAFETY_TOLERANCE_M)
+                    .count()
+            })
+            .sum();
+        Summary {
+            scenario: self.scenario.clone(),
+            agents: self.steps.first().map_or(0, |s| s.agents.len()),
+            steps: self.steps.len().saturating_sub(1),
+            completed: self.completed,
+            collisions,
+            min_clearance_m: self
+                .steps
+                .iter()
+                .map(Step::min_clearance_m)
+                .fold(f64::INFINITY, f64::min),
+            mean_deviation_m,
+            max_deviation_m: self
+                .steps
+                .iter()
+                .flat_map(|s| s.agents.iter().filter(|a| a.alive).map(|a| a.deviation_m))
+                .fold(0.0, f64::max),
+            final_mean_deviation_m: self.steps.last().map_or(0.0, Step::mean_deviation_m),
+            faults: self.faults.clone(),
+        }
+    }
+}
+
+/// The world during a run: where every agent stands, who is alive, and the record so far.
+#[derive(Debug)]
+pub struct Recorder<'a> {
+    scenario: &'a Scenario,
+    /// Obstacles with their true radii, for the safety check and clearances.
+    obstacles: DiskGrid,
+    bodies: Vec<Body>,
+    alive: Vec<bool>,
+    /// This step's moves, one per agent, until the step ends.
+    pending: Vec<Option<Move>>,
+    run: Run,
+}
+
+impl<'a> Recorder<'a> {
+    /// Start a run of `scenario` along `centre_path`: every agent at its ideal slot at
+    /// the first pose, recorded as step 0.
+    pub fn new(scenario: &'a Scenario, centre_path: &[Pose]) -> Self {
+        let start = centre_path.first().copied().unwrap_or(scenario.path.start);
+        let bodies: Vec<Body> = scenario
+            .agents
+            .iter()
+            .map(|a| Body {
+                position: a.slot.ideal_position(&start),
+                radius_m: a.radius_m,
+            })
+            .collect();
+        let n = bodies.len();
+        let mut recorder = Self {
+            scenario,
+            obstacles: DiskGrid::new(scenario.obstacles.clone()),
+            bodies,
+            alive: vec![true; n],
+            pending: vec![None; n],
+            run: Run {
+                scenario: scenario.name.clone(),
+                centre_path: centre_path.to_vec(),
+                steps: Vec::new(),
+                faults: Vec::new(),
+                completed: false,
+            },
+        };
+        for (i, b) in recorder.bodies.clone().iter().enumerate() {
+            recorder.pending[i] = Some(Move {
+                slot: b.position,
+                best: b.position,
+                status: MoveStatus::AtSlot,
+                waypoints: vec![b.position],
+            });
+        }
+        recorder.end_step(0);
+        recorder
+    }
+
+    /// The scenario being run.
+    pub fn scenario(&self) -> &Scenario {
+        self.scenario
+    }
+
+    /// Every agent's body, in agent order.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// Whether each agent is alive, in agent order.
+    pub fn alive(&self) -> &[bool] {
+        &self.alive
+    }
+
+    /// Every body but `agent`'s: the other agents, dead or alive, which stand still.
+    pub fn others(&self, agent: usize) -> Vec<Body> {
+        self.bodies
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != agent)
+            .map(|(_, b)| *b)
+            .collect()
+    }
+
+    /// The steps recorded so far.
+    pub fn steps(&self) -> &[Step] {
+        &self.run.steps
+    }
+
+    /// Check `mv` against the safety invariant (plain geometry) and, if it holds, move
+    /// `agent` to `mv.best`. A violating move is rejected: the agent stays where it
+    /// was, and the rejection is recorded as a fault of `step`.
+    pub fn submit(&mut self, step: usize, agent: usize, mv: Move) -> Result<(), Violation> {
+        let body = self.bodies[agent];
+        let others = self.others(agent);
+        let checked = safety::check_move(
+            &self.scenario.field,
+            &self.obstacles,
+            &others,
+            body.radius_m,
+            &body.position,
+            &mv.waypoints,
+            MAX_WAYPOINTS,
+        )
+        .and_then(|()| {
+            // The last waypoint is where the agent ends up; it must be the best point.
+            match mv.waypoints.last() {
+                Some(end) if *end == mv.best => Ok(()),
+                _ => Err(Violation::BadLength {
+                    count: mv.waypoints.len(),
+                }),
+            }
+        });
+        match checked {
+            Ok(()) => {
+                self.bodies[agent].position = mv.best;
+                self.pending[agent] = Some(mv);
+                Ok(())
+            }
+            Err(v) => {
+                self.reject(step, agent, mv.slot, "rejected", v.to_string());
+                Err(v)
+            }
+        }
+    }
+
+    /// Record that `agent` did not move this step (its move was refused or never came):
+    /// it stays where it was with `status` `kind`, and a fault is recorded.
+    pub fn reject(&mut self, step: usize, agent: usize, slot: Point, kind: &str, detail: String) {
+        let here = self.bodies[agent].position;
+        let status = match kind {
+            "missed" => MoveStatus::Missed,
+            "dead" => MoveStatus::Dead,
+            _ => MoveStatus::Rejected,
+        };
+        self.pending[agent] = Some(Move {
+            slot,
+            best: here,
+            status,
+            waypoints: vec![here],
+        });
+        self.run.faults.push(Fault {
+            agent,
+            step,
+            kind: kind.to_string(),
+            detail,
+        });
+    }
+
+    /// Record a fault that does not change the agent's move (for example a respawn).
+    pub fn note_fault(&mut self, step: usize, agent: usize, kind: &str, detail: String) {
+        self.run.faults.push(Fault {
+            agent,
+            step,
+            kind: kind.to_string(),
+            detail,
+        });
+    }
+
+    /// Take `agent` out of the formation: it stays as a static obstacle where it stands.
+    pub fn mark_dead(&mut self, agent: usize) {
+        self.alive[agent] = false;
+    }
+
+    /// Put `agent` back into the formation (a replacement process took its place).
+    pub fn mark_alive(&mut self, agent: usize) {
+        self.alive[agent] = true;
+    }
+
+    /// Close step `step`: record every agent's row with its deviation and clearance.
+    pub fn end_step(&mut self, step: usize) {
+        let centre = self
+            .run
+            .centre_path
+            .get(step)
+            .copied()
+            .unwrap_or(self.scenario.path.start);
+        let reach_m = self.obstacles.max_radius_m()
+            + self
+                .bodies
+                .iter()
+                .map(|b| b.radius_m)
+                .fold(0.0, f64::max);
+        let mut agents = Vec::with_capacity(self.bodies.len());
+        for i in 0..self.bodies.len() {
+            let body = self.bodies[i];
+            let slot = self.scenario.agents[i].slot.ideal_position(&centre);
+            let mv = self.pending[i].take().unwrap_or(Move {
+                slot,
+                best: body.position,
+                status: if self.alive[i] {
+                    MoveStatus::Stayed
+                } else {
+                    MoveStatus::Dead
+                },
+                waypoints: vec![body.position],
+            });
+            let others = self.others(i);
+            // Obstacles farther than the largest radii sum cannot be the nearest overlap;
+            // look a little farther so clearance is reported for near misses too.
+            let (to_obstacle, to_other) =
+                safety::clearances_m(&body, &self.obstacles, &others, reach_m + 10.0);
+            agents.push(AgentStep {
+                position: body.position,
+                slot,
+                best: mv.best,
+                deviation_m: (body.position - slot).norm(),
+                clearance_m: to_obstacle.min(to_other),
+                status: mv.status,
+                alive: self.alive[i],
+                waypoints: mv.waypoints,
+            });
+        }
+        self.run.steps.push(Step {
+            step,
+            centre,
+            agents,
+        });
+    }
+
+    /// End the run; `completed` says whether it went through the whole path.
+    pub fn finish(mut self, completed: bool) -> Run {
+        self.run.completed = completed;
+        self.run
+    }
+
+    /// The run so far, marked not completed (for a run stopped early).
+    pub fn snapshot(&self) -> Run {
+        let mut run = self.run.clone();
+        run.completed = false;
+        run
+    }
+}

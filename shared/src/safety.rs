@@ -1,0 +1,190 @@
+//! The safety invariant, checked with plain geometry: for every pair of bodies a, b at
+//! every instant, `||p_a - p_b|| >= r_a + r_b` (to [`SAFETY_TOLERANCE_M`]).
+//!
+//! This check knows nothing of the planners' inflation, margins or arcs: it takes the
+//! polyline a body follows and the true radii. The coordinator's monitor is a second,
+//! independent implementation of the same check on parry.
+
+use std::ops::ControlFlow;
+
+use crate::geometry::{DiskGrid, Field, Point, Vector, distance_point_segment};
+use crate::turn::Body;
+
+/// How far a body may overlap another before it counts as a collision, in metres.
+pub const SAFETY_TOLERANCE_M: f64 = 1e-9;
+
+/// Why a move breaks the safety invariant.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum Violation {
+    /// A waypoint is NaN or infinite.
+    #[error("waypoint {index} is not a finite point")]
+    NotFinite {
+        /// Index of the waypoint.
+        index: usize,
+    },
+    /// The move has no waypoint or more than allowed.
+    #[error("the move has {count} waypoints")]
+    BadLength {
+        /// How many waypoints it has.
+        count: usize,
+    },
+    /// The first waypoint is not where the body stands.
+    #[error("the move starts {offset_m} m away from the body")]
+    Teleport {
+        /// Distance from the body's position to the first waypoint.
+        offset_m: f64,
+    },
+    /// The body would leave the field.
+    #[error("waypoint {index} takes the body {overshoot_m} m outside the field")]
+    OutsideField {
+        /// Index of the waypoint.
+        index: usize,
+        /// How far the body's edge would stick out.
+        overshoot_m: f64,
+    },
+    /// The body would overlap an obstacle.
+    #[error("segment {segment} overlaps obstacle {obstacle} by {overlap_m} m")]
+    HitsObstacle {
+        /// Index of the segment (waypoint `segment` to `segment + 1`).
+        segment: usize,
+        /// Index of the obstacle.
+        obstacle: usize,
+        /// Overlap depth.
+        overlap_m: f64,
+    },
+    /// The body would overlap another body.
+    #[error("segment {segment} overlaps body {body} by {overlap_m} m")]
+    HitsBody {
+        /// Index of the segment.
+        segment: usize,
+        /// Index of the other body in the list given.
+        body: usize,
+        /// Overlap depth.
+        overlap_m: f64,
+    },
+}
+
+/// Check that a body of radius `radius_m` standing at `from` can follow `waypoints`
+/// (a polyline starting at `from`) without leaving `field` or overlapping an obstacle of
+/// `obstacles` (true radii) or one of `others` (which stand still).
+pub fn check_move(
+    field: &Field,
+    obstacles: &DiskGrid,
+    others: &[Body],
+    radius_m: f64,
+    from: &Point,
+    waypoints: &[Point],
+    max_waypoints: usize,
+) -> Result<(), Violation> {
+    if waypoints.is_empty() || waypoints.len() > max_waypoints {
+        return Err(Violation::BadLength {
+            count: waypoints.len(),
+        });
+    }
+    if let Some(index) = waypoints
+        .iter()
+        .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+    {
+        return Err(Violation::NotFinite { index });
+    }
+    let offset_m = (waypoints[0] - from).norm();
+    if offset_m > SAFETY_TOLERANCE_M {
+        return Err(Violation::Teleport { offset_m });
+    }
+    for (index, p) in waypoints.iter().enumerate() {
+        let overshoot_m = radius_m - field.signed_inset_m(p);
+        if overshoot_m > SAFETY_TOLERANCE_M {
+            return Err(Violation::OutsideField { index, overshoot_m });
+        }
+    }
+    let single = [waypoints[0], waypoints[0]];
+    let segments: &[Point] = if waypoints.len() == 1 { &single } else { waypoints };
+    for (segment, w) in segments.windows(2).enumerate() {
+        let (a, b) = (&w[0], &w[1]);
+        let reach = Vector::new(radius_m, radius_m);
+        let min = Point::new(a.x.min(b.x), a.y.min(b.y)) - reach;
+        let max = Point::new(a.x.max(b.x), a.y.max(b.y)) + reach;
+        let hit = obstacles.visit_box(&min, &max, |obstacle, o| {
+            let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.center, a, b);
+            if overlap_m > SAFETY_TOLERANCE_M {
+                ControlFlow::Break(Violation::HitsObstacle {
+                    segment,
+                    obstacle,
+                    overlap_m,
+                })
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        if let ControlFlow::Break(v) = hit {
+            return Err(v);
+        }
+        for (body, o) in others.iter().enumerate() {
+            let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.position, a, b);
+            if overlap_m > SAFETY_TOLERANCE_M {
+                return Err(Violation::HitsBody {
+                    segment,
+                    body,
+                    overlap_m,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Clearance of `body` (distance minus radii) to the nearest obstacle and to the nearest
+/// of `others`, looking for obstacles within `reach_m`: `(obstacle, other)`, each
+/// `f64::INFINITY` when there is none.
+pub fn clearances_m(body: &Body, obstacles: &DiskGrid, others: &[Body], reach_m: f64) -> (f64, f64) {
+    let mut to_obstacle = f64::INFINITY;
+    let _ = obstacles.visit_near(&body.position, reach_m, |_, o| {
+        to_obstacle = to_obstacle.min((body.position - o.center).norm() - o.radius_m - body.radius_m);
+        ControlFlow::<()>::Continue(())
+    });
+    let to_other = others
+        .iter()
+        .map(|o| (body.position - o.position).norm() - o.radius_m - body.radius_m)
+        .fold(f64::INFINITY, f64::min);
+    (to_obstacle, to_other)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Disk;
+
+    #[test]
+    fn a_move_through_an_obstacle_or_a_body_is_a_violation() {
+        let field = Field::new(10.0, 10.0);
+        let obstacles = DiskGrid::new(vec![Disk::new(5.0, 5.0, 1.0)]);
+        let from = Point::new(1.0, 5.0);
+        let through = [from, Point::new(9.0, 5.0)];
+        assert!(matches!(
+            check_move(&field, &obstacles, &[], 0.3, &from, &through, 8),
+            Err(Violation::HitsObstacle { obstacle: 0, .. })
+        ));
+        let around = [from, Point::new(5.0, 6.3), Point::new(9.0, 5.0)];
+        assert!(check_move(&field, &obstacles, &[], 0.3, &from, &around, 8).is_ok());
+        let other = Body { position: Point::new(7.0, 5.8), radius_m: 0.3 };
+        assert!(matches!(
+            check_move(&field, &obstacles, &[other], 0.3, &from, &around, 8),
+            Err(Violation::HitsBody { body: 0, .. })
+        ));
+        let nan = [from, Point::new(f64::NAN, 1.0)];
+        assert!(matches!(
+            check_move(&field, &obstacles, &[], 0.3, &from, &nan, 8),
+            Err(Violation::NotFinite { index: 1 })
+        ));
+        let jump = [Point::new(2.0, 2.0)];
+        assert!(matches!(
+            check_move(&field, &obstacles, &[], 0.3, &from, &jump, 8),
+            Err(Violation::Teleport { .. })
+        ));
+        let out = [from, Point::new(0.1, 5.0)];
+        assert!(matches!(
+            check_move(&field, &obstacles, &[], 0.3, &from, &out, 8),
+            Err(Violation::OutsideField { index: 1, .. })
+        ));
+    }
+}

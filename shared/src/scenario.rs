@@ -1,0 +1,741 @@
+//! The scenario: field, obstacles, formation and path settings, read from TOML and
+//! validated into a [`Scenario`] every other part can trust.
+//!
+//! Every error names the file and the field: `FILE: FIELD: REASON` (DESIGN.md section 5).
+
+use std::path::Path;
+
+use rand::{Rng, SeedableRng};
+use serde::Deserialize;
+
+use crate::formation::Slot;
+use crate::geometry::{Disk, Field, Point, Pose};
+
+/// Most agents a scenario may hold (the wire types' fixed capacity).
+pub const MAX_AGENTS: usize = 256;
+/// Most obstacles a scenario may hold (the wire types' fixed capacity).
+pub const MAX_OBSTACLES: usize = 16_384;
+/// Largest field side accepted, in metres: beyond this the numbers stop being a field.
+pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
+/// Bound on the number of centre steps: `step_m` may not cut the field's diagonal into
+/// more than a quarter of this many steps.
+pub const MAX_STEPS: usize = 200_000;
+
+/// The paper's example (section III), embedded so `coordinator run` works with no file.
+pub const PAPER_SCENARIO_TOML: &str = include_str!("../../scenarios/paper.toml");
+/// The name shown for the embedded paper scenario in messages.
+pub const PAPER_SCENARIO_NAME: &str = "<embedded paper.toml>";
+
+/// Which controller moves the agents.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlannerKind {
+    /// The paper's method: exact best point, then a shortest collision-free path to it.
+    #[default]
+    BestPoint,
+}
+
+/// A validated scenario: every number finite and in range, every body placed legally.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scenario {
+    /// Name, used in output folder names and plot titles.
+    pub name: String,
+    /// Seed for every random choice.
+    pub seed: u64,
+    /// The playing field.
+    pub field: Field,
+    /// Every obstacle with its true (not inflated) radius, explicit ones first, then the
+    /// generated ones.
+    pub obstacles: Vec<Disk>,
+    /// The agents, in turn order.
+    pub agents: Vec<AgentSpec>,
+    /// Formation centre path settings.
+    pub path: PathSpec,
+    /// The controller.
+    pub planner: PlannerKind,
+}
+
+/// One agent: its formation slot and body radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AgentSpec {
+    /// Its slot in the formation.
+    pub slot: Slot,
+    /// Radius of its body, in metres.
+    pub radius_m: f64,
+}
+
+/// Settings of the formation centre's path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSpec {
+    /// Start pose of the centre.
+    pub start: Pose,
+    /// Goal pose of the centre.
+    pub goal: Pose,
+    /// Minimum turning radius of the centre, in metres.
+    pub turning_radius_m: f64,
+    /// Centre travel between two steps, in metres.
+    pub step_m: f64,
+    /// Clearance the centre keeps from every obstacle boundary and field edge, in metres.
+    pub center_clearance_m: f64,
+    /// Whether the centre may drive backwards.
+    pub allow_reverse: bool,
+}
+
+/// Why a scenario was rejected. Every variant displays as `FILE: FIELD: REASON`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read (missing, a directory, not UTF-8, ...).
+    #[error("{file}: (file): {reason}")]
+    Read {
+        /// The file as given.
+        file: String,
+        /// What went wrong.
+        reason: String,
+    },
+    /// The text is not a scenario: TOML syntax, an unknown field, a missing field or a
+    /// value of the wrong type.
+    #[error("{file}: {field}: {reason}")]
+    Parse {
+        /// The file as given.
+        file: String,
+        /// Dotted path of the offending field, or `line L, column C` for syntax errors.
+        field: String,
+        /// What went wrong.
+        reason: String,
+    },
+    /// The values are well-formed but not a legal scenario (NaN, a negative size, an
+    /// obstacle outside the field, overlapping slots, a blocked start, no path, ...).
+    #[error("{file}: {field}: {reason}")]
+    Invalid {
+        /// The file as given.
+        file: String,
+        /// Dotted path of the offending field.
+        field: String,
+        /// What went wrong.
+        reason: String,
+    },
+}
+
+impl ScenarioError {
+    /// The field the error names (`(file)` for read errors).
+    pub fn field(&self) -> &str {
+        match self {
+            Self::Read { .. } => "(file)",
+            Self::Parse { field, .. } | Self::Invalid { field, .. } => field,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The file format (serde side). Units are in the names; unknown fields are errors.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioFile {
+    name: String,
+    #[serde(default)]
+    seed: u64,
+    field: FieldFile,
+    #[serde(default)]
+    obstacles: ObstaclesFile,
+    formation: FormationFile,
+    path: PathFile,
+    #[serde(default)]
+    planner: PlannerKind,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FieldFile {
+    width_m: f64,
+    height_m: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObstaclesFile {
+    #[serde(default = "default_obstacle_radius_m")]
+    radius_m: f64,
+    #[serde(default)]
+    positions_m: Vec<[f64; 2]>,
+    #[serde(default)]
+    disk: Vec<DiskFile>,
+    random: Option<RandomFile>,
+}
+
+impl Default for ObstaclesFile {
+    fn default() -> Self {
+        Self {
+            radius_m: default_obstacle_radius_m(),
+            positions_m: Vec::new(),
+            disk: Vec::new(),
+            random: None,
+        }
+    }
+}
+
+/// The paper's Assumption 4: one obstacle radius for all, 1 m unless the file says.
+fn default_obstacle_radius_m() -> f64 {
+    1.0
+}
+
+/// The paper's Assumption 3: one agent radius for all, 0.3 m unless the file says.
+fn default_agent_radius_m() -> f64 {
+    0.3
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DiskFile {
+    x_m: f64,
+    y_m: f64,
+    radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RandomFile {
+    count: usize,
+    #[serde(default)]
+    keep_clear_m: f64,
+    radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FormationFile {
+    #[serde(default = "default_agent_radius_m")]
+    agent_radius_m: f64,
+    slots: Vec<SlotFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SlotFile {
+    r_m: f64,
+    theta_deg: f64,
+    radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathFile {
+    start: PoseFile,
+    goal: PoseFile,
+    turning_radius_m: f64,
+    step_m: f64,
+    center_clearance_m: f64,
+    #[serde(default)]
+    allow_reverse: bool,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+struct PoseFile {
+    x_m: f64,
+    y_m: f64,
+    heading_deg: f64,
+}
+
+impl PoseFile {
+    fn pose(&self) -> Pose {
+        Pose::new(self.x_m, self.y_m, self.heading_deg.to_radians())
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+
+impl Scenario {
+    /// Read and validate the scenario file at `path`.
+    pub fn load(path: &Path) -> Result<Self, ScenarioError> {
+        let file = path.display().to_string();
+        if path.is_dir() {
+            return Err(ScenarioError::Read {
+                file,
+                reason: "is a directory, not a scenario file".into(),
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
+            file: file.clone(),
+            reason: e.to_string(),
+        })?;
+        Self::parse(&text, &file)
+    }
+
+    /// The paper's example, embedded in the library.
+    pub fn paper() -> Self {
+        match Self::parse(PAPER_SCENARIO_TOML, PAPER_SCENARIO_NAME) {
+            Ok(s) => s,
+            // The embedded file is checked by the test suite; reaching this is a build bug.
+            Err(e) => panic!("embedded paper scenario is invalid: {e}"),
+        }
+    }
+
+    /// Parse and validate scenario text; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Self, ScenarioError> {
+        let raw = parse_file(text, file)?;
+        Checker { file }.check(raw)
+    }
+
+    /// Number of agents.
+    pub fn agent_count(&self) -> usize {
+        self.agents.len()
+    }
+}
+
+fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
+    let syntax = |e: toml::de::Error| ScenarioError::Parse {
+        file: file.to_string(),
+        field: e
+            .span()
+            .map(|s| line_column(text, s.start))
+            .unwrap_or_else(|| "(syntax)".into()),
+        reason: one_line(e.message()),
+    };
+    let deserializer = toml::Deserializer::parse(text).map_err(syntax)?;
+    serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        ScenarioError::Parse {
+            file: file.to_string(),
+            field: if path == "." || path.is_empty() {
+                inner
+                    .span()
+                    .map(|s| line_column(text, s.start))
+                    .unwrap_or_else(|| "(top level)".into())
+            } else {
+                path
+            },
+            reason: one_line(inner.message()),
+        }
+    })
+}
+
+fn line_column(text: &str, offset: usize) -> String {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    format!("line {line}, column {column}")
+}
+
+fn one_line(message: &str) -> String {
+    message.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    fn invalid(&self, field: impl Into<String>, reason: impl Into<String>) -> ScenarioError {
+        ScenarioError::Invalid {
+            file: self.file.to_string(),
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+
+    fn finite(&self, field: &str, v: f64) -> Result<f64, ScenarioError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.invalid(field, format!("must be a finite number, got {v}")))
+        }
+    }
+
+    fn positive(&self, field: &str, v: f64, max: f64) -> Result<f64, ScenarioError> {
+        self.finite(field, v)?;
+        if v <= 0.0 {
+            return Err(self.invalid(field, format!("must be positive, got {v}")));
+        }
+        if v > max {
+            return Err(self.invalid(field, format!("{v} is larger than the limit {max}")));
+        }
+        Ok(v)
+    }
+
+    fn non_negative(&self, field: &str, v: f64, max: f64) -> Result<f64, ScenarioError> {
+        self.finite(field, v)?;
+        if v < 0.0 {
+            return Err(self.invalid(field, format!("must not be negative, got {v}")));
+        }
+        if v > max {
+            return Err(self.invalid(field, format!("{v} is larger than the limit {max}")));
+        }
+        Ok(v)
+    }
+
+    fn pose(&self, field: &str, p: &PoseFile, area: &Field) -> Result<Pose, ScenarioError> {
+        self.finite(&format!("{field}.x_m"), p.x_m)?;
+        self.finite(&format!("{field}.y_m"), p.y_m)?;
+        self.finite(&format!("{field}.heading_deg"), p.heading_deg)?;
+        if !area.contains(&Point::new(p.x_m, p.y_m), 0.0) {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "({}, {}) is outside the {} x {} m field",
+                    p.x_m, p.y_m, area.width_m, area.height_m
+                ),
+            ));
+        }
+        Ok(p.pose())
+    }
+
+    fn check(&self, raw: ScenarioFile) -> Result<Scenario, ScenarioError> {
+        if raw.name.trim().is_empty() {
+            return Err(self.invalid("name", "must not be empty"));
+        }
+        let width_m = self.positive("field.width_m", raw.field.width_m, MAX_FIELD_SIDE_M)?;
+        let height_m = self.positive("field.height_m", raw.field.height_m, MAX_FIELD_SIDE_M)?;
+        let field = Field::new(width_m, height_m);
+        let side_m = width_m.max(height_m);
+
+        // Path settings first: random obstacles keep clear of the start and goal.
+        let p = &raw.path;
+        let start = self.pose("path.start", &p.start, &field)?;
+        let goal = self.pose("path.goal", &p.goal, &field)?;
+        let path = PathSpec {
+            start,
+            goal,
+            turning_radius_m: self.positive("path.turning_radius_m", p.turning_radius_m, side_m)?,
+            step_m: self.positive("path.step_m", p.step_m, side_m)?,
+            center_clearance_m: self.non_negative(
+                "path.center_clearance_m",
+                p.center_clearance_m,
+                0.5 * width_m.min(height_m),
+            )?,
+            allow_reverse: p.allow_reverse,
+        };
+        let diagonal_m = width_m.hypot(height_m);
+        if diagonal_m / path.step_m > MAX_STEPS as f64 / 4.0 {
+            return Err(self.invalid(
+                "path.step_m",
+                format!(
+                    "{} m is too small for a {width_m} x {height_m} m field (more than {MAX_STEPS} steps)",
+                    path.step_m
+                ),
+            ));
+        }
+
+        let obstacles = self.obstacles(&raw.obstacles, &field, &path, raw.seed)?;
+        let agents = self.agents(&raw.formation, &field)?;
+        self.start_and_goal_clear(&obstacles, &path)?;
+        self.formation_fits_at_start(&agents, &obstacles, &field, &path)?;
+
+        Ok(Scenario {
+            name: raw.name,
+            seed: raw.seed,
+            field,
+            obstacles,
+            agents,
+            path,
+            planner: raw.planner,
+        })
+    }
+
+    fn obstacles(
+        &self,
+        raw: &ObstaclesFile,
+        field: &Field,
+        path: &PathSpec,
+        seed: u64,
+    ) -> Result<Vec<Disk>, ScenarioError> {
+        let side_m = field.width_m.max(field.height_m);
+        let default_radius_m = self.positive("obstacles.radius_m", raw.radius_m, side_m)?;
+        let mut obstacles = Vec::new();
+        let mut place = |name: String, x_m: f64, y_m: f64, radius_m: f64| {
+            self.finite(&format!("{name}.x"), x_m)?;
+            self.finite(&format!("{name}.y"), y_m)?;
+            if !field.contains(&Point::new(x_m, y_m), 0.0) {
+                return Err(self.invalid(
+                    name,
+                    format!("obstacle centre ({x_m}, {y_m}) is outside the field"),
+                ));
+            }
+            obstacles.push(Disk::new(x_m, y_m, radius_m));
+            Ok(())
+        };
+        for (i, [x_m, y_m]) in raw.positions_m.iter().enumerate() {
+            place(format!("obstacles.positions_m[{i}]"), *x_m, *y_m, default_radius_m)?;
+        }
+        for (i, d) in raw.disk.iter().enumerate() {
+            let name = format!("obstacles.disk[{i}]");
+            let radius_m = match d.radius_m {
+                Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
+                None => default_radius_m,
+            };
+            place(name, d.x_m, d.y_m, radius_m)?;
+        }
+        if let Some(random) = &raw.random {
+            let explicit = obstacles.len();
+            if random.count > MAX_OBSTACLES.saturating_sub(explicit) {
+                return Err(self.invalid(
+                    "obstacles.random.count",
+                    format!(
+                        "{} obstacles exceed the capacity of {MAX_OBSTACLES} (with {explicit} explicit ones)",
+                        random.count
+                    ),
+                ));
+            }
+            let radius_m = match random.radius_m {
+                Some(r) => self.positive("obstacles.random.radius_m", r, side_m)?,
+                None => default_radius_m,
+            };
+            let keep_clear_m =
+                self.non_negative("obstacles.random.keep_clear_m", random.keep_clear_m, side_m)?;
+            obstacles.extend(self.random_obstacles(
+                random.count,
+                radius_m,
+                keep_clear_m,
+                field,
+                path,
+                seed,
+            )?);
+        }
+        if obstacles.len() > MAX_OBSTACLES {
+            return Err(self.invalid(
+                "obstacles",
+                format!("{} obstacles exceed the capacity of {MAX_OBSTACLES}", obstacles.len()),
+            ));
+        }
+        Ok(obstacles)
+    }
+
+    /// Uniformly placed obstacles whose disks stay `keep_clear_m` away from the start and
+    /// goal positions, drawn from a ChaCha8 stream seeded with the scenario's seed.
+    fn random_obstacles(
+        &self,
+        count: usize,
+        radius_m: f64,
+        keep_clear_m: f64,
+        field: &Field,
+        path: &PathSpec,
+        seed: u64,
+    ) -> Result<Vec<Disk>, ScenarioError> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let keep = [path.start.position(), path.goal.position()];
+        let mut disks = Vec::with_capacity(count);
+        let max_attempts = 1000 * count.max(1);
+        let mut attempts = 0;
+        while disks.len() < count {
+            attempts += 1;
+            if attempts > max_attempts {
+                return Err(self.invalid(
+                    "obstacles.random",
+                    format!(
+                        "could place only {} of {count} obstacles clear of the start and goal",
+                        disks.len()
+                    ),
+                ));
+            }
+            let c = Point::new(
+                rng.random_range(0.0..=field.width_m),
+                rng.random_range(0.0..=field.height_m),
+            );
+            if keep
+                .iter()
+                .all(|k| (c - k).norm() >= radius_m + keep_clear_m)
+            {
+                disks.push(Disk {
+                    center: c,
+                    radius_m,
+                });
+            }
+        }
+        Ok(disks)
+    }
+
+    fn agents(&self, raw: &FormationFile, field: &Field) -> Result<Vec<AgentSpec>, ScenarioError> {
+        let hold_m = 0.5 * field.width_m.min(field.height_m);
+        let default_radius_m =
+            self.positive("formation.agent_radius_m", raw.agent_radius_m, hold_m)?;
+        if raw.slots.is_empty() {
+            return Err(self.invalid("formation.slots", "the formation has no agents"));
+        }
+        if raw.slots.len() > MAX_AGENTS {
+            return Err(self.invalid(
+                "formation.slots",
+                format!("{} agents exceed the capacity of {MAX_AGENTS}", raw.slots.len()),
+            ));
+        }
+        let mut agents = Vec::with_capacity(raw.slots.len());
+        for (i, s) in raw.slots.iter().enumerate() {
+            let name = format!("formation.slots[{i}]");
+            let r_m = self.non_negative(
+                &format!("{name}.r_m"),
+                s.r_m,
+                field.width_m.hypot(field.height_m),
+            )?;
+            let theta_deg = self.finite(&format!("{name}.theta_deg"), s.theta_deg)?;
+            let radius_m = match s.radius_m {
+                Some(r) => self.positive(&format!("{name}.radius_m"), r, hold_m)?,
+                None => default_radius_m,
+            };
+            agents.push(AgentSpec {
+                slot: Slot::new(r_m, theta_deg.to_radians()),
+                radius_m,
+            });
+        }
+        // The paper's Assumption 2: the nominal formation is itself collision-free.
+        let origin = Pose::new(0.0, 0.0, 0.0);
+        for i in 0..agents.len() {
+            for j in 0..i {
+                let d = (agents[i].slot.ideal_position(&origin)
+                    - agents[j].slot.ideal_position(&origin))
+                .norm();
+                let need = agents[i].radius_m + agents[j].radius_m;
+                if d < need {
+                    return Err(self.invalid(
+                        format!("formation.slots[{i}]"),
+                        format!(
+                            "slot is {d:.4} m from slot {j}, closer than their radii sum {need:.4} m (Assumption 2)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(agents)
+    }
+
+    fn start_and_goal_clear(&self, obstacles: &[Disk], path: &PathSpec) -> Result<(), ScenarioError> {
+        for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
+            let p = pose.position();
+            if let Some((k, o)) = obstacles
+                .iter()
+                .enumerate()
+                .find(|(_, o)| o.signed_distance_m(&p) < path.center_clearance_m)
+            {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "({}, {}) is within the centre clearance {} m of obstacle {k} at ({}, {}) radius {} m",
+                        p.x, p.y, path.center_clearance_m, o.center.x, o.center.y, o.radius_m
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn formation_fits_at_start(
+        &self,
+        agents: &[AgentSpec],
+        obstacles: &[Disk],
+        field: &Field,
+        path: &PathSpec,
+    ) -> Result<(), ScenarioError> {
+        for (i, a) in agents.iter().enumerate() {
+            let name = format!("formation.slots[{i}]");
+            let p = a.slot.ideal_position(&path.start);
+            if field.signed_inset_m(&p) < a.radius_m {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "at the start pose the agent at ({:.3}, {:.3}) does not fit inside the field",
+                        p.x, p.y
+                    ),
+                ));
+            }
+            if let Some((k, o)) = obstacles
+                .iter()
+                .enumerate()
+                .find(|(_, o)| o.signed_distance_m(&p) < a.radius_m)
+            {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "at the start pose the agent at ({:.3}, {:.3}) overlaps obstacle {k} at ({}, {})",
+                        p.x, p.y, o.center.x, o.center.y
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+name = "t"
+[field]
+width_m = 20.0
+height_m = 10.0
+[formation]
+slots = [ { r_m = 0.0, theta_deg = 0.0 }, { r_m = 1.0, theta_deg = 90.0 } ]
+[path]
+start = { x_m = 3.0, y_m = 5.0, heading_deg = 0.0 }
+goal = { x_m = 17.0, y_m = 5.0, heading_deg = 0.0 }
+turning_radius_m = 2.0
+step_m = 0.5
+center_clearance_m = 0.3
+"#;
+
+    #[test]
+    fn a_minimal_file_gets_the_papers_default_radii() {
+        let s = Scenario::parse(MINIMAL, "min.toml").unwrap();
+        assert_eq!(s.agents.len(), 2);
+        assert!(s.agents.iter().all(|a| a.radius_m == 0.3));
+        assert!(s.obstacles.is_empty());
+    }
+
+    #[test]
+    fn the_embedded_paper_scenario_is_valid_and_has_the_papers_formation() {
+        let s = Scenario::paper();
+        let want = [(1.0, 0.0), (0.0, 0.0), (1.5, 45.0), (1.0, 120.0), (1.5, 180.0), (2.0, -120.0)];
+        assert_eq!(s.agents.len(), want.len());
+        for (a, (r, th)) in s.agents.iter().zip(want) {
+            assert_eq!(a.slot.r_m, r);
+            assert!((a.slot.theta_rad - f64::to_radians(th)).abs() < 1e-15);
+        }
+        assert_eq!(s.path.start, Pose::new(2.0, 2.0, 0.0));
+    }
+
+    #[test]
+    fn random_obstacles_are_reproducible_and_keep_clear_of_start_and_goal() {
+        let text = MINIMAL.replace(
+            "[formation]",
+            "[obstacles.random]\ncount = 25\nkeep_clear_m = 2.0\n[formation]",
+        );
+        let a = Scenario::parse(&text, "r.toml").unwrap();
+        let b = Scenario::parse(&text, "r.toml").unwrap();
+        assert_eq!(a.obstacles, b.obstacles);
+        assert_eq!(a.obstacles.len(), 25);
+        for o in &a.obstacles {
+            for p in [a.path.start.position(), a.path.goal.position()] {
+                assert!(o.signed_distance_m(&p) >= 2.0 - 1e-12);
+            }
+        }
+        let c = Scenario::parse(&text.replace("name = \"t\"", "name = \"t\"\nseed = 9"), "r.toml")
+            .unwrap();
+        assert_ne!(a.obstacles, c.obstacles, "the seed drives the field");
+    }
+
+    #[test]
+    fn errors_name_the_file_and_the_field() {
+        let cases = [
+            (MINIMAL.replace("width_m = 20.0", "width_m = -1.0"), "field.width_m"),
+            (MINIMAL.replace("width_m = 20.0", "width_m = nan"), "field.width_m"),
+            (MINIMAL.replace("step_m = 0.5", "step_m = inf"), "path.step_m"),
+            (MINIMAL.replace("[path]", "[path]\nspeed = 1"), "path"),
+            (MINIMAL.replace("r_m = 1.0", "r_m = 0.5"), "formation.slots[1]"),
+            (MINIMAL.replace("r_m = 1.0", "r_m = \"far\""), "formation.slots[1].r_m"),
+            (MINIMAL.replace("x_m = 3.0", "x_m = 30.0"), "path.start"),
+        ];
+        for (text, field) in cases {
+            let e = Scenario::parse(&text, "bad.toml").unwrap_err();
+            assert_eq!(e.field(), field, "{e}");
+            let line = e.to_string();
+            assert!(line.starts_with("bad.toml: "), "{line}");
+            assert!(!line.contains('\n'), "one line: {line}");
+        }
+    }
+
+    #[test]
+    fn syntax_errors_point_at_the_line() {
+        let e = Scenario::parse("name = \"x\"\n[field\n", "s.toml").unwrap_err();
+        assert!(e.field().starts_with("line 2"), "{e}");
+    }
+}

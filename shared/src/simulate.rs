@@ -1,0 +1,58 @@
+//! The reference simulation: the paper's solution flow (Fig. 5) in one process.
+//!
+//! The formation centre follows the Hybrid A* path; at every step each agent in turn
+//! plans its move while the others stand still ([`AgentPlanner::plan_move`]), and the
+//! move is checked against the safety invariant before it is taken. The multi-process
+//! run must reproduce this trajectory to the bit.
+
+use crate::geometry::Pose;
+use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
+use crate::run::{Recorder, Run};
+use crate::scenario::Scenario;
+use crate::turn::AgentPlanner;
+
+/// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
+pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
+    let p = &scenario.path;
+    let settings =
+        HybridAStarSettings::new(p.turning_radius_m, p.center_clearance_m, p.allow_reverse);
+    let dense = hybrid_astar::plan(
+        &scenario.field,
+        &scenario.obstacles,
+        &p.start,
+        &p.goal,
+        &settings,
+    )?;
+    Ok(hybrid_astar::resample(&dense, p.step_m))
+}
+
+/// One planner per agent, in agent order.
+pub fn agent_planners(scenario: &Scenario) -> Vec<AgentPlanner> {
+    scenario
+        .agents
+        .iter()
+        .map(|a| AgentPlanner::new(scenario.field, &scenario.obstacles, a))
+        .collect()
+}
+
+/// Plan the centre path and run the whole scenario.
+pub fn simulate(scenario: &Scenario) -> Result<Run, PlanError> {
+    let path = plan_centre_path(scenario)?;
+    Ok(simulate_along(scenario, &path))
+}
+
+/// Run the scenario along a given centre path (one pose per step).
+pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Run {
+    let planners = agent_planners(scenario);
+    let mut recorder = Recorder::new(scenario, centre_path);
+    for (step, centre) in centre_path.iter().enumerate().skip(1) {
+        for (agent, planner) in planners.iter().enumerate() {
+            let me = recorder.bodies()[agent].position;
+            let mv = planner.plan_move(centre, &me, &recorder.others(agent));
+            // A rejected move is recorded by the recorder; the agent simply stays.
+            let _ = recorder.submit(step, agent, mv);
+        }
+        recorder.end_step(step);
+    }
+    recorder.finish(true)
+}

@@ -1,0 +1,197 @@
+//! One agent's turn (the inner loop of the paper's Fig. 5): ideal slot, reachable best
+//! point, shortest collision-free path to it, as a polyline the agent then follows.
+//!
+//! This is the one place the decision is made: the reference simulation and the agent
+//! process both call [`AgentPlanner::plan_move`], so their trajectories agree to the bit.
+
+use crate::best_point::{self, BestPointError};
+use crate::disk_path::{self, DiskPath};
+use crate::formation::Slot;
+use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose};
+use crate::scenario::AgentSpec;
+
+/// Extra inflation of every disk when choosing the best point and planning the path, in
+/// metres. It absorbs rounding and the chords of arcs: the followed polyline stays at
+/// least half of it away from every true body.
+pub const PLANNING_MARGIN_M: f64 = 1e-3;
+
+/// Most waypoints one move may have (the wire message's capacity).
+pub const MAX_WAYPOINTS: usize = 512;
+
+/// What an agent did in its turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum MoveStatus {
+    /// Reached its ideal slot.
+    AtSlot = 0,
+    /// The slot is blocked or unreachable: moved to the nearest reachable free point.
+    Deviated = 1,
+    /// Nothing nearer the slot is reachable: stayed where it was.
+    Stayed = 2,
+    /// No point of the field is free for this agent: stayed where it was.
+    NoFreePoint = 3,
+    /// The path to the best point needs more than [`MAX_WAYPOINTS`] waypoints: stayed.
+    PathTooLong = 4,
+    /// The safety monitor rejected the published move: the agent stayed where it was.
+    Rejected = 5,
+    /// The agent missed its turn deadline (dead or hung): frozen where it was.
+    Missed = 6,
+    /// The agent is out of the formation (its process died): a static obstacle.
+    Dead = 7,
+}
+
+impl MoveStatus {
+    /// Every status, in code order.
+    pub const ALL: [MoveStatus; 8] = [
+        Self::AtSlot,
+        Self::Deviated,
+        Self::Stayed,
+        Self::NoFreePoint,
+        Self::PathTooLong,
+        Self::Rejected,
+        Self::Missed,
+        Self::Dead,
+    ];
+
+    /// The status with wire code `code`, if any.
+    pub fn from_code(code: u8) -> Option<Self> {
+        Self::ALL.get(code as usize).copied()
+    }
+
+    /// A short lowercase name for tables and CSV files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::AtSlot => "at_slot",
+            Self::Deviated => "deviated",
+            Self::Stayed => "stayed",
+            Self::NoFreePoint => "no_free_point",
+            Self::PathTooLong => "path_too_long",
+            Self::Rejected => "rejected",
+            Self::Missed => "missed",
+            Self::Dead => "dead",
+        }
+    }
+}
+
+/// A body in the plane: a disk at a position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Body {
+    /// Centre of the body.
+    pub position: Point,
+    /// Radius of the body, in metres.
+    pub radius_m: f64,
+}
+
+/// The outcome of a turn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Move {
+    /// The ideal slot at this step.
+    pub slot: Point,
+    /// The point the agent goes to (its current position when it stays).
+    pub best: Point,
+    /// What happened.
+    pub status: MoveStatus,
+    /// The polyline followed, from the current position to `best` (a single point when
+    /// the agent stays).
+    pub waypoints: Vec<Point>,
+}
+
+/// Everything an agent needs to take its turns; built once, reused every step.
+#[derive(Clone, Debug)]
+pub struct AgentPlanner {
+    field: Field,
+    slot: Slot,
+    radius_m: f64,
+    /// Static obstacles inflated by this agent's radius and the planning margin.
+    obstacles: DiskGrid,
+}
+
+impl AgentPlanner {
+    /// The planner of agent `spec` in `field` among `obstacles` (true radii).
+    pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
+        let grow_m = spec.radius_m + PLANNING_MARGIN_M;
+        Self {
+            field,
+            slot: spec.slot,
+            radius_m: spec.radius_m,
+            obstacles: DiskGrid::new(obstacles.iter().map(|o| o.inflated(grow_m)).collect()),
+        }
+    }
+
+    /// This agent's radius, in metres.
+    pub fn radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// The ideal slot when the centre is at `centre`.
+    pub fn slot_position(&self, centre: &Pose) -> Point {
+        self.slot.ideal_position(centre)
+    }
+
+    /// Plan this agent's move while every `other` body stands still: the reachable free
+    /// point nearest to the slot and the shortest path there.
+    pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        let slot = self.slot_position(centre);
+        let grow_m = self.radius_m + PLANNING_MARGIN_M;
+        let agents = DiskGrid::new(
+            others
+                .iter()
+                .map(|b| Disk {
+                    center: b.position,
+                    radius_m: b.radius_m + grow_m,
+                })
+                .collect(),
+        );
+        let layers = [&self.obstacles, &agents];
+        let space = FreeSpace::new(self.field, &layers);
+        let stay = |status| Move {
+            slot,
+            best: *me,
+            status,
+            waypoints: vec![*me],
+        };
+
+        let mut found: Option<(Point, DiskPath)> = None;
+        let best = best_point::nearest_reachable_free_point(&space, &slot, me, |p| {
+            match disk_path::shortest_path(&space, me, p) {
+                Ok(path) => {
+                    found = Some((*p, path));
+                    true
+                }
+                Err(_) => false,
+            }
+        });
+        let best = match best {
+            Ok(p) => p,
+            Err(BestPointError::NoFreePoint) => return stay(MoveStatus::NoFreePoint),
+        };
+        if best == *me {
+            let status = if (slot - best).norm() <= 1e-9 {
+                MoveStatus::AtSlot
+            } else {
+                MoveStatus::Stayed
+            };
+            return stay(status);
+        }
+        // The closure accepted `best` last, so `found` holds its path.
+        let path = match found {
+            Some((p, path)) if p == best => path,
+            _ => return stay(MoveStatus::Stayed),
+        };
+        let waypoints = path.polyline(0.5 * PLANNING_MARGIN_M);
+        if waypoints.len() > MAX_WAYPOINTS {
+            return stay(MoveStatus::PathTooLong);
+        }
+        let status = if (slot - best).norm() <= 1e-9 {
+            MoveStatus::AtSlot
+        } else {
+            MoveStatus::Deviated
+        };
+        Move {
+            slot,
+            best,
+            status,
+            waypoints,
+        }
+    }
+}
