@@ -1,9 +1,12 @@
 //! The coordinator: validates and plans a scenario, runs it over agent processes, and
 //! writes the outputs. The binary's `main` calls [`run_cli`].
 
+pub mod agents;
 pub mod cli;
+pub mod ipc;
 pub mod error;
 pub mod logging;
+pub mod monitor;
 pub mod output;
 pub mod plan;
 pub mod validate;

@@ -434,7 +434,10 @@ pub fn circle_circle_intersections(
 ) -> Option<[Point; 2]> {
     let between = c2 - c1;
     let distance_m = between.norm();
-    if !(distance_m > 0.0) || distance_m > r1_m + r2_m || distance_m < (r1_m - r2_m).abs() {
+    // Written so that NaN inputs give `None`.
+    let circles_cross =
+        distance_m > 0.0 && distance_m <= r1_m + r2_m && distance_m >= (r1_m - r2_m).abs();
+    if !circles_cross {
         return None;
     }
     // Signed distance from c1, along c1 -> c2, to the chord through the crossings.
@@ -460,12 +463,14 @@ pub fn circle_line_intersections(
     line_direction: &Vector,
 ) -> Option<[Point; 2]> {
     let length2 = line_direction.norm_squared();
-    if !(length2 > 0.0) {
+    let has_direction = length2 > 0.0;
+    if !has_direction {
         return None;
     }
     let foot = line_point + ((center - line_point).dot(line_direction) / length2) * line_direction;
     let offset_m = (center - foot).norm();
-    if !(offset_m <= radius_m) {
+    let line_meets_circle = offset_m <= radius_m;
+    if !line_meets_circle {
         return None;
     }
     // Half chord in units of the direction's length.
@@ -570,11 +575,11 @@ mod tests {
     fn circle_line_intersections_lie_on_circle_and_line() {
         let c = Point::new(2.0, 1.0);
         let [p, q] =
-            circle_line_intersections(&c, 2.0, &Point::new(0.0, 0.0), &Vector::new(0.0, 5.0))
+            circle_line_intersections(&c, 2.5, &Point::new(0.0, 0.0), &Vector::new(0.0, 5.0))
                 .expect("the line x = 0 crosses");
         for x in [p, q] {
             assert_eq!(x.x, 0.0);
-            assert!(((x - c).norm() - 2.0).abs() < 1e-12);
+            assert!(((x - c).norm() - 2.5).abs() < 1e-12);
         }
         assert!(p.y < q.y, "ordered along the direction");
         let [t, u] =

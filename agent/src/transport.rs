@@ -1,0 +1,54 @@
+//! What the agent's turn loop needs from the outside world.
+
+use std::time::Duration;
+
+use shared::geometry::{Disk, Field, Point, Pose};
+use shared::scenario::AgentSpec;
+use shared::turn::Move;
+
+/// The static scenario as an agent sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissionView {
+    /// The field.
+    pub field: Field,
+    /// Every obstacle, true radii.
+    pub obstacles: Vec<Disk>,
+    /// Every agent, in agent order.
+    pub agents: Vec<AgentSpec>,
+}
+
+/// The world at the start of this agent's turn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TurnInput {
+    /// The world's sequence number (echoed in the answer).
+    pub seq: u64,
+    /// The step.
+    pub step: u64,
+    /// The formation centre.
+    pub centre: Pose,
+    /// Every agent's position, in agent order (this agent's included).
+    pub positions: Vec<Point>,
+    /// Every agent's radius, in agent order.
+    pub radii_m: Vec<f64>,
+}
+
+/// What the coordinator asks.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Take a turn in this world.
+    Turn(TurnInput),
+    /// Leave now (asked to, or the coordinator is gone).
+    Quit,
+}
+
+/// The agent's link to the coordinator.
+pub trait Transport {
+    /// Tell the coordinator this agent is ready for turns.
+    fn announce_ready(&mut self) -> anyhow::Result<()>;
+    /// Block (without using CPU) until the next command.
+    fn next_command(&mut self) -> anyhow::Result<Command>;
+    /// The static scenario (available from the first turn on).
+    fn mission(&mut self) -> anyhow::Result<MissionView>;
+    /// Publish this turn's move and the time spent computing it.
+    fn publish_move(&mut self, turn: &TurnInput, mv: &Move, compute: Duration) -> anyhow::Result<()>;
+}

@@ -1,0 +1,327 @@
+//! The coordinator's side of the iceoryx2 protocol (see [`shared::wire`]): it creates
+//! every service with limits sized for the run, publishes the mission and the world,
+//! rings turns, and collects the agents' states.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, anyhow};
+use iceoryx2::node::NodeView;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::port::update_connections::UpdateConnections;
+use iceoryx2::prelude::*;
+use shared::geometry::Pose;
+use shared::scenario::Scenario;
+use shared::turn::Body;
+use shared::wire::{
+    self, AgentState, DONE_SERVICE, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission, Role,
+    STATE_SERVICE, WORLD_SERVICE, World,
+};
+
+/// A state sample copied out of shared memory.
+pub type StateCopy = AgentState;
+
+/// The coordinator's node and ports for one run.
+pub struct CoordinatorIpc {
+    prefix: String,
+    config: Config,
+    node: Node<ipc::Service>,
+    mission_pub: Publisher<ipc::Service, Mission, ()>,
+    world_pub: Publisher<ipc::Service, World, ()>,
+    state_sub: Subscriber<ipc::Service, AgentState, ()>,
+    done_listener: Listener<ipc::Service>,
+    turn_notifiers: Vec<Notifier<ipc::Service>>,
+    seq: u64,
+}
+
+fn service_name(s: &str) -> anyhow::Result<ServiceName> {
+    ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
+}
+
+impl CoordinatorIpc {
+    /// Create the node and every service of run `prefix` for `agents` agents.
+    pub fn create(prefix: &str, agents: usize) -> anyhow::Result<Self> {
+        let config = wire::ipc_config(prefix, Role::Coordinator)?;
+        let node = NodeBuilder::new()
+            .name(&NodeName::new("coordinator").map_err(|e| anyhow!("{e:?}"))?)
+            .config(&config)
+            .create::<ipc::Service>()
+            .map_err(|e| anyhow!("creating the coordinator node: {e:?}"))?;
+        // Install iceoryx2's signal handlers now: Ctrl-C and SIGTERM then interrupt waits
+        // and are polled with `termination_requested`, so outputs are flushed.
+        let _ = node.wait(Duration::ZERO);
+        let nodes = agents + 1;
+
+        let mission = node
+            .service_builder(&service_name(MISSION_SERVICE)?)
+            .publish_subscribe::<Mission>()
+            .max_publishers(1)
+            .max_subscribers(agents.max(1))
+            .max_nodes(nodes)
+            .history_size(1)
+            .subscriber_max_buffer_size(1)
+            .subscriber_max_borrowed_samples(1)
+            .create()
+            .map_err(|e| anyhow!("creating {MISSION_SERVICE}: {e:?}"))?;
+        let world = node
+            .service_builder(&service_name(WORLD_SERVICE)?)
+            .publish_subscribe::<World>()
+            .max_publishers(1)
+            .max_subscribers(agents.max(1))
+            .max_nodes(nodes)
+            .history_size(1)
+            .subscriber_max_buffer_size(1)
+            .subscriber_max_borrowed_samples(1)
+            .create()
+            .map_err(|e| anyhow!("creating {WORLD_SERVICE}: {e:?}"))?;
+        // The buffer is per publisher-subscriber connection: the ready handshake and one
+        // move per agent fit in 2.
+        let state = node
+            .service_builder(&service_name(STATE_SERVICE)?)
+            .publish_subscribe::<AgentState>()
+            .max_publishers(agents.max(1))
+            .max_subscribers(1)
+            .max_nodes(nodes)
+            .subscriber_max_buffer_size(2)
+            .subscriber_max_borrowed_samples(2)
+            .create()
+            .map_err(|e| anyhow!("creating {STATE_SERVICE}: {e:?}"))?;
+        let done = node
+            .service_builder(&service_name(DONE_SERVICE)?)
+            .event()
+            .max_notifiers(agents.max(1))
+            .max_listeners(1)
+            .max_nodes(nodes)
+            .create()
+            .map_err(|e| anyhow!("creating {DONE_SERVICE}: {e:?}"))?;
+        let mut turn_notifiers = Vec::with_capacity(agents);
+        for i in 0..agents {
+            let turn = node
+                .service_builder(&service_name(&wire::turn_service_name(i))?)
+                .event()
+                .max_notifiers(1)
+                .max_listeners(1)
+                .max_nodes(2)
+                .create()
+                .map_err(|e| anyhow!("creating the turn service of agent {i}: {e:?}"))?;
+            turn_notifiers.push(
+                turn.notifier_builder()
+                    .default_event_id(EventId::new(EVENT_TURN))
+                    .create()
+                    .map_err(|e| anyhow!("turn notifier {i}: {e:?}"))?,
+            );
+        }
+        Ok(Self {
+            prefix: prefix.to_string(),
+            mission_pub: mission
+                .publisher_builder()
+                .max_loaned_samples(1)
+                .create()
+                .map_err(|e| anyhow!("mission publisher: {e:?}"))?,
+            world_pub: world
+                .publisher_builder()
+                .max_loaned_samples(1)
+                .create()
+                .map_err(|e| anyhow!("world publisher: {e:?}"))?,
+            state_sub: state
+                .subscriber_builder()
+                .create()
+                .map_err(|e| anyhow!("state subscriber: {e:?}"))?,
+            done_listener: done
+                .listener_builder()
+                .create()
+                .map_err(|e| anyhow!("done listener: {e:?}"))?,
+            turn_notifiers,
+            config,
+            node,
+            seq: 0,
+        })
+    }
+
+    /// The run's prefix.
+    pub fn prefix(&self) -> &str {
+        &self.prefix
+    }
+
+    /// The run's iceoryx2 configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Whether SIGINT or SIGTERM reached the coordinator (consumes the request).
+    pub fn termination_requested(&self) -> bool {
+        self.node.wait(Duration::ZERO).is_err_and(|e| {
+            matches!(e, iceoryx2::node::NodeWaitFailure::TerminationRequest)
+        })
+    }
+
+    /// Publish the static scenario (kept as history for agents that connect later).
+    pub fn publish_mission(&self, scenario: &Scenario) -> anyhow::Result<()> {
+        let sample = self
+            .mission_pub
+            .loan_uninit()
+            .map_err(|e| anyhow!("loaning the mission: {e:?}"))?;
+        // Build the 400 kB mission in place, never on the stack.
+        let mut sample = sample;
+        // SAFETY: the pointer is the sample's own payload slot, valid and exclusive.
+        unsafe { Mission::placement_default(sample.payload_mut().as_mut_ptr()) };
+        // SAFETY: placement_default initialised every byte of the payload.
+        let mut sample = unsafe { sample.assume_init() };
+        sample
+            .payload_mut()
+            .fill(&scenario.field, &scenario.obstacles, &scenario.agents)?;
+        sample
+            .send()
+            .map_err(|e| anyhow!("sending the mission: {e:?}"))?;
+        Ok(())
+    }
+
+    /// Connect to subscribers that appeared since the last send and hand them history
+    /// (the mission); call after the agents' ready handshake.
+    pub fn update_connections(&self) -> anyhow::Result<()> {
+        self.mission_pub
+            .update_connections()
+            .map_err(|e| anyhow!("mission connections: {e:?}"))?;
+        self.world_pub
+            .update_connections()
+            .map_err(|e| anyhow!("world connections: {e:?}"))?;
+        Ok(())
+    }
+
+    /// Publish the world for `agent`'s turn at `step`; returns its sequence number.
+    pub fn publish_world(
+        &mut self,
+        step: usize,
+        agent: usize,
+        centre: &Pose,
+        bodies: &[Body],
+        alive: &[bool],
+    ) -> anyhow::Result<u64> {
+        self.seq += 1;
+        let sample = self
+            .world_pub
+            .loan_uninit()
+            .map_err(|e| anyhow!("loaning a world sample: {e:?}"))?;
+        let mut sample = sample;
+        // SAFETY: as in `publish_mission`.
+        unsafe { World::placement_default(sample.payload_mut().as_mut_ptr()) };
+        // SAFETY: placement_default initialised the payload.
+        let mut sample = unsafe { sample.assume_init() };
+        let w = sample.payload_mut();
+        w.seq = self.seq;
+        w.step = step as u64;
+        w.turn_agent = agent as u32;
+        w.centre = (*centre).into();
+        w.set_bodies(bodies, alive)?;
+        sample
+            .send()
+            .map_err(|e| anyhow!("sending the world: {e:?}"))?;
+        Ok(self.seq)
+    }
+
+    /// Ring `agent`'s turn event.
+    pub fn notify_turn(&self, agent: usize) -> anyhow::Result<()> {
+        self.turn_notifiers[agent]
+            .notify()
+            .map_err(|e| anyhow!("ringing agent {agent}'s turn: {e:?}"))?;
+        Ok(())
+    }
+
+    /// Ask `agent` to leave cleanly.
+    pub fn notify_quit(&self, agent: usize) -> anyhow::Result<()> {
+        self.turn_notifiers[agent]
+            .notify_with_custom_event_id(EventId::new(EVENT_QUIT))
+            .map_err(|e| anyhow!("asking agent {agent} to quit: {e:?}"))?;
+        Ok(())
+    }
+
+    /// Wait (blocking, no polling) until `want` accepts a state sample or `deadline`
+    /// passes. Every sample received is offered to `want` in order; the first it accepts
+    /// is returned as a copy. Returns `None` at the deadline.
+    pub fn wait_state(
+        &self,
+        deadline: Instant,
+        mut want: impl FnMut(&AgentState) -> bool,
+    ) -> anyhow::Result<Option<StateCopy>> {
+        loop {
+            while let Some(sample) = self
+                .state_sub
+                .receive()
+                .map_err(|e| anyhow!("receiving a state: {e:?}"))?
+            {
+                if want(&sample) {
+                    return Ok(Some(copy_state(&sample)));
+                }
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return Ok(None);
+            }
+            match self.done_listener.timed_wait(|_| {}, deadline - now) {
+                Ok(_) => {}
+                // A signal: let the caller look at it through `termination_requested`.
+                Err(ListenerWaitError::InterruptSignal) => return Ok(None),
+                Err(e) => return Err(anyhow!("waiting for agents: {e:?}")),
+            }
+        }
+    }
+
+    /// Remove the resources of this run's dead nodes (killed agents); returns how many
+    /// nodes were cleaned.
+    pub fn cleanup_dead_nodes(&self) -> usize {
+        self.node.try_cleanup_dead_nodes().cleanups as usize
+    }
+
+    /// Whether a node named `agent-{agent}` of this run is alive.
+    pub fn agent_node_alive(&self, agent: usize) -> bool {
+        let want = format!("agent-{agent}");
+        let mut alive = false;
+        let _ = Node::<ipc::Service>::list(&self.config, |state| {
+            if let NodeState::Alive(view) = state
+                && view
+                    .details()
+                    .as_ref()
+                    .is_some_and(|d| d.name().to_string() == want)
+            {
+                alive = true;
+                return CallbackProgression::Stop;
+            }
+            CallbackProgression::Continue
+        });
+        alive
+    }
+
+    /// Drop every port and the node, then remove the run's last shared-memory file.
+    /// Call only once every agent process has exited.
+    pub fn shut_down(self) -> anyhow::Result<()> {
+        let config = self.config.clone();
+        let _ = self.node.try_cleanup_dead_nodes();
+        drop(self);
+        // SAFETY: every process of this run has exited (the caller's contract), so no one
+        // else uses the run's global management segment.
+        unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&config) }
+            .map_err(|e| anyhow!("removing the run's management segment: {e:?}"))
+            .context("cleaning up shared memory")?;
+        Ok(())
+    }
+}
+
+fn copy_state(s: &AgentState) -> AgentState {
+    let mut c = AgentState {
+        seq: s.seq,
+        step: s.step,
+        compute_ns: s.compute_ns,
+        agent: s.agent,
+        kind: s.kind,
+        status: s.status,
+        pid: s.pid,
+        slot: s.slot,
+        best: s.best,
+        ..AgentState::default()
+    };
+    // Same capacity on both sides: this cannot fail.
+    let _ = c.set_waypoints(&s.waypoint_points());
+    c
+}

@@ -1,0 +1,193 @@
+//! The independent safety monitor: every published move is checked with parry against
+//! the true obstacles and agents before it is accepted (the planners' own geometry, with
+//! its margins and arcs, is not consulted).
+
+use nalgebra::{Isometry2, Vector2};
+use parry2d_f64::bounding_volume::Aabb;
+use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
+use parry2d_f64::query;
+use parry2d_f64::shape::{Ball, Segment};
+use shared::geometry::{Disk, Field, Point};
+use shared::safety::SAFETY_TOLERANCE_M;
+use shared::turn::Body;
+
+/// Why the monitor refused a move.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Refusal {
+    /// No waypoint, or more than the protocol allows.
+    #[error("{0} waypoints")]
+    Length(usize),
+    /// A waypoint is NaN or infinite.
+    #[error("waypoint {0} is not finite")]
+    NotFinite(usize),
+    /// The move does not start where the agent stands.
+    #[error("the move starts {0} m from the agent")]
+    Teleport(f64),
+    /// The move does not end at the announced best point.
+    #[error("the move does not end at its best point")]
+    WrongEnd,
+    /// The agent would leave the field.
+    #[error("waypoint {0} leaves the field")]
+    OutsideField(usize),
+    /// The agent would overlap an obstacle.
+    #[error("segment {segment} overlaps obstacle {obstacle}")]
+    Obstacle {
+        /// Segment index.
+        segment: usize,
+        /// Obstacle index.
+        obstacle: usize,
+    },
+    /// The agent would overlap another agent.
+    #[error("segment {segment} overlaps agent {agent}")]
+    Agent {
+        /// Segment index.
+        segment: usize,
+        /// The other agent's index.
+        agent: usize,
+    },
+}
+
+/// Obstacles in a parry BVH, and the field.
+pub struct SafetyMonitor {
+    field: Field,
+    obstacles: Vec<Disk>,
+    bvh: Bvh,
+}
+
+impl SafetyMonitor {
+    /// A monitor for `obstacles` (true radii) in `field`.
+    pub fn new(field: Field, obstacles: &[Disk]) -> Self {
+        let leaves: Vec<Aabb> = obstacles
+            .iter()
+            .map(|o| {
+                let r = Vector2::new(o.radius_m, o.radius_m);
+                Aabb::new(o.center - r, o.center + r)
+            })
+            .collect();
+        Self {
+            field,
+            obstacles: obstacles.to_vec(),
+            bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves),
+        }
+    }
+
+    /// Check that agent `agent` (radius `radius_m`, standing at `from`) may follow
+    /// `waypoints` to `best` while every body of `bodies` (all agents, by index) stands
+    /// still.
+    pub fn check(
+        &self,
+        agent: usize,
+        from: &Point,
+        waypoints: &[Point],
+        best: &Point,
+        bodies: &[Body],
+        max_waypoints: usize,
+    ) -> Result<(), Refusal> {
+        if waypoints.is_empty() || waypoints.len() > max_waypoints {
+            return Err(Refusal::Length(waypoints.len()));
+        }
+        if let Some(i) = waypoints
+            .iter()
+            .chain(std::iter::once(best))
+            .position(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(Refusal::NotFinite(i));
+        }
+        let start_offset_m = (waypoints[0] - from).norm();
+        if start_offset_m > SAFETY_TOLERANCE_M {
+            return Err(Refusal::Teleport(start_offset_m));
+        }
+        if waypoints.last() != Some(best) {
+            return Err(Refusal::WrongEnd);
+        }
+        let radius_m = bodies[agent].radius_m;
+        let inner = Aabb::new(
+            Point::new(radius_m, radius_m),
+            Point::new(self.field.width_m - radius_m, self.field.height_m - radius_m),
+        );
+        let tol = Vector2::new(SAFETY_TOLERANCE_M, SAFETY_TOLERANCE_M);
+        let inner = Aabb::new(inner.mins - tol, inner.maxs + tol);
+        if let Some(i) = waypoints.iter().position(|p| !inner.contains_local_point(p)) {
+            return Err(Refusal::OutsideField(i));
+        }
+        let identity = Isometry2::identity();
+        let pairs: Vec<[Point; 2]> = if waypoints.len() == 1 {
+            vec![[waypoints[0], waypoints[0]]]
+        } else {
+            waypoints.windows(2).map(|w| [w[0], w[1]]).collect()
+        };
+        for (segment, [a, b]) in pairs.iter().enumerate() {
+            let shape = Segment::new(*a, *b);
+            let hits = |center: &Point, other_radius_m: f64| -> bool {
+                // Overlap deeper than the tolerance <=> the segment meets the ball shrunk
+                // by the tolerance.
+                let ball = Ball::new(other_radius_m + radius_m - SAFETY_TOLERANCE_M);
+                let at = Isometry2::translation(center.x, center.y);
+                query::intersection_test(&identity, &shape, &at, &ball).unwrap_or(true)
+            };
+            let reach = Vector2::new(radius_m, radius_m);
+            let sweep = Aabb::new(
+                Point::new(a.x.min(b.x), a.y.min(b.y)) - reach,
+                Point::new(a.x.max(b.x), a.y.max(b.y)) + reach,
+            );
+            for leaf in self.bvh.intersect_aabb(&sweep) {
+                let o = &self.obstacles[leaf as usize];
+                if hits(&o.center, o.radius_m) {
+                    return Err(Refusal::Obstacle {
+                        segment,
+                        obstacle: leaf as usize,
+                    });
+                }
+            }
+            for (other, body) in bodies.iter().enumerate() {
+                if other != agent && hits(&body.position, body.radius_m) {
+                    return Err(Refusal::Agent {
+                        segment,
+                        agent: other,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bodies() -> Vec<Body> {
+        vec![
+            Body { position: Point::new(1.0, 5.0), radius_m: 0.3 },
+            Body { position: Point::new(7.0, 5.8), radius_m: 0.3 },
+        ]
+    }
+
+    #[test]
+    fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
+        let m = SafetyMonitor::new(Field::new(10.0, 10.0), &[Disk::new(5.0, 5.0, 1.0)]);
+        let from = Point::new(1.0, 5.0);
+        let clear = [from, Point::new(3.0, 3.0)];
+        assert_eq!(m.check(0, &from, &clear, &clear[1], &bodies(), 8), Ok(()));
+        let through = [from, Point::new(9.0, 5.0)];
+        assert!(matches!(
+            m.check(0, &from, &through, &through[1], &bodies(), 8),
+            Err(Refusal::Obstacle { obstacle: 0, .. })
+        ));
+        let around = [from, Point::new(5.0, 6.35), Point::new(9.0, 5.0)];
+        assert!(matches!(
+            m.check(0, &from, &around, &around[2], &bodies(), 8),
+            Err(Refusal::Agent { agent: 1, .. })
+        ));
+        let nan = [from, Point::new(f64::NAN, 0.0)];
+        assert!(matches!(m.check(0, &from, &nan, &nan[1], &bodies(), 8), Err(Refusal::NotFinite(1))));
+        let jump = [Point::new(2.0, 2.0)];
+        assert!(matches!(m.check(0, &from, &jump, &jump[0], &bodies(), 8), Err(Refusal::Teleport(_))));
+        let out = [from, Point::new(0.2, 5.0)];
+        assert!(matches!(m.check(0, &from, &out, &out[1], &bodies(), 8), Err(Refusal::OutsideField(1))));
+        assert!(matches!(m.check(0, &from, &clear, &from, &bodies(), 8), Err(Refusal::WrongEnd)));
+        // Touching is allowed: exactly the radii sum away.
+        let touch = [from, Point::new(5.0, 6.3)];
+        assert_eq!(m.check(0, &from, &touch, &touch[1], &bodies()[..1], 8), Ok(()));
+    }
+}

@@ -1,0 +1,99 @@
+//! Hybrid A* on the CL-CBS obstacle fields (50 m, 100 m and 300 m maps, 0.8 m obstacles),
+//! turning radius 2.5 m, clearance 0.5 m, reverse allowed. For each map the benchmark
+//! takes the agents whose plans took longest in a survey of every agent (the hardest
+//! searches, not straight shots), plus one forward-only (Dubins) case on a 100 m map.
+//!
+//! Target: under 50 ms median on the 100 m maps. The data is read from
+//! `FORMATION_CLCBS_DIR` or the repository's sibling folder `shared/data/clcbs`.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use shared::clcbs::{ClcbsInstance, default_clcbs_dir};
+use shared::hybrid_astar::{HybridAStarSettings, plan};
+
+const TURNING_RADIUS_M: f64 = 2.5;
+const CLEARANCE_M: f64 = 0.5;
+
+/// (benchmark id, instance file, agent index, reverse allowed)
+const CASES: [(&str, &str, usize, bool); 7] = [
+    (
+        "50m/ex0-agent9",
+        "map_50by50_obst25_agents10_ex0.yaml",
+        9,
+        true,
+    ),
+    (
+        "50m/ex3-agent19",
+        "map_50by50_obst25_agents20_ex3.yaml",
+        19,
+        true,
+    ),
+    (
+        "100m/ex0-agent5",
+        "map_100by100_obst50_agents10_ex0.yaml",
+        5,
+        true,
+    ),
+    (
+        "100m/ex7-agent1",
+        "map_100by100_obst50_agents50_ex7.yaml",
+        1,
+        true,
+    ),
+    (
+        "100m/ex0-agent8-forward",
+        "map_100by100_obst50_agents10_ex0.yaml",
+        8,
+        false,
+    ),
+    (
+        "300m/ex0-agent4",
+        "map_300by300_obst100_agents10_ex0.yaml",
+        4,
+        true,
+    ),
+    (
+        "300m/ex2-agent50",
+        "map_300by300_obst100_agents100_ex2.yaml",
+        50,
+        true,
+    ),
+];
+
+fn bench_hybrid_astar(c: &mut Criterion) {
+    let mut group = c.benchmark_group("hybrid_astar");
+    for (id, file, agent, allow_reverse) in CASES {
+        let path = default_clcbs_dir().join(file);
+        let instance = ClcbsInstance::load(&path).unwrap_or_else(|e| {
+            panic!("{e} (set FORMATION_CLCBS_DIR to the folder of the CL-CBS files)")
+        });
+        let agent = &instance.agents[agent];
+        let settings = HybridAStarSettings::new(TURNING_RADIUS_M, CLEARANCE_M, allow_reverse);
+        // Make sure the case plans before timing it.
+        if let Err(e) = plan(
+            &instance.field,
+            &instance.obstacles,
+            &agent.start,
+            &agent.goal,
+            &settings,
+        ) {
+            panic!("{id}: {e}");
+        }
+        group.bench_function(id, |b| {
+            b.iter(|| {
+                plan(
+                    black_box(&instance.field),
+                    black_box(&instance.obstacles),
+                    black_box(&agent.start),
+                    black_box(&agent.goal),
+                    &settings,
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_hybrid_astar);
+criterion_main!(benches);

@@ -1,0 +1,401 @@
+//! Messages between the coordinator and the agents over iceoryx2 shared memory.
+//!
+//! Every type is `#[repr(C)]`, [`ZeroCopySend`] with an explicit type name, of fixed
+//! capacity and without pointers: a sample is written in place in shared memory and read
+//! in place by the other process, with no serialization.
+//!
+//! Services (names below a per-run prefix set in the iceoryx2 config):
+//! - [`MISSION_SERVICE`]: publish-subscribe, history 1: the static scenario;
+//! - [`WORLD_SERVICE`]: publish-subscribe, coordinator to agents: the world before a turn;
+//! - [`STATE_SERVICE`]: publish-subscribe, agents to coordinator: handshakes and moves;
+//! - [`turn_service_name`]: one event service per agent: "your turn" / "quit";
+//! - [`DONE_SERVICE`]: event, agents to coordinator: "my state is published".
+
+use iceoryx2::prelude::*;
+use iceoryx2_bb_container::vector::{StaticVec, Vector};
+
+use crate::formation::Slot;
+use crate::geometry::{Disk, Field, Point, Pose};
+use crate::scenario::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES};
+use crate::turn::{Body, MAX_WAYPOINTS, MoveStatus};
+
+/// Name of the mission service.
+pub const MISSION_SERVICE: &str = "formation/mission";
+/// Name of the world service.
+pub const WORLD_SERVICE: &str = "formation/world";
+/// Name of the agents' state service.
+pub const STATE_SERVICE: &str = "formation/state";
+/// Name of the "state published" event service.
+pub const DONE_SERVICE: &str = "formation/done";
+
+/// Name of agent `agent`'s turn event service.
+pub fn turn_service_name(agent: usize) -> String {
+    format!("formation/agent/{agent}/turn")
+}
+
+/// Event id on a turn service: take your turn (the world is published).
+pub const EVENT_TURN: usize = 1;
+/// Event id on a turn service: leave cleanly now.
+pub const EVENT_QUIT: usize = 2;
+
+/// A point on the wire.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::WirePoint")]
+pub struct WirePoint {
+    /// x, in metres.
+    pub x_m: f64,
+    /// y, in metres.
+    pub y_m: f64,
+}
+
+impl From<Point> for WirePoint {
+    fn from(p: Point) -> Self {
+        Self { x_m: p.x, y_m: p.y }
+    }
+}
+
+impl From<WirePoint> for Point {
+    fn from(p: WirePoint) -> Self {
+        Point::new(p.x_m, p.y_m)
+    }
+}
+
+/// A pose on the wire.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::WirePose")]
+pub struct WirePose {
+    /// x, in metres.
+    pub x_m: f64,
+    /// y, in metres.
+    pub y_m: f64,
+    /// Heading, in radians.
+    pub heading_rad: f64,
+}
+
+impl From<Pose> for WirePose {
+    fn from(p: Pose) -> Self {
+        Self {
+            x_m: p.x_m,
+            y_m: p.y_m,
+            heading_rad: p.heading_rad,
+        }
+    }
+}
+
+impl From<WirePose> for Pose {
+    fn from(p: WirePose) -> Self {
+        Pose::new(p.x_m, p.y_m, p.heading_rad)
+    }
+}
+
+/// An obstacle on the wire (true radius).
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::WireDisk")]
+pub struct WireDisk {
+    /// Centre x, in metres.
+    pub x_m: f64,
+    /// Centre y, in metres.
+    pub y_m: f64,
+    /// Radius, in metres.
+    pub radius_m: f64,
+}
+
+/// An agent's formation slot and radius on the wire.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::WireAgent")]
+pub struct WireAgent {
+    /// Slot distance from the centre, in metres.
+    pub slot_r_m: f64,
+    /// Slot angle from the heading, in radians.
+    pub slot_theta_rad: f64,
+    /// Body radius, in metres.
+    pub radius_m: f64,
+}
+
+/// The static scenario, published once (history 1) for every agent.
+#[repr(C)]
+#[derive(Debug, Default, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::Mission")]
+pub struct Mission {
+    /// Field width, in metres.
+    pub field_width_m: f64,
+    /// Field height, in metres.
+    pub field_height_m: f64,
+    /// Every obstacle, true radii.
+    pub obstacles: StaticVec<WireDisk, MAX_OBSTACLES>,
+    /// Every agent, in agent order.
+    pub agents: StaticVec<WireAgent, MAX_AGENTS>,
+}
+
+/// Why a scenario does not fit the wire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum CapacityError {
+    /// More obstacles than [`MAX_OBSTACLES`].
+    #[error("{0} obstacles exceed the wire capacity of {MAX_OBSTACLES}")]
+    Obstacles(usize),
+    /// More agents than [`MAX_AGENTS`].
+    #[error("{0} agents exceed the wire capacity of {MAX_AGENTS}")]
+    Agents(usize),
+    /// More waypoints than [`MAX_WAYPOINTS`].
+    #[error("{0} waypoints exceed the wire capacity of {MAX_WAYPOINTS}")]
+    Waypoints(usize),
+}
+
+impl Mission {
+    /// Fill an (emptied) mission in place from the scenario's parts.
+    pub fn fill(
+        &mut self,
+        field: &Field,
+        obstacles: &[Disk],
+        agents: &[AgentSpec],
+    ) -> Result<(), CapacityError> {
+        self.field_width_m = field.width_m;
+        self.field_height_m = field.height_m;
+        self.obstacles.clear();
+        self.agents.clear();
+        for o in obstacles {
+            self.obstacles
+                .push(WireDisk {
+                    x_m: o.center.x,
+                    y_m: o.center.y,
+                    radius_m: o.radius_m,
+                })
+                .map_err(|_| CapacityError::Obstacles(obstacles.len()))?;
+        }
+        for a in agents {
+            self.agents
+                .push(WireAgent {
+                    slot_r_m: a.slot.r_m,
+                    slot_theta_rad: a.slot.theta_rad,
+                    radius_m: a.radius_m,
+                })
+                .map_err(|_| CapacityError::Agents(agents.len()))?;
+        }
+        Ok(())
+    }
+
+    /// The field.
+    pub fn field(&self) -> Field {
+        Field::new(self.field_width_m, self.field_height_m)
+    }
+
+    /// The obstacles, true radii.
+    pub fn obstacles(&self) -> Vec<Disk> {
+        self.obstacles
+            .iter()
+            .map(|o| Disk::new(o.x_m, o.y_m, o.radius_m))
+            .collect()
+    }
+
+    /// The agents, in agent order.
+    pub fn agents(&self) -> Vec<AgentSpec> {
+        self.agents
+            .iter()
+            .map(|a| AgentSpec {
+                slot: Slot::new(a.slot_r_m, a.slot_theta_rad),
+                radius_m: a.radius_m,
+            })
+            .collect()
+    }
+}
+
+/// One agent's body in the world message.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::WireBody")]
+pub struct WireBody {
+    /// Where the agent stands.
+    pub position: WirePoint,
+    /// 1 while the agent belongs to the formation, 0 once it is frozen as an obstacle.
+    pub alive: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+}
+
+/// The world before a turn: published by the coordinator, read by the agent whose turn it
+/// is.
+#[repr(C)]
+#[derive(Debug, Default, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::World")]
+pub struct World {
+    /// Increases with every world published; a state answering it echoes it.
+    pub seq: u64,
+    /// The step (centre pose index).
+    pub step: u64,
+    /// Whose turn it is.
+    pub turn_agent: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+    /// The formation centre at this step.
+    pub centre: WirePose,
+    /// Every agent, in agent order, dead ones included (they are obstacles).
+    pub bodies: StaticVec<WireBody, MAX_AGENTS>,
+}
+
+impl World {
+    /// Replace the bodies with `bodies` (positions) and their `alive` flags.
+    pub fn set_bodies(&mut self, bodies: &[Body], alive: &[bool]) -> Result<(), CapacityError> {
+        self.bodies.clear();
+        for (b, &a) in bodies.iter().zip(alive) {
+            self.bodies
+                .push(WireBody {
+                    position: b.position.into(),
+                    alive: u32::from(a),
+                    reserved: 0,
+                })
+                .map_err(|_| CapacityError::Agents(bodies.len()))?;
+        }
+        Ok(())
+    }
+}
+
+/// What an agent's state message is.
+#[repr(u32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StateKind {
+    /// The agent has opened every service and waits for turns.
+    Ready = 0,
+    /// The agent's move for the turn with sequence number `seq`.
+    Move = 1,
+}
+
+/// An agent's message to the coordinator: its ready handshake or its move.
+#[repr(C)]
+#[derive(Debug, Default, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::AgentState")]
+pub struct AgentState {
+    /// The world's `seq` this answers (0 for the handshake).
+    pub seq: u64,
+    /// The step this answers.
+    pub step: u64,
+    /// Time the agent spent computing the move, in nanoseconds.
+    pub compute_ns: u64,
+    /// The agent's index.
+    pub agent: u32,
+    /// A [`StateKind`] code.
+    pub kind: u32,
+    /// A [`MoveStatus`] code.
+    pub status: u32,
+    /// The agent's process id.
+    pub pid: u32,
+    /// The ideal slot at this step.
+    pub slot: WirePoint,
+    /// The point the agent moves to.
+    pub best: WirePoint,
+    /// The polyline it follows, from its position to `best`.
+    pub waypoints: StaticVec<WirePoint, MAX_WAYPOINTS>,
+}
+
+impl AgentState {
+    /// The message kind, if the code is known.
+    pub fn state_kind(&self) -> Option<StateKind> {
+        match self.kind {
+            0 => Some(StateKind::Ready),
+            1 => Some(StateKind::Move),
+            _ => None,
+        }
+    }
+
+    /// The move status, if the code is known.
+    pub fn move_status(&self) -> Option<MoveStatus> {
+        u8::try_from(self.status).ok().and_then(MoveStatus::from_code)
+    }
+
+    /// The waypoints as points.
+    pub fn waypoint_points(&self) -> Vec<Point> {
+        self.waypoints.iter().map(|&p| p.into()).collect()
+    }
+
+    /// Replace the waypoints.
+    pub fn set_waypoints(&mut self, points: &[Point]) -> Result<(), CapacityError> {
+        self.waypoints.clear();
+        for &p in points {
+            self.waypoints
+                .push(p.into())
+                .map_err(|_| CapacityError::Waypoints(points.len()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Which side of the protocol a process is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// The coordinator: creates the services and cleans up after dead nodes.
+    Coordinator,
+    /// An agent: opens the services and never cleans up after other nodes (cleanup racing
+    /// a starting node can abort the cleaner, iceoryx2 issue 1880).
+    Agent,
+}
+
+/// Why a run prefix cannot name iceoryx2 resources.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PrefixError {
+    /// The prefix is not a valid file name, or longer than [`MAX_PREFIX_LEN`].
+    #[error("run prefix {0:?} must be 1 to 24 characters of [A-Za-z0-9_-]")]
+    Invalid(String),
+}
+
+/// Longest run prefix accepted: socket paths built from it must fit in 108 bytes.
+pub const MAX_PREFIX_LEN: usize = 24;
+
+/// The iceoryx2 configuration of one run: every resource name starts with `prefix`, so
+/// runs never see each other, and listing or cleaning nodes only touches this run.
+pub fn ipc_config(prefix: &str, role: Role) -> Result<Config, PrefixError> {
+    let valid = !prefix.is_empty()
+        && prefix.len() <= MAX_PREFIX_LEN
+        && prefix
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-');
+    if !valid {
+        return Err(PrefixError::Invalid(prefix.to_string()));
+    }
+    let mut config = Config::default();
+    config.global.prefix = FileName::new(prefix.as_bytes())
+        .map_err(|_| PrefixError::Invalid(prefix.to_string()))?;
+    if role == Role::Agent {
+        config.global.node.cleanup_dead_nodes_on_creation = false;
+        config.global.node.cleanup_dead_nodes_on_destruction = false;
+        config.global.service.cleanup_dead_nodes_on_open = false;
+    }
+    Ok(config)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prefixes_that_could_escape_or_overflow_are_refused() {
+        assert!(ipc_config("fc123_4_", Role::Coordinator).is_ok());
+        for bad in ["", "a/b", "../x", "with space", &"x".repeat(MAX_PREFIX_LEN + 1)] {
+            assert!(ipc_config(bad, Role::Agent).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn a_mission_round_trips_the_scenario_exactly() {
+        let s = crate::scenario::Scenario::paper();
+        let mut m = Mission::default();
+        m.fill(&s.field, &s.obstacles, &s.agents).unwrap();
+        assert_eq!(m.field(), s.field);
+        assert_eq!(m.obstacles(), s.obstacles);
+        assert_eq!(m.agents(), s.agents);
+    }
+
+    #[test]
+    fn waypoints_beyond_capacity_are_an_error_not_a_truncation() {
+        let mut st = AgentState::default();
+        let many = vec![Point::new(1.0, 2.0); MAX_WAYPOINTS + 1];
+        assert_eq!(
+            st.set_waypoints(&many),
+            Err(CapacityError::Waypoints(MAX_WAYPOINTS + 1))
+        );
+        st.set_waypoints(&many[..3]).unwrap();
+        assert_eq!(st.waypoint_points(), many[..3].to_vec());
+    }
+}

@@ -1,0 +1,84 @@
+//! The reference simulation on every shipped scenario: no collision, clearance never
+//! negative, every move checked independently, and the deviation shape of the paper's
+//! Fig. 9 (it returns to near zero once the obstacles are behind).
+
+use std::path::PathBuf;
+
+use shared::geometry::DiskGrid;
+use shared::run::Run;
+use shared::safety::{self, SAFETY_TOLERANCE_M};
+use shared::scenario::Scenario;
+use shared::simulate::simulate;
+use shared::turn::{Body, MAX_WAYPOINTS, MoveStatus};
+
+fn scenario_files() -> Vec<PathBuf> {
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios"));
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 4, "the paper scenario and at least three more");
+    files
+}
+
+/// Re-check every accepted move of the run from the record alone: each agent's polyline
+/// against the true obstacles and every other agent as they stood when it moved.
+fn recheck_every_move(scenario: &Scenario, run: &Run) {
+    let obstacles = DiskGrid::new(scenario.obstacles.clone());
+    for w in run.steps.windows(2) {
+        let (before, after) = (&w[0], &w[1]);
+        let mut bodies: Vec<Body> = before
+            .agents
+            .iter()
+            .zip(&scenario.agents)
+            .map(|(a, s)| Body { position: a.position, radius_m: s.radius_m })
+            .collect();
+        for (i, a) in after.agents.iter().enumerate() {
+            let others: Vec<Body> =
+                bodies.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, b)| *b).collect();
+            safety::check_move(
+                &scenario.field,
+                &obstacles,
+                &others,
+                bodies[i].radius_m,
+                &bodies[i].position,
+                &a.waypoints,
+                MAX_WAYPOINTS,
+            )
+            .unwrap_or_else(|v| panic!("{}: step {} agent {i}: {v}", scenario.name, after.step));
+            assert_eq!(*a.waypoints.last().unwrap(), a.position);
+            bodies[i].position = a.position;
+        }
+    }
+}
+
+#[test]
+fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
+    for file in scenario_files() {
+        let scenario = Scenario::load(&file).unwrap();
+        let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let summary = run.summary();
+        eprintln!(
+            "{}: {} agents, {} steps, min clearance {:.4} m, mean deviation {:.4} m, max {:.4} m, final {:.6} m",
+            scenario.name, summary.agents, summary.steps, summary.min_clearance_m,
+            summary.mean_deviation_m, summary.max_deviation_m, summary.final_mean_deviation_m
+        );
+        assert!(run.completed);
+        assert_eq!(summary.collisions, 0, "{}", scenario.name);
+        assert!(summary.min_clearance_m >= -SAFETY_TOLERANCE_M, "{}", scenario.name);
+        assert!(summary.faults.is_empty(), "{}: {:?}", scenario.name, summary.faults);
+        recheck_every_move(&scenario, &run);
+        // Fig. 9: the formation deviates among the obstacles and recovers afterwards.
+        assert!(summary.max_deviation_m > 0.0, "{}: the field must disturb the formation", scenario.name);
+        assert!(
+            summary.final_mean_deviation_m < 0.05,
+            "{}: final mean deviation {}",
+            scenario.name,
+            summary.final_mean_deviation_m
+        );
+        let last = run.steps.last().unwrap();
+        assert!(last.agents.iter().all(|a| a.status == MoveStatus::AtSlot || a.deviation_m < 0.05));
+    }
+}
