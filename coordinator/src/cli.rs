@@ -21,6 +21,28 @@ pub enum Command {
     Validate(ValidateArgs),
     /// Plan the formation centre's path with Hybrid A* and write it as CSV.
     Plan(PlanArgs),
+    /// Run a scenario with one agent process per agent and write the outputs.
+    Run(RunArgs),
+}
+
+/// Arguments of `run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// The scenario file (TOML); the embedded paper example when omitted.
+    pub scenario: Option<PathBuf>,
+    /// Output folder (default `runs/<name>-<UTC time>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// The agent executable (default: `agent` beside this program).
+    #[arg(long)]
+    pub agent_bin: Option<PathBuf>,
+    /// Turn deadline in milliseconds: an agent that has not answered by then is checked
+    /// on and, if dead, frozen as an obstacle.
+    #[arg(long, default_value_t = 250)]
+    pub turn_deadline_ms: u64,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Arguments of `validate`.

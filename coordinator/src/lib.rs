@@ -9,6 +9,9 @@ pub mod logging;
 pub mod monitor;
 pub mod output;
 pub mod plan;
+pub mod run_cmd;
+pub mod runner;
+pub mod stats;
 pub mod validate;
 
 pub use error::CliError;
@@ -18,5 +21,6 @@ pub fn run_cli(cli: cli::Cli) -> Result<(), CliError> {
     match cli.command {
         cli::Command::Validate(args) => validate::run(&args),
         cli::Command::Plan(args) => plan::run(&args),
+        cli::Command::Run(args) => run_cmd::run(&args),
     }
 }

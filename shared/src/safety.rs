@@ -164,9 +164,9 @@ mod tests {
             check_move(&field, &obstacles, &[], 0.3, &from, &through, 8),
             Err(Violation::HitsObstacle { obstacle: 0, .. })
         ));
-        let around = [from, Point::new(5.0, 6.3), Point::new(9.0, 5.0)];
+        let around = [from, Point::new(3.0, 7.0), Point::new(7.0, 7.0), Point::new(9.0, 5.0)];
         assert!(check_move(&field, &obstacles, &[], 0.3, &from, &around, 8).is_ok());
-        let other = Body { position: Point::new(7.0, 5.8), radius_m: 0.3 };
+        let other = Body { position: Point::new(5.0, 7.5), radius_m: 0.3 };
         assert!(matches!(
             check_move(&field, &obstacles, &[other], 0.3, &from, &around, 8),
             Err(Violation::HitsBody { body: 0, .. })

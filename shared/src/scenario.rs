@@ -719,7 +719,7 @@ center_clearance_m = 0.3
             (MINIMAL.replace("width_m = 20.0", "width_m = -1.0"), "field.width_m"),
             (MINIMAL.replace("width_m = 20.0", "width_m = nan"), "field.width_m"),
             (MINIMAL.replace("step_m = 0.5", "step_m = inf"), "path.step_m"),
-            (MINIMAL.replace("[path]", "[path]\nspeed = 1"), "path"),
+            (MINIMAL.replace("[path]", "[path]\nspeed = 1"), "path.speed"),
             (MINIMAL.replace("r_m = 1.0", "r_m = 0.5"), "formation.slots[1]"),
             (MINIMAL.replace("r_m = 1.0", "r_m = \"far\""), "formation.slots[1].r_m"),
             (MINIMAL.replace("x_m = 3.0", "x_m = 30.0"), "path.start"),

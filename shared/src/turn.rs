@@ -7,7 +7,7 @@
 use crate::best_point::{self, BestPointError};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose};
+use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
 use crate::scenario::AgentSpec;
 
 /// Extra inflation of every disk when choosing the best point and planning the path, in
@@ -97,12 +97,22 @@ pub struct Move {
 }
 
 /// Everything an agent needs to take its turns; built once, reused every step.
+///
+/// The agent is planned as a point: every other body is inflated by the agent's radius
+/// plus [`PLANNING_MARGIN_M`], and the field is shrunk by the same amount on every side.
+/// The planners take a field anchored at the origin, so planning happens in a frame
+/// shifted by that inset; results are mapped back (exactly for the slot and the agent's
+/// own position).
 #[derive(Clone, Debug)]
 pub struct AgentPlanner {
+    /// The field the agent's centre may use, in the planning frame.
     field: Field,
+    /// Planning frame origin in world coordinates (the inset on both axes).
+    offset: Vector,
     slot: Slot,
     radius_m: f64,
-    /// Static obstacles inflated by this agent's radius and the planning margin.
+    /// Static obstacles inflated by this agent's radius and the planning margin, in the
+    /// planning frame.
     obstacles: DiskGrid,
 }
 
@@ -110,11 +120,24 @@ impl AgentPlanner {
     /// The planner of agent `spec` in `field` among `obstacles` (true radii).
     pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
         let grow_m = spec.radius_m + PLANNING_MARGIN_M;
+        let offset = Vector::new(grow_m, grow_m);
         Self {
-            field,
+            field: Field::new(
+                (field.width_m - 2.0 * grow_m).max(0.0),
+                (field.height_m - 2.0 * grow_m).max(0.0),
+            ),
+            offset,
             slot: spec.slot,
             radius_m: spec.radius_m,
-            obstacles: DiskGrid::new(obstacles.iter().map(|o| o.inflated(grow_m)).collect()),
+            obstacles: DiskGrid::new(
+                obstacles
+                    .iter()
+                    .map(|o| Disk {
+                        center: o.center - offset,
+                        radius_m: o.radius_m + grow_m,
+                    })
+                    .collect(),
+            ),
         }
     }
 
@@ -137,13 +160,24 @@ impl AgentPlanner {
             others
                 .iter()
                 .map(|b| Disk {
-                    center: b.position,
+                    center: b.position - self.offset,
                     radius_m: b.radius_m + grow_m,
                 })
                 .collect(),
         );
         let layers = [&self.obstacles, &agents];
         let space = FreeSpace::new(self.field, &layers);
+        let (slot_p, me_p) = (slot - self.offset, me - self.offset);
+        // Back to world coordinates, keeping the slot and the start bit-exact.
+        let to_world = |p: &Point| -> Point {
+            if *p == slot_p {
+                slot
+            } else if *p == me_p {
+                *me
+            } else {
+                p + self.offset
+            }
+        };
         let stay = |status| Move {
             slot,
             best: *me,
@@ -152,8 +186,8 @@ impl AgentPlanner {
         };
 
         let mut found: Option<(Point, DiskPath)> = None;
-        let best = best_point::nearest_reachable_free_point(&space, &slot, me, |p| {
-            match disk_path::shortest_path(&space, me, p) {
+        let best = best_point::nearest_reachable_free_point(&space, &slot_p, &me_p, |p| {
+            match disk_path::shortest_path(&space, &me_p, p) {
                 Ok(path) => {
                     found = Some((*p, path));
                     true
@@ -161,11 +195,12 @@ impl AgentPlanner {
                 Err(_) => false,
             }
         });
-        let best = match best {
+        let best_p = match best {
             Ok(p) => p,
             Err(BestPointError::NoFreePoint) => return stay(MoveStatus::NoFreePoint),
         };
-        if best == *me {
+        let best = to_world(&best_p);
+        if best_p == me_p {
             let status = if (slot - best).norm() <= 1e-9 {
                 MoveStatus::AtSlot
             } else {
@@ -175,12 +210,23 @@ impl AgentPlanner {
         }
         // The closure accepted `best` last, so `found` holds its path.
         let path = match found {
-            Some((p, path)) if p == best => path,
+            Some((p, path)) if p == best_p => path,
             _ => return stay(MoveStatus::Stayed),
         };
-        let waypoints = path.polyline(0.5 * PLANNING_MARGIN_M);
+        let mut waypoints: Vec<Point> = path
+            .polyline(0.5 * PLANNING_MARGIN_M)
+            .iter()
+            .map(to_world)
+            .collect();
         if waypoints.len() > MAX_WAYPOINTS {
             return stay(MoveStatus::PathTooLong);
+        }
+        // The polyline starts at the agent and ends at the best point, exactly.
+        if let Some(first) = waypoints.first_mut() {
+            *first = *me;
+        }
+        if let Some(last) = waypoints.last_mut() {
+            *last = best;
         }
         let status = if (slot - best).norm() <= 1e-9 {
             MoveStatus::AtSlot

@@ -1,0 +1,50 @@
+//! `coordinator run [SCENARIO] [--out DIR]`.
+
+use std::time::Duration;
+
+use crate::cli::RunArgs;
+use crate::error::CliError;
+use crate::output;
+use crate::runner::{RunOptions, run_scenario};
+use crate::validate::load_and_plan;
+
+/// Run `run`: validate and plan (bad input exits 2 before anything is created), run the
+/// agents, write the outputs. An interrupted run still writes its outputs, marked not
+/// completed, and exits 1.
+pub fn run(args: &RunArgs) -> Result<(), CliError> {
+    let (scenario, centre_path) = load_and_plan(args.scenario.as_deref())?;
+    let options = RunOptions {
+        agent_bin: args.agent_bin.clone(),
+        turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
+        progress: !args.quiet,
+        ..RunOptions::default()
+    };
+    let outcome = run_scenario(&scenario, &centre_path, &options)?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| output::default_run_dir(&scenario.name));
+    output::write_run(&dir, &outcome.run, &outcome.timing)?;
+    let s = outcome.run.summary();
+    eprintln!(
+        "{}: {} agents, {} steps, {} collisions, min clearance {:.4} m, mean deviation {:.4} m, {} faults, turn latency p50 {:.0} us p99 {:.0} us, {:.2} s -> {}",
+        s.scenario,
+        s.agents,
+        s.steps,
+        s.collisions,
+        s.min_clearance_m,
+        s.mean_deviation_m,
+        s.faults.len(),
+        outcome.timing.turn_latency_us.p50,
+        outcome.timing.turn_latency_us.p99,
+        outcome.timing.wall_s,
+        dir.display()
+    );
+    if outcome.interrupted {
+        return Err(CliError::Other(anyhow::anyhow!(
+            "interrupted: outputs written up to step {}, marked not completed",
+            outcome.run.steps.last().map_or(0, |st| st.step)
+        )));
+    }
+    Ok(())
+}
