@@ -52,6 +52,8 @@ pub struct RunOutcome {
     pub timing: Timing,
     /// Whether SIGINT/SIGTERM stopped the run early.
     pub interrupted: bool,
+    /// The run's iceoryx2 prefix (every resource of the run starts with it).
+    pub prefix: String,
 }
 
 /// A prefix no other run on this machine uses: process id and a counter.
@@ -110,6 +112,7 @@ pub fn run_scenario(
     ipc.shut_down()?;
     let mut outcome = result?;
     outcome.timing.wall_s = started.elapsed().as_secs_f64();
+    outcome.prefix = prefix;
     Ok(outcome)
 }
 
@@ -197,6 +200,7 @@ fn drive(
         run,
         timing,
         interrupted,
+        prefix: String::new(),
     })
 }
 

@@ -1,0 +1,85 @@
+//! Every agent its own process over real iceoryx2 shared memory: the multi-process run
+//! reproduces the reference simulation to the bit, on every shipped scenario, and leaves
+//! no process and no shared-memory file behind. Runs in parallel tests do not meet.
+
+mod support;
+
+use coordinator::runner::{RunOptions, run_scenario};
+use shared::run::Run;
+use shared::scenario::Scenario;
+use shared::simulate::{plan_centre_path, simulate_along};
+
+fn options() -> RunOptions {
+    RunOptions {
+        agent_bin: Some(support::agent_bin()),
+        progress: false,
+        ..RunOptions::default()
+    }
+}
+
+/// Run `scenario` with real processes and compare with the reference, field by field
+/// (f64 equality is bit equality here: no NaN in a record).
+fn run_and_compare(scenario: &Scenario) -> Run {
+    let path = plan_centre_path(scenario).expect("centre path");
+    let reference = simulate_along(scenario, &path);
+    let outcome = run_scenario(scenario, &path, &options()).expect("multi-process run");
+    assert!(!outcome.interrupted);
+    assert!(
+        support::leftovers(&outcome.prefix).is_empty(),
+        "{}: iceoryx2 files left: {:?}",
+        scenario.name,
+        support::leftovers(&outcome.prefix)
+    );
+    assert!(
+        support::processes_mentioning(&outcome.prefix).is_empty(),
+        "{}: agent processes left running",
+        scenario.name
+    );
+    let run = outcome.run;
+    assert_eq!(run.steps.len(), reference.steps.len(), "{}", scenario.name);
+    for (got, want) in run.steps.iter().zip(&reference.steps) {
+        assert_eq!(got, want, "{}: step {} differs from the reference", scenario.name, want.step);
+    }
+    assert_eq!(run.faults, reference.faults);
+    assert!(run.completed);
+    let s = run.summary();
+    assert_eq!(s.collisions, 0, "{}", scenario.name);
+    assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
+    assert!(outcome.timing.turn_latency_us.count > 0);
+    run
+}
+
+#[test]
+fn the_paper_example_over_six_processes_matches_the_reference_to_the_bit() {
+    let run = run_and_compare(&Scenario::paper());
+    assert_eq!(run.steps[0].agents.len(), 6);
+}
+
+#[test]
+fn two_hundred_agent_processes_complete_safely_and_match_the_reference() {
+    let file = support::repo_root().join("scenarios/swarm200.toml");
+    let scenario = Scenario::load(&file).expect("swarm200.toml");
+    assert_eq!(scenario.agents.len(), 200);
+    run_and_compare(&scenario);
+}
+
+#[test]
+fn every_other_shipped_scenario_matches_the_reference() {
+    for file in support::shipped_scenarios() {
+        if file.ends_with("swarm200.toml") || file.ends_with("paper.toml") {
+            continue; // their own tests above
+        }
+        let scenario = Scenario::load(&file).expect("shipped scenario");
+        run_and_compare(&scenario);
+    }
+}
+
+#[test]
+fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
+    let scenario = Scenario::paper();
+    let runs: Vec<Run> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..3).map(|_| s.spawn(|| run_and_compare(&scenario))).collect();
+        handles.into_iter().map(|h| h.join().expect("run thread")).collect()
+    });
+    assert!(runs.windows(2).all(|w| w[0] == w[1]));
+}
