@@ -38,7 +38,11 @@ fn run_and_compare(scenario: &Scenario) -> Run {
     let run = outcome.run;
     assert_eq!(run.steps.len(), reference.steps.len(), "{}", scenario.name);
     for (got, want) in run.steps.iter().zip(&reference.steps) {
-        assert_eq!(got, want, "{}: step {} differs from the reference", scenario.name, want.step);
+        assert_eq!(
+            got, want,
+            "{}: step {} differs from the reference",
+            scenario.name, want.step
+        );
     }
     assert_eq!(run.faults, reference.faults);
     assert!(run.completed);
@@ -78,8 +82,13 @@ fn every_other_shipped_scenario_matches_the_reference() {
 fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
     let scenario = Scenario::paper();
     let runs: Vec<Run> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..3).map(|_| s.spawn(|| run_and_compare(&scenario))).collect();
-        handles.into_iter().map(|h| h.join().expect("run thread")).collect()
+        let handles: Vec<_> = (0..3)
+            .map(|_| s.spawn(|| run_and_compare(&scenario)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("run thread"))
+            .collect()
     });
     assert!(runs.windows(2).all(|w| w[0] == w[1]));
 }

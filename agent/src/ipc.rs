@@ -113,7 +113,10 @@ impl IpcTransport {
     }
 
     /// Loan a state sample, let `fill` write it in place, send it and ring `done`.
-    fn send_state(&self, fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>) -> anyhow::Result<()> {
+    fn send_state(
+        &self,
+        fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
         let sample = self
             .state_pub
             .loan_uninit()
@@ -123,7 +126,9 @@ impl IpcTransport {
         state.agent = self.agent as u32;
         state.pid = std::process::id();
         fill(state)?;
-        sample.send().map_err(|e| anyhow!("sending the state: {e:?}"))?;
+        sample
+            .send()
+            .map_err(|e| anyhow!("sending the state: {e:?}"))?;
         self.done_notifier
             .notify()
             .map_err(|e| anyhow!("notifying done: {e:?}"))?;
@@ -235,7 +240,12 @@ impl Transport for IpcTransport {
             .context("no mission was published before the first turn")
     }
 
-    fn publish_move(&mut self, turn: &TurnInput, mv: &Move, compute: Duration) -> anyhow::Result<()> {
+    fn publish_move(
+        &mut self,
+        turn: &TurnInput,
+        mv: &Move,
+        compute: Duration,
+    ) -> anyhow::Result<()> {
         self.send_state(|s| {
             s.kind = StateKind::Move as u32;
             s.seq = turn.seq;

@@ -68,7 +68,10 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         if planner.is_none() {
             let mission = transport.mission()?;
             let spec = mission.agents.get(agent).with_context(|| {
-                format!("agent {agent} is not in the mission's {} agents", mission.agents.len())
+                format!(
+                    "agent {agent} is not in the mission's {} agents",
+                    mission.agents.len()
+                )
             })?;
             planner = Some(AgentPlanner::new(mission.field, &mission.obstacles, spec));
         }
@@ -77,7 +80,10 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         };
         let started = Instant::now();
         let me = turn.positions.get(agent).copied().with_context(|| {
-            format!("the world has {} agents, not agent {agent}", turn.positions.len())
+            format!(
+                "the world has {} agents, not agent {agent}",
+                turn.positions.len()
+            )
         })?;
         let others: Vec<Body> = turn
             .positions

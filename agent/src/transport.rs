@@ -50,5 +50,10 @@ pub trait Transport {
     /// The static scenario (available from the first turn on).
     fn mission(&mut self) -> anyhow::Result<MissionView>;
     /// Publish this turn's move and the time spent computing it.
-    fn publish_move(&mut self, turn: &TurnInput, mv: &Move, compute: Duration) -> anyhow::Result<()>;
+    fn publish_move(
+        &mut self,
+        turn: &TurnInput,
+        mv: &Move,
+        compute: Duration,
+    ) -> anyhow::Result<()>;
 }

@@ -152,9 +152,9 @@ impl CoordinatorIpc {
 
     /// Whether SIGINT or SIGTERM reached the coordinator (consumes the request).
     pub fn termination_requested(&self) -> bool {
-        self.node.wait(Duration::ZERO).is_err_and(|e| {
-            matches!(e, iceoryx2::node::NodeWaitFailure::TerminationRequest)
-        })
+        self.node
+            .wait(Duration::ZERO)
+            .is_err_and(|e| matches!(e, iceoryx2::node::NodeWaitFailure::TerminationRequest))
     }
 
     /// Publish the static scenario (kept as history for agents that connect later).

@@ -3,8 +3,8 @@
 
 pub mod agents;
 pub mod cli;
-pub mod ipc;
 pub mod error;
+pub mod ipc;
 pub mod logging;
 pub mod monitor;
 pub mod output;

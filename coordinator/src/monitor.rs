@@ -103,11 +103,17 @@ impl SafetyMonitor {
         let radius_m = bodies[agent].radius_m;
         let inner = Aabb::new(
             Point::new(radius_m, radius_m),
-            Point::new(self.field.width_m - radius_m, self.field.height_m - radius_m),
+            Point::new(
+                self.field.width_m - radius_m,
+                self.field.height_m - radius_m,
+            ),
         );
         let tol = Vector2::new(SAFETY_TOLERANCE_M, SAFETY_TOLERANCE_M);
         let inner = Aabb::new(inner.mins - tol, inner.maxs + tol);
-        if let Some(i) = waypoints.iter().position(|p| !inner.contains_local_point(p)) {
+        if let Some(i) = waypoints
+            .iter()
+            .position(|p| !inner.contains_local_point(p))
+        {
             return Err(Refusal::OutsideField(i));
         }
         let identity = Isometry2::identity();
@@ -158,8 +164,14 @@ mod tests {
 
     fn bodies() -> Vec<Body> {
         vec![
-            Body { position: Point::new(1.0, 5.0), radius_m: 0.3 },
-            Body { position: Point::new(7.0, 5.8), radius_m: 0.3 },
+            Body {
+                position: Point::new(1.0, 5.0),
+                radius_m: 0.3,
+            },
+            Body {
+                position: Point::new(7.0, 5.8),
+                radius_m: 0.3,
+            },
         ]
     }
 
@@ -180,14 +192,29 @@ mod tests {
             Err(Refusal::Agent { agent: 1, .. })
         ));
         let nan = [from, Point::new(f64::NAN, 0.0)];
-        assert!(matches!(m.check(0, &from, &nan, &nan[1], &bodies(), 8), Err(Refusal::NotFinite(1))));
+        assert!(matches!(
+            m.check(0, &from, &nan, &nan[1], &bodies(), 8),
+            Err(Refusal::NotFinite(1))
+        ));
         let jump = [Point::new(2.0, 2.0)];
-        assert!(matches!(m.check(0, &from, &jump, &jump[0], &bodies(), 8), Err(Refusal::Teleport(_))));
+        assert!(matches!(
+            m.check(0, &from, &jump, &jump[0], &bodies(), 8),
+            Err(Refusal::Teleport(_))
+        ));
         let out = [from, Point::new(0.2, 5.0)];
-        assert!(matches!(m.check(0, &from, &out, &out[1], &bodies(), 8), Err(Refusal::OutsideField(1))));
-        assert!(matches!(m.check(0, &from, &clear, &from, &bodies(), 8), Err(Refusal::WrongEnd)));
+        assert!(matches!(
+            m.check(0, &from, &out, &out[1], &bodies(), 8),
+            Err(Refusal::OutsideField(1))
+        ));
+        assert!(matches!(
+            m.check(0, &from, &clear, &from, &bodies(), 8),
+            Err(Refusal::WrongEnd)
+        ));
         // Touching is allowed: exactly the radii sum away.
         let touch = [from, Point::new(5.0, 6.3)];
-        assert_eq!(m.check(0, &from, &touch, &touch[1], &bodies()[..1], 8), Ok(()));
+        assert_eq!(
+            m.check(0, &from, &touch, &touch[1], &bodies()[..1], 8),
+            Ok(())
+        );
     }
 }

@@ -80,6 +80,26 @@ pub fn trajectory_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
+/// Every move's polyline as CSV: `step,agent,index,x,y` (one row per waypoint).
+pub fn moves_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(["step", "agent", "index", "x", "y"])?;
+    for s in &run.steps {
+        for (i, a) in s.agents.iter().enumerate() {
+            for (k, p) in a.waypoints.iter().enumerate() {
+                w.write_record([
+                    s.step.to_string(),
+                    i.to_string(),
+                    k.to_string(),
+                    p.x.to_string(),
+                    p.y.to_string(),
+                ])?;
+            }
+        }
+    }
+    Ok(w.into_inner()?)
+}
+
 /// Timing figures of a multi-process run.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Timing {
@@ -106,8 +126,14 @@ struct SummaryFile<'a> {
     last_step: usize,
 }
 
-/// Create `dir` and write every output file of `run` into it.
-pub fn write_run(dir: &Path, run: &Run, timing: &Timing) -> anyhow::Result<Vec<PathBuf>> {
+/// Create `dir` and write every output file of `run` into it, with the scenario's text
+/// (`scenario.toml`) so the run can be rendered again without re-planning.
+pub fn write_run(
+    dir: &Path,
+    scenario_text: &str,
+    run: &Run,
+    timing: &Timing,
+) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let summary = run.summary();
     let file = SummaryFile {
@@ -118,7 +144,9 @@ pub fn write_run(dir: &Path, run: &Run, timing: &Timing) -> anyhow::Result<Vec<P
     let mut json = serde_json::to_vec_pretty(&file).context("formatting summary.json")?;
     json.push(b'\n');
     let files = [
+        ("scenario.toml", scenario_text.as_bytes().to_vec()),
         ("trajectory.csv", trajectory_csv(run)?),
+        ("moves.csv", moves_csv(run)?),
         ("path.csv", path_csv(&run.centre_path)?),
         // Last: a summary.json present means the other files are complete.
         ("summary.json", json),
@@ -139,7 +167,13 @@ pub fn default_run_dir(scenario_name: &str) -> PathBuf {
         .replace(':', "-");
     let name: String = scenario_name
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     PathBuf::from("runs").join(format!("{name}-{stamp}"))
 }

@@ -11,8 +11,8 @@ use crate::validate::load_and_plan;
 
 /// Run `plan`.
 pub fn run(args: &PlanArgs) -> Result<(), CliError> {
-    let (_, path) = load_and_plan(args.scenario.as_deref())?;
-    let csv = output::path_csv(&path).context("formatting the path")?;
+    let loaded = load_and_plan(args.scenario.as_deref())?;
+    let csv = output::path_csv(&loaded.centre_path).context("formatting the path")?;
     match &args.out {
         Some(file) => output::write_atomically(file, &csv)?,
         None => std::io::stdout()

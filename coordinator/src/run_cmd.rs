@@ -12,19 +12,20 @@ use crate::validate::load_and_plan;
 /// agents, write the outputs. An interrupted run still writes its outputs, marked not
 /// completed, and exits 1.
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
-    let (scenario, centre_path) = load_and_plan(args.scenario.as_deref())?;
+    let loaded = load_and_plan(args.scenario.as_deref())?;
+    let (scenario, centre_path) = (&loaded.scenario, &loaded.centre_path);
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
         turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
         progress: !args.quiet,
         ..RunOptions::default()
     };
-    let outcome = run_scenario(&scenario, &centre_path, &options)?;
+    let outcome = run_scenario(scenario, centre_path, &options)?;
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| output::default_run_dir(&scenario.name));
-    output::write_run(&dir, &outcome.run, &outcome.timing)?;
+    output::write_run(&dir, &loaded.text, &outcome.run, &outcome.timing)?;
     let s = outcome.run.summary();
     eprintln!(
         "{}: {} agents, {} steps, {} collisions, min clearance {:.4} m, mean deviation {:.4} m, {} faults, turn latency p50 {:.0} us p99 {:.0} us, {:.2} s -> {}",

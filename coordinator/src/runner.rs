@@ -101,7 +101,14 @@ pub fn run_scenario(
     ipc.publish_mission(scenario)?;
     let mut procs = AgentProcesses::new(bin, &prefix, n);
 
-    let result = drive(scenario, centre_path, options, &mut ipc, &mut procs, started);
+    let result = drive(
+        scenario,
+        centre_path,
+        options,
+        &mut ipc,
+        &mut procs,
+        started,
+    );
 
     // Whatever happened, stop the agents and clean up before reporting.
     for i in procs.running() {
@@ -149,19 +156,12 @@ fn drive(
                 continue;
             }
             let slot = scenario.agents[agent].slot.ideal_position(centre);
-            let seq = ipc.publish_world(
-                step,
-                agent,
-                centre,
-                recorder.bodies(),
-                recorder.alive(),
-            )?;
+            let seq =
+                ipc.publish_world(step, agent, centre, recorder.bodies(), recorder.alive())?;
             let sent = Instant::now();
             ipc.notify_turn(agent)?;
             let answer = ipc.wait_state(sent + options.turn_deadline, |s| {
-                s.state_kind() == Some(StateKind::Move)
-                    && s.agent as usize == agent
-                    && s.seq == seq
+                s.state_kind() == Some(StateKind::Move) && s.agent as usize == agent && s.seq == seq
             })?;
             if ipc.termination_requested() {
                 interrupted = true;

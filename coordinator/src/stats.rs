@@ -47,7 +47,10 @@ mod tests {
     fn nearest_rank_percentiles() {
         let v: Vec<f64> = (1..=1000).map(f64::from).collect();
         let d = Distribution::of(&v);
-        assert_eq!((d.p50, d.p90, d.p99, d.p999, d.max), (500.0, 900.0, 990.0, 999.0, 1000.0));
+        assert_eq!(
+            (d.p50, d.p90, d.p99, d.p999, d.max),
+            (500.0, 900.0, 990.0, 999.0, 1000.0)
+        );
         assert_eq!(Distribution::of(&[]).count, 0);
         assert_eq!(Distribution::of(&[7.0]).p99, 7.0);
     }

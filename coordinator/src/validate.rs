@@ -7,36 +7,57 @@ use shared::simulate::plan_centre_path;
 use crate::cli::ValidateArgs;
 use crate::error::CliError;
 
+/// A scenario checked completely, with its text and its centre path.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The validated scenario.
+    pub scenario: Scenario,
+    /// The file's text (kept with the outputs, so a run can be re-rendered).
+    pub text: String,
+    /// The centre path, one pose per step.
+    pub centre_path: Vec<Pose>,
+}
+
 /// Load `file` (or the embedded paper scenario) and check it completely, planning the
-/// centre path (a scenario with no path to its goal is invalid). Returns the scenario and
-/// its centre path, one pose per step.
-pub fn load_and_plan(
-    file: Option<&std::path::Path>,
-) -> Result<(Scenario, Vec<Pose>), ScenarioError> {
-    let (scenario, name) = match file {
-        Some(path) => (Scenario::load(path)?, path.display().to_string()),
+/// centre path (a scenario with no path to its goal is invalid).
+pub fn load_and_plan(file: Option<&std::path::Path>) -> Result<Loaded, ScenarioError> {
+    let (scenario, text, name) = match file {
+        Some(path) => {
+            let name = path.display().to_string();
+            let scenario = Scenario::load(path)?;
+            let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
+                file: name.clone(),
+                reason: e.to_string(),
+            })?;
+            (scenario, text, name)
+        }
         None => (
             Scenario::paper(),
+            shared::scenario::PAPER_SCENARIO_TOML.to_string(),
             shared::scenario::PAPER_SCENARIO_NAME.to_string(),
         ),
     };
-    let path = plan_centre_path(&scenario).map_err(|e| ScenarioError::Invalid {
+    let centre_path = plan_centre_path(&scenario).map_err(|e| ScenarioError::Invalid {
         file: name,
         field: "path".into(),
         reason: format!("no path for the formation centre from start to goal: {e}"),
     })?;
-    Ok((scenario, path))
+    Ok(Loaded {
+        scenario,
+        text,
+        centre_path,
+    })
 }
 
 /// Run `validate`.
 pub fn run(args: &ValidateArgs) -> Result<(), CliError> {
-    let (scenario, path) = load_and_plan(Some(&args.scenario))?;
+    let loaded = load_and_plan(Some(&args.scenario))?;
     eprintln!(
         "{}: valid: {} agents, {} obstacles, centre path of {} steps",
         args.scenario.display(),
-        scenario.agents.len(),
-        scenario.obstacles.len(),
-        path.len().saturating_sub(1)
+        loaded.scenario.agents.len(),
+        loaded.scenario.obstacles.len(),
+        loaded.centre_path.len().saturating_sub(1)
     );
     Ok(())
 }

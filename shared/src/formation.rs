@@ -39,14 +39,21 @@ mod tests {
 
     #[test]
     fn rotating_the_centre_rotates_every_slot_rigidly() {
-        let slots = [Slot::new(1.0, 0.0), Slot::new(1.5, 0.7), Slot::new(2.0, -2.1)];
+        let slots = [
+            Slot::new(1.0, 0.0),
+            Slot::new(1.5, 0.7),
+            Slot::new(2.0, -2.1),
+        ];
         let a = Pose::new(3.0, 4.0, 0.0);
         let b = Pose::new(3.0, 4.0, 1.1);
         for i in 0..slots.len() {
             for j in 0..slots.len() {
                 let da = (slots[i].ideal_position(&a) - slots[j].ideal_position(&a)).norm();
                 let db = (slots[i].ideal_position(&b) - slots[j].ideal_position(&b)).norm();
-                assert!((da - db).abs() < 1e-12, "distances between slots are preserved");
+                assert!(
+                    (da - db).abs() < 1e-12,
+                    "distances between slots are preserved"
+                );
             }
             let d = (slots[i].ideal_position(&b) - b.position()).norm();
             assert!((d - slots[i].r_m).abs() < 1e-12);

@@ -262,11 +262,7 @@ impl DiskGrid {
     fn cell_range(&self, center: &Point, half_w: f64, half_h: f64) -> (usize, usize, usize, usize) {
         let to_cell = |v: f64, o: f64, n: usize| -> usize {
             let k = ((v - o) / self.cell_m).floor();
-            if k <= 0.0 {
-                0
-            } else {
-                (k as usize).min(n - 1)
-            }
+            if k <= 0.0 { 0 } else { (k as usize).min(n - 1) }
         };
         (
             to_cell(center.x - half_w, self.origin.x, self.columns),
@@ -294,7 +290,9 @@ impl DiskGrid {
         for r in r0..=r1 {
             for c in c0..=c1 {
                 let k = r * self.columns + c;
-                for &i in &self.cell_items[self.cell_start[k] as usize..self.cell_start[k + 1] as usize] {
+                for &i in
+                    &self.cell_items[self.cell_start[k] as usize..self.cell_start[k + 1] as usize]
+                {
                     let d = &self.disks[i as usize];
                     if d.center.x + d.radius_m < min.x
                         || d.center.x - d.radius_m > max.x
@@ -347,7 +345,10 @@ impl<'a> FreeSpace<'a> {
 
     /// Largest disk radius over all layers.
     pub fn max_radius_m(&self) -> f64 {
-        self.layers.iter().map(|g| g.max_radius_m()).fold(0.0, f64::max)
+        self.layers
+            .iter()
+            .map(|g| g.max_radius_m())
+            .fold(0.0, f64::max)
     }
 
     /// Visit every disk of every layer whose box meets `[min, max]`; the index passed is
@@ -504,7 +505,9 @@ mod tests {
         let mut disks = Vec::new();
         let mut s = 12345u64;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..500 {
@@ -532,9 +535,15 @@ mod tests {
         let grid = DiskGrid::new(vec![Disk::new(5.0, 5.0, 1.0)]);
         let layers = [&grid];
         let space = FreeSpace::new(Field::new(10.0, 10.0), &layers);
-        assert!(space.is_free(&Point::new(6.0, 5.0), 0.0), "the boundary is free");
+        assert!(
+            space.is_free(&Point::new(6.0, 5.0), 0.0),
+            "the boundary is free"
+        );
         assert!(!space.is_free(&Point::new(5.5, 5.0), 0.0));
-        assert!(!space.is_free(&Point::new(-0.1, 5.0), 0.0), "outside the field");
+        assert!(
+            !space.is_free(&Point::new(-0.1, 5.0), 0.0),
+            "outside the field"
+        );
         assert!(space.is_segment_free(&Point::new(0.0, 6.0), &Point::new(10.0, 6.0), 0.0));
         assert!(!space.is_segment_free(&Point::new(0.0, 5.9), &Point::new(10.0, 5.9), 0.0));
     }

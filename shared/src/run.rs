@@ -337,11 +337,7 @@ impl<'a> Recorder<'a> {
             .copied()
             .unwrap_or(self.scenario.path.start);
         let reach_m = self.obstacles.max_radius_m()
-            + self
-                .bodies
-                .iter()
-                .map(|b| b.radius_m)
-                .fold(0.0, f64::max);
+            + self.bodies.iter().map(|b| b.radius_m).fold(0.0, f64::max);
         let mut agents = Vec::with_capacity(self.bodies.len());
         for i in 0..self.bodies.len() {
             let body = self.bodies[i];

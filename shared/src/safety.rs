@@ -98,7 +98,11 @@ pub fn check_move(
         }
     }
     let single = [waypoints[0], waypoints[0]];
-    let segments: &[Point] = if waypoints.len() == 1 { &single } else { waypoints };
+    let segments: &[Point] = if waypoints.len() == 1 {
+        &single
+    } else {
+        waypoints
+    };
     for (segment, w) in segments.windows(2).enumerate() {
         let (a, b) = (&w[0], &w[1]);
         let reach = Vector::new(radius_m, radius_m);
@@ -136,10 +140,16 @@ pub fn check_move(
 /// Clearance of `body` (distance minus radii) to the nearest obstacle and to the nearest
 /// of `others`, looking for obstacles within `reach_m`: `(obstacle, other)`, each
 /// `f64::INFINITY` when there is none.
-pub fn clearances_m(body: &Body, obstacles: &DiskGrid, others: &[Body], reach_m: f64) -> (f64, f64) {
+pub fn clearances_m(
+    body: &Body,
+    obstacles: &DiskGrid,
+    others: &[Body],
+    reach_m: f64,
+) -> (f64, f64) {
     let mut to_obstacle = f64::INFINITY;
     let _ = obstacles.visit_near(&body.position, reach_m, |_, o| {
-        to_obstacle = to_obstacle.min((body.position - o.center).norm() - o.radius_m - body.radius_m);
+        to_obstacle =
+            to_obstacle.min((body.position - o.center).norm() - o.radius_m - body.radius_m);
         ControlFlow::<()>::Continue(())
     });
     let to_other = others
@@ -164,9 +174,17 @@ mod tests {
             check_move(&field, &obstacles, &[], 0.3, &from, &through, 8),
             Err(Violation::HitsObstacle { obstacle: 0, .. })
         ));
-        let around = [from, Point::new(3.0, 7.0), Point::new(7.0, 7.0), Point::new(9.0, 5.0)];
+        let around = [
+            from,
+            Point::new(3.0, 7.0),
+            Point::new(7.0, 7.0),
+            Point::new(9.0, 5.0),
+        ];
         assert!(check_move(&field, &obstacles, &[], 0.3, &from, &around, 8).is_ok());
-        let other = Body { position: Point::new(5.0, 7.5), radius_m: 0.3 };
+        let other = Body {
+            position: Point::new(5.0, 7.5),
+            radius_m: 0.3,
+        };
         assert!(matches!(
             check_move(&field, &obstacles, &[other], 0.3, &from, &around, 8),
             Err(Violation::HitsBody { body: 0, .. })

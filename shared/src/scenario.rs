@@ -456,7 +456,12 @@ impl Checker<'_> {
             Ok(())
         };
         for (i, [x_m, y_m]) in raw.positions_m.iter().enumerate() {
-            place(format!("obstacles.positions_m[{i}]"), *x_m, *y_m, default_radius_m)?;
+            place(
+                format!("obstacles.positions_m[{i}]"),
+                *x_m,
+                *y_m,
+                default_radius_m,
+            )?;
         }
         for (i, d) in raw.disk.iter().enumerate() {
             let name = format!("obstacles.disk[{i}]");
@@ -495,7 +500,10 @@ impl Checker<'_> {
         if obstacles.len() > MAX_OBSTACLES {
             return Err(self.invalid(
                 "obstacles",
-                format!("{} obstacles exceed the capacity of {MAX_OBSTACLES}", obstacles.len()),
+                format!(
+                    "{} obstacles exceed the capacity of {MAX_OBSTACLES}",
+                    obstacles.len()
+                ),
             ));
         }
         Ok(obstacles)
@@ -555,7 +563,10 @@ impl Checker<'_> {
         if raw.slots.len() > MAX_AGENTS {
             return Err(self.invalid(
                 "formation.slots",
-                format!("{} agents exceed the capacity of {MAX_AGENTS}", raw.slots.len()),
+                format!(
+                    "{} agents exceed the capacity of {MAX_AGENTS}",
+                    raw.slots.len()
+                ),
             ));
         }
         let mut agents = Vec::with_capacity(raw.slots.len());
@@ -597,7 +608,11 @@ impl Checker<'_> {
         Ok(agents)
     }
 
-    fn start_and_goal_clear(&self, obstacles: &[Disk], path: &PathSpec) -> Result<(), ScenarioError> {
+    fn start_and_goal_clear(
+        &self,
+        obstacles: &[Disk],
+        path: &PathSpec,
+    ) -> Result<(), ScenarioError> {
         for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
             let p = pose.position();
             if let Some((k, o)) = obstacles
@@ -684,7 +699,14 @@ center_clearance_m = 0.3
     #[test]
     fn the_embedded_paper_scenario_is_valid_and_has_the_papers_formation() {
         let s = Scenario::paper();
-        let want = [(1.0, 0.0), (0.0, 0.0), (1.5, 45.0), (1.0, 120.0), (1.5, 180.0), (2.0, -120.0)];
+        let want = [
+            (1.0, 0.0),
+            (0.0, 0.0),
+            (1.5, 45.0),
+            (1.0, 120.0),
+            (1.5, 180.0),
+            (2.0, -120.0),
+        ];
         assert_eq!(s.agents.len(), want.len());
         for (a, (r, th)) in s.agents.iter().zip(want) {
             assert_eq!(a.slot.r_m, r);
@@ -708,20 +730,38 @@ center_clearance_m = 0.3
                 assert!(o.signed_distance_m(&p) >= 2.0 - 1e-12);
             }
         }
-        let c = Scenario::parse(&text.replace("name = \"t\"", "name = \"t\"\nseed = 9"), "r.toml")
-            .unwrap();
+        let c = Scenario::parse(
+            &text.replace("name = \"t\"", "name = \"t\"\nseed = 9"),
+            "r.toml",
+        )
+        .unwrap();
         assert_ne!(a.obstacles, c.obstacles, "the seed drives the field");
     }
 
     #[test]
     fn errors_name_the_file_and_the_field() {
         let cases = [
-            (MINIMAL.replace("width_m = 20.0", "width_m = -1.0"), "field.width_m"),
-            (MINIMAL.replace("width_m = 20.0", "width_m = nan"), "field.width_m"),
-            (MINIMAL.replace("step_m = 0.5", "step_m = inf"), "path.step_m"),
+            (
+                MINIMAL.replace("width_m = 20.0", "width_m = -1.0"),
+                "field.width_m",
+            ),
+            (
+                MINIMAL.replace("width_m = 20.0", "width_m = nan"),
+                "field.width_m",
+            ),
+            (
+                MINIMAL.replace("step_m = 0.5", "step_m = inf"),
+                "path.step_m",
+            ),
             (MINIMAL.replace("[path]", "[path]\nspeed = 1"), "path.speed"),
-            (MINIMAL.replace("r_m = 1.0", "r_m = 0.5"), "formation.slots[1]"),
-            (MINIMAL.replace("r_m = 1.0", "r_m = \"far\""), "formation.slots[1].r_m"),
+            (
+                MINIMAL.replace("r_m = 1.0", "r_m = 0.5"),
+                "formation.slots[1]",
+            ),
+            (
+                MINIMAL.replace("r_m = 1.0", "r_m = \"far\""),
+                "formation.slots[1].r_m",
+            ),
             (MINIMAL.replace("x_m = 3.0", "x_m = 30.0"), "path.start"),
         ];
         for (text, field) in cases {

@@ -302,7 +302,9 @@ impl AgentState {
 
     /// The move status, if the code is known.
     pub fn move_status(&self) -> Option<MoveStatus> {
-        u8::try_from(self.status).ok().and_then(MoveStatus::from_code)
+        u8::try_from(self.status)
+            .ok()
+            .and_then(MoveStatus::from_code)
     }
 
     /// The waypoints as points.
@@ -355,8 +357,8 @@ pub fn ipc_config(prefix: &str, role: Role) -> Result<Config, PrefixError> {
         return Err(PrefixError::Invalid(prefix.to_string()));
     }
     let mut config = Config::default();
-    config.global.prefix = FileName::new(prefix.as_bytes())
-        .map_err(|_| PrefixError::Invalid(prefix.to_string()))?;
+    config.global.prefix =
+        FileName::new(prefix.as_bytes()).map_err(|_| PrefixError::Invalid(prefix.to_string()))?;
     if role == Role::Agent {
         config.global.node.cleanup_dead_nodes_on_creation = false;
         config.global.node.cleanup_dead_nodes_on_destruction = false;
@@ -372,7 +374,13 @@ mod tests {
     #[test]
     fn prefixes_that_could_escape_or_overflow_are_refused() {
         assert!(ipc_config("fc123_4_", Role::Coordinator).is_ok());
-        for bad in ["", "a/b", "../x", "with space", &"x".repeat(MAX_PREFIX_LEN + 1)] {
+        for bad in [
+            "",
+            "a/b",
+            "../x",
+            "with space",
+            &"x".repeat(MAX_PREFIX_LEN + 1),
+        ] {
             assert!(ipc_config(bad, Role::Agent).is_err(), "{bad:?}");
         }
     }

@@ -19,7 +19,10 @@ fn scenario_files() -> Vec<PathBuf> {
         .filter(|p| p.extension().is_some_and(|x| x == "toml"))
         .collect();
     files.sort();
-    assert!(files.len() >= 4, "the paper scenario and at least three more");
+    assert!(
+        files.len() >= 4,
+        "the paper scenario and at least three more"
+    );
     files
 }
 
@@ -33,11 +36,18 @@ fn recheck_every_move(scenario: &Scenario, run: &Run) {
             .agents
             .iter()
             .zip(&scenario.agents)
-            .map(|(a, s)| Body { position: a.position, radius_m: s.radius_m })
+            .map(|(a, s)| Body {
+                position: a.position,
+                radius_m: s.radius_m,
+            })
             .collect();
         for (i, a) in after.agents.iter().enumerate() {
-            let others: Vec<Body> =
-                bodies.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, b)| *b).collect();
+            let others: Vec<Body> = bodies
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, b)| *b)
+                .collect();
             safety::check_move(
                 &scenario.field,
                 &obstacles,
@@ -62,16 +72,34 @@ fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
         let summary = run.summary();
         eprintln!(
             "{}: {} agents, {} steps, min clearance {:.4} m, mean deviation {:.4} m, max {:.4} m, final {:.6} m",
-            scenario.name, summary.agents, summary.steps, summary.min_clearance_m,
-            summary.mean_deviation_m, summary.max_deviation_m, summary.final_mean_deviation_m
+            scenario.name,
+            summary.agents,
+            summary.steps,
+            summary.min_clearance_m,
+            summary.mean_deviation_m,
+            summary.max_deviation_m,
+            summary.final_mean_deviation_m
         );
         assert!(run.completed);
         assert_eq!(summary.collisions, 0, "{}", scenario.name);
-        assert!(summary.min_clearance_m >= -SAFETY_TOLERANCE_M, "{}", scenario.name);
-        assert!(summary.faults.is_empty(), "{}: {:?}", scenario.name, summary.faults);
+        assert!(
+            summary.min_clearance_m >= -SAFETY_TOLERANCE_M,
+            "{}",
+            scenario.name
+        );
+        assert!(
+            summary.faults.is_empty(),
+            "{}: {:?}",
+            scenario.name,
+            summary.faults
+        );
         recheck_every_move(&scenario, &run);
         // Fig. 9: the formation deviates among the obstacles and recovers afterwards.
-        assert!(summary.max_deviation_m > 0.0, "{}: the field must disturb the formation", scenario.name);
+        assert!(
+            summary.max_deviation_m > 0.0,
+            "{}: the field must disturb the formation",
+            scenario.name
+        );
         assert!(
             summary.final_mean_deviation_m < 0.05,
             "{}: final mean deviation {}",
@@ -79,6 +107,10 @@ fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
             summary.final_mean_deviation_m
         );
         let last = run.steps.last().unwrap();
-        assert!(last.agents.iter().all(|a| a.status == MoveStatus::AtSlot || a.deviation_m < 0.05));
+        assert!(
+            last.agents
+                .iter()
+                .all(|a| a.status == MoveStatus::AtSlot || a.deviation_m < 0.05)
+        );
     }
 }

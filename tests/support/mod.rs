@@ -90,7 +90,10 @@ pub fn children_of(parent: u32) -> Vec<u32> {
         let Some(rest) = stat.rsplit(')').next() else {
             continue;
         };
-        let ppid = rest.split_whitespace().nth(1).and_then(|p| p.parse::<u32>().ok());
+        let ppid = rest
+            .split_whitespace()
+            .nth(1)
+            .and_then(|p| p.parse::<u32>().ok());
         if ppid == Some(parent) {
             out.push(pid);
         }
@@ -113,7 +116,13 @@ pub fn processes_mentioning(needle: &str) -> Vec<u32> {
         };
         let cmdline = String::from_utf8_lossy(&cmdline).replace('\0', " ");
         let zombie = std::fs::read_to_string(format!("/proc/{pid}/stat"))
-            .map(|s| s.rsplit(')').next().unwrap_or("").trim_start().starts_with('Z'))
+            .map(|s| {
+                s.rsplit(')')
+                    .next()
+                    .unwrap_or("")
+                    .trim_start()
+                    .starts_with('Z')
+            })
             .unwrap_or(false);
         if cmdline.contains(needle) && !zombie {
             out.push(pid);
