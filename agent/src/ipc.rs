@@ -244,6 +244,7 @@ impl Transport for IpcTransport {
         &mut self,
         turn: &TurnInput,
         mv: &Move,
+        status: u32,
         compute: Duration,
     ) -> anyhow::Result<()> {
         self.send_state(|s| {
@@ -251,7 +252,7 @@ impl Transport for IpcTransport {
             s.seq = turn.seq;
             s.step = turn.step;
             s.compute_ns = u64::try_from(compute.as_nanos()).unwrap_or(u64::MAX);
-            s.status = mv.status as u32;
+            s.status = status;
             s.slot = mv.slot.into();
             s.best = mv.best.into();
             s.set_waypoints(&mv.waypoints)?;

@@ -5,6 +5,7 @@
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.
 
 pub mod ipc;
+pub mod misbehave;
 pub mod transport;
 
 use std::time::{Duration, Instant};
@@ -12,6 +13,8 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use clap::Parser;
 use shared::turn::{AgentPlanner, Body};
+
+use crate::misbehave::Misbehave;
 
 pub use transport::{Command, Transport, TurnInput};
 
@@ -28,6 +31,9 @@ pub struct Args {
     /// How often to check that the coordinator is still there while waiting, in ms.
     #[arg(long, default_value_t = 200)]
     pub liveness_ms: u64,
+    /// Test mode: publish bad results on purpose (the safety monitor must refuse them).
+    #[arg(long, value_enum)]
+    pub misbehave: Option<Misbehave>,
 }
 
 /// Install the stderr logger (`RUST_LOG`, default `warn`) and route iceoryx2's own log
@@ -52,14 +58,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Duration::from_millis(args.liveness_ms.max(1)),
     )
     .with_context(|| format!("opening run {}", args.run))?;
-    serve(&mut transport, args.agent)
+    serve(&mut transport, args.agent, args.misbehave)
 }
 
 /// The agent's turn loop: announce readiness, then for every turn plan and publish a
-/// move, until [`Command::Quit`].
-pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()> {
+/// move, until [`Command::Quit`]. `misbehave` is a test mode that publishes bad moves.
+pub fn serve<T: Transport>(
+    transport: &mut T,
+    agent: usize,
+    misbehave: Option<Misbehave>,
+) -> anyhow::Result<()> {
     transport.announce_ready()?;
     let mut planner: Option<AgentPlanner> = None;
+    let mut obstacles = Vec::new();
     loop {
         let turn = match transport.next_command()? {
             Command::Quit => return Ok(()),
@@ -74,6 +85,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
                 )
             })?;
             planner = Some(AgentPlanner::new(mission.field, &mission.obstacles, spec));
+            obstacles = mission.obstacles.clone();
         }
         let Some(planner) = planner.as_ref() else {
             continue;
@@ -95,6 +107,15 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
             .collect();
         let mv = planner.plan_move(&turn.centre, &me, &others);
         let compute = started.elapsed();
-        transport.publish_move(&turn, &mv, compute)?;
+        match misbehave {
+            None => transport.publish_move(&turn, &mv, mv.status as u32, compute)?,
+            Some(mode) => {
+                if let Some((bad, status)) =
+                    misbehave::corrupt(mode, mv, &me, &obstacles, turn.step)
+                {
+                    transport.publish_move(&turn, &bad, status, compute)?;
+                }
+            }
+        }
     }
 }

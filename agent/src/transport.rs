@@ -49,11 +49,13 @@ pub trait Transport {
     fn next_command(&mut self) -> anyhow::Result<Command>;
     /// The static scenario (available from the first turn on).
     fn mission(&mut self) -> anyhow::Result<MissionView>;
-    /// Publish this turn's move and the time spent computing it.
+    /// Publish this turn's move with its status code (normally `mv.status as u32`; a
+    /// test mode may send another) and the time spent computing it.
     fn publish_move(
         &mut self,
         turn: &TurnInput,
         mv: &Move,
+        status: u32,
         compute: Duration,
     ) -> anyhow::Result<()>;
 }

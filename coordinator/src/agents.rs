@@ -129,7 +129,15 @@ impl AgentProcesses {
         }
     }
 
-    /// Kill agent `agent` with SIGKILL (fault injection) and reap it.
+    /// Send SIGKILL to agent `agent`'s process without reaping it (fault injection: the
+    /// coordinator must then notice the death the way it would notice any other).
+    pub fn signal_kill(&mut self, agent: usize) -> Option<u32> {
+        let pid = self.pid(agent)?;
+        kill(Pid::from_raw(pid as i32), Signal::SIGKILL).ok()?;
+        Some(pid)
+    }
+
+    /// Kill agent `agent` with SIGKILL and reap it.
     pub fn kill_now(&mut self, agent: usize) {
         if let Some(mut child) = self.children[agent].take() {
             let _ = child.kill();

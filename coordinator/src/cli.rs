@@ -40,9 +40,52 @@ pub struct RunArgs {
     /// on and, if dead, frozen as an obstacle.
     #[arg(long, default_value_t = 250)]
     pub turn_deadline_ms: u64,
+    /// Start a replacement process for every agent that dies; it re-joins from where the
+    /// dead one stood and takes its slot again.
+    #[arg(long)]
+    pub respawn: bool,
+    /// Fault injection: kill agent AGENT with SIGKILL during its turn at step STEP
+    /// (repeatable), e.g. `--kill-agent 2@40`.
+    #[arg(long = "kill-agent", value_name = "AGENT@STEP", value_parser = parse_kill)]
+    pub kill_agent: Vec<(usize, usize)>,
+    /// Test mode: agent AGENT publishes bad moves of kind MODE (nan, teleport,
+    /// through-obstacle, silent, garbage); repeatable, e.g. `--misbehave 3=nan`.
+    #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
+    pub misbehave: Vec<(usize, String)>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// `AGENT@STEP`.
+fn parse_kill(s: &str) -> Result<(usize, usize), String> {
+    let (a, t) = s
+        .split_once('@')
+        .ok_or_else(|| format!("{s:?}: expected AGENT@STEP, e.g. 2@40"))?;
+    let agent = a
+        .parse()
+        .map_err(|_| format!("{a:?} is not an agent index"))?;
+    let step = t
+        .parse()
+        .map_err(|_| format!("{t:?} is not a step number"))?;
+    Ok((agent, step))
+}
+
+/// The modes of `agent --misbehave`.
+pub const MISBEHAVE_MODES: [&str; 5] = ["nan", "teleport", "through-obstacle", "silent", "garbage"];
+
+/// `AGENT=MODE`.
+fn parse_misbehave(s: &str) -> Result<(usize, String), String> {
+    let (a, m) = s
+        .split_once('=')
+        .ok_or_else(|| format!("{s:?}: expected AGENT=MODE, e.g. 3=nan"))?;
+    let agent = a
+        .parse()
+        .map_err(|_| format!("{a:?} is not an agent index"))?;
+    if !MISBEHAVE_MODES.contains(&m) {
+        return Err(format!("{m:?}: one of {}", MISBEHAVE_MODES.join(", ")));
+    }
+    Ok((agent, m.to_string()))
 }
 
 /// Arguments of `validate`.

@@ -308,6 +308,101 @@ impl CoordinatorIpc {
     }
 }
 
+/// Remove what crashed runs left behind: every run prefix `<stem><pid>x<n>_` found in
+/// /dev/shm or below the iceoryx2 root whose coordinator process no longer exists. Dead
+/// nodes are cleaned through iceoryx2 first; files that no node owns any more (the dead
+/// coordinator's services) are removed after. Returns the prefixes cleaned.
+pub fn clean_stale_runs(stem: &str) -> Vec<String> {
+    let root = std::path::PathBuf::from(Config::default().global.root_path().to_string());
+    let mut prefixes = std::collections::BTreeSet::new();
+    let mut files = Vec::new();
+    let mut scan = |dir: &std::path::Path| {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if let Some(prefix) = stale_prefix(&name, stem) {
+                prefixes.insert(prefix);
+                files.push(e.path());
+            }
+        }
+    };
+    scan(std::path::Path::new("/dev/shm"));
+    scan(&root);
+    for sub in ["nodes", "services"] {
+        scan(&root.join(sub));
+    }
+    if let Ok(entries) = std::fs::read_dir(root.join("nodes")) {
+        for e in entries.flatten().filter(|e| e.path().is_dir()) {
+            scan(&e.path());
+        }
+    }
+    for prefix in &prefixes {
+        let Ok(config) = wire::ipc_config(prefix, Role::Coordinator) else {
+            continue;
+        };
+        let _ = Node::<ipc::Service>::list(&config, |state| {
+            if let NodeState::Dead(view) = state {
+                let _ = view.try_remove_stale_resources();
+            }
+            CallbackProgression::Continue
+        });
+        // SAFETY: the run's coordinator is gone and its agents exit when it does; nothing
+        // uses this prefix any more.
+        let _ = unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&config) };
+    }
+    for f in files.iter().filter(|f| f.exists()) {
+        let _ = if f.is_dir() {
+            std::fs::remove_dir_all(f)
+        } else {
+            std::fs::remove_file(f)
+        };
+    }
+    if !prefixes.is_empty() {
+        tracing::info!("cleaned stale runs {prefixes:?}");
+    }
+    prefixes.into_iter().collect()
+}
+
+/// The run prefix in file `name` if it is `<stem><pid>x<n>_...` and process `pid` is
+/// gone.
+fn stale_prefix(name: &str, stem: &str) -> Option<String> {
+    let rest = name.strip_prefix(stem)?;
+    let (pid, rest) = rest.split_once('x')?;
+    let (counter, _) = rest.split_once('_')?;
+    if pid.is_empty()
+        || counter.is_empty()
+        || !pid.bytes().all(|b| b.is_ascii_digit())
+        || !counter.bytes().all(|b| b.is_ascii_digit())
+    {
+        return None;
+    }
+    if std::path::Path::new(&format!("/proc/{pid}")).exists() {
+        return None;
+    }
+    let prefix = format!("{stem}{pid}x{counter}_");
+    // Its agents may still be on their way out (they leave within a second).
+    if processes_serving(&prefix) {
+        return None;
+    }
+    Some(prefix)
+}
+
+/// Whether a process was started for run `prefix` (its command line holds
+/// `--run <prefix>`).
+fn processes_serving(prefix: &str) -> bool {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return false;
+    };
+    let needle: Vec<u8> = [b"--run\0".as_slice(), prefix.as_bytes(), b"\0"].concat();
+    entries.flatten().any(|e| {
+        std::fs::read(e.path().join("cmdline"))
+            .map(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
+            .unwrap_or(false)
+    })
+}
+
 fn copy_state(s: &AgentState) -> AgentState {
     let mut c = AgentState {
         seq: s.seq,

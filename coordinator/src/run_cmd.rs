@@ -14,9 +14,24 @@ use crate::validate::load_and_plan;
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let (scenario, centre_path) = (&loaded.scenario, &loaded.centre_path);
+    let n = scenario.agents.len();
+    let mut named = args.kill_agent.iter().map(|(a, _)| *a);
+    let mut misbehaving = args.misbehave.iter().map(|(a, _)| *a);
+    if let Some(a) = named
+        .find(|&a| a >= n)
+        .or_else(|| misbehaving.find(|&a| a >= n))
+    {
+        return Err(CliError::Usage(format!(
+            "agent {a} does not exist: the scenario has {n} agents (0 to {})",
+            n - 1
+        )));
+    }
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
         turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
+        respawn: args.respawn,
+        kills: args.kill_agent.clone(),
+        misbehave: args.misbehave.clone(),
         progress: !args.quiet,
         ..RunOptions::default()
     };

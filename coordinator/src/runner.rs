@@ -1,5 +1,11 @@
 //! `coordinator run`: one agent process per agent, turns granted over iceoryx2, every
-//! move checked by the safety monitor, the run recorded and written out.
+//! move checked by the safety monitor, faults survived, the run recorded.
+//!
+//! Liveness: while it waits for a move, the coordinator wakes every
+//! [`LIVENESS_SLICE`] to ask the kernel whether the agent's process still exists, so a
+//! killed agent is noticed within a slice, not at the end of the turn deadline. A dead
+//! agent is frozen as an obstacle where it last stood and leaves the formation; with
+//! `respawn`, a replacement process takes its place from there.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -19,15 +25,28 @@ use crate::monitor::SafetyMonitor;
 use crate::output::Timing;
 use crate::stats::Distribution;
 
+/// How often the coordinator checks an agent's process while it waits for its move.
+pub const LIVENESS_SLICE: Duration = Duration::from_millis(10);
+
 /// How a run is carried out.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
     /// The agent executable (default: beside the coordinator).
     pub agent_bin: Option<PathBuf>,
-    /// How long an agent has for its turn before the coordinator checks on it.
+    /// How long an agent has for its turn.
     pub turn_deadline: Duration,
     /// How long every agent together has to start and shake hands.
     pub startup_timeout: Duration,
+    /// Consecutive missed turns after which a live but silent agent is declared hung,
+    /// killed and frozen.
+    pub max_missed_turns: u32,
+    /// Start a replacement process for every agent that dies.
+    pub respawn: bool,
+    /// Fault injection: kill agent `.0` with SIGKILL right after granting its turn at
+    /// step `.1`.
+    pub kills: Vec<(usize, usize)>,
+    /// Test mode: start agent `.0` with `--misbehave .1`.
+    pub misbehave: Vec<(usize, String)>,
     /// Show a progress bar on stderr (only drawn on a terminal).
     pub progress: bool,
 }
@@ -38,6 +57,10 @@ impl Default for RunOptions {
             agent_bin: None,
             turn_deadline: Duration::from_millis(250),
             startup_timeout: Duration::from_secs(30),
+            max_missed_turns: 3,
+            respawn: false,
+            kills: Vec::new(),
+            misbehave: Vec::new(),
             progress: true,
         }
     }
@@ -56,11 +79,14 @@ pub struct RunOutcome {
     pub prefix: String,
 }
 
+/// Prefix of every run prefix: `fc<coordinator pid>x<counter>_`.
+pub const PREFIX_STEM: &str = "fc";
+
 /// A prefix no other run on this machine uses: process id and a counter.
 pub fn unique_prefix() -> String {
     static COUNTER: AtomicU32 = AtomicU32::new(0);
     format!(
-        "fc{}x{}_",
+        "{PREFIX_STEM}{}x{}_",
         std::process::id(),
         COUNTER.fetch_add(1, Ordering::Relaxed)
     )
@@ -96,19 +122,20 @@ pub fn run_scenario(
     let n = scenario.agents.len();
     let bin = agents::locate_agent_binary(options.agent_bin.as_deref())?;
     agents::raise_fd_limit();
+    crate::ipc::clean_stale_runs(PREFIX_STEM);
     let prefix = unique_prefix();
     let mut ipc = CoordinatorIpc::create(&prefix, n)?;
     ipc.publish_mission(scenario)?;
     let mut procs = AgentProcesses::new(bin, &prefix, n);
 
-    let result = drive(
+    let result = Driver {
         scenario,
-        centre_path,
         options,
-        &mut ipc,
-        &mut procs,
-        started,
-    );
+        ipc: &mut ipc,
+        procs: &mut procs,
+        missed: vec![0; n],
+    }
+    .drive(centre_path, started);
 
     // Whatever happened, stop the agents and clean up before reporting.
     for i in procs.running() {
@@ -123,120 +150,294 @@ pub fn run_scenario(
     Ok(outcome)
 }
 
-fn drive(
-    scenario: &Scenario,
-    centre_path: &[Pose],
-    options: &RunOptions,
-    ipc: &mut CoordinatorIpc,
-    procs: &mut AgentProcesses,
-    started: Instant,
-) -> anyhow::Result<RunOutcome> {
-    let n = scenario.agents.len();
-    for i in 0..n {
-        procs.spawn(i, &[])?;
-    }
-    wait_ready(ipc, procs, n, options.startup_timeout)?;
-    let startup_s = started.elapsed().as_secs_f64();
-    ipc.update_connections()?;
-
-    let monitor = SafetyMonitor::new(scenario.field, &scenario.obstacles);
-    let mut recorder = Recorder::new(scenario, centre_path);
-    let mut latency_us = Vec::with_capacity(n * centre_path.len());
-    let mut compute_us = Vec::with_capacity(n * centre_path.len());
-    let bar = progress_bar(
-        centre_path.len().saturating_sub(1),
-        &scenario.name,
-        options.progress,
-    );
-    let mut interrupted = false;
-
-    'steps: for (step, centre) in centre_path.iter().enumerate().skip(1) {
-        for agent in 0..n {
-            if !recorder.alive()[agent] {
-                continue;
-            }
-            let slot = scenario.agents[agent].slot.ideal_position(centre);
-            let seq =
-                ipc.publish_world(step, agent, centre, recorder.bodies(), recorder.alive())?;
-            let sent = Instant::now();
-            ipc.notify_turn(agent)?;
-            let answer = ipc.wait_state(sent + options.turn_deadline, |s| {
-                s.state_kind() == Some(StateKind::Move) && s.agent as usize == agent && s.seq == seq
-            })?;
-            if ipc.termination_requested() {
-                interrupted = true;
-                break 'steps;
-            }
-            match answer {
-                Some(state) => {
-                    latency_us.push(sent.elapsed().as_secs_f64() * 1e6);
-                    compute_us.push(state.compute_ns as f64 / 1e3);
-                    accept_or_reject(&monitor, &mut recorder, step, agent, slot, &state);
-                }
-                None => on_missed_turn(ipc, procs, &mut recorder, step, agent, slot),
-            }
-        }
-        recorder.end_step(step);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-
-    let rss: Vec<f64> = (0..n)
-        .filter_map(|i| procs.pid(i).and_then(rss_kib))
-        .collect();
-    let timing = Timing {
-        turn_latency_us: Distribution::of(&latency_us),
-        compute_us: Distribution::of(&compute_us),
-        wall_s: 0.0,
-        startup_s,
-        agent_rss_kib: Distribution::of(&rss),
-    };
-    let run = if interrupted {
-        recorder.snapshot()
-    } else {
-        recorder.finish(true)
-    };
-    Ok(RunOutcome {
-        run,
-        timing,
-        interrupted,
-        prefix: String::new(),
-    })
+/// What the coordinator learned while waiting for a move.
+enum Answer {
+    /// The move arrived.
+    Move(Box<AgentState>),
+    /// The agent's process is gone; detected after this long.
+    Dead(Duration),
+    /// The deadline passed with the process alive.
+    Missed,
+    /// SIGINT or SIGTERM reached the coordinator.
+    Interrupted,
 }
 
-/// Wait for every agent's ready handshake.
+struct Driver<'a> {
+    scenario: &'a Scenario,
+    options: &'a RunOptions,
+    ipc: &'a mut CoordinatorIpc,
+    procs: &'a mut AgentProcesses,
+    /// Consecutive missed turns per agent.
+    missed: Vec<u32>,
+}
+
+impl Driver<'_> {
+    fn spawn(&mut self, agent: usize, replacement: bool) -> anyhow::Result<()> {
+        let mut extra = Vec::new();
+        if !replacement
+            && let Some((_, mode)) = self.options.misbehave.iter().find(|(a, _)| *a == agent)
+        {
+            extra = vec!["--misbehave".to_string(), mode.clone()];
+        }
+        self.procs.spawn(agent, &extra)?;
+        Ok(())
+    }
+
+    fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<RunOutcome> {
+        let n = self.scenario.agents.len();
+        for i in 0..n {
+            self.spawn(i, false)?;
+        }
+        let all: Vec<usize> = (0..n).collect();
+        wait_ready(self.ipc, self.procs, &all, self.options.startup_timeout)?;
+        let startup_s = started.elapsed().as_secs_f64();
+        self.ipc.update_connections()?;
+
+        let monitor = SafetyMonitor::new(self.scenario.field, &self.scenario.obstacles);
+        let mut recorder = Recorder::new(self.scenario, centre_path);
+        let mut latency_us = Vec::with_capacity(n * centre_path.len());
+        let mut compute_us = Vec::with_capacity(n * centre_path.len());
+        let bar = progress_bar(
+            centre_path.len().saturating_sub(1),
+            &self.scenario.name,
+            self.options.progress,
+        );
+        let mut interrupted = false;
+
+        'steps: for (step, centre) in centre_path.iter().enumerate().skip(1) {
+            // Agents that died while waiting for their turn are noticed now.
+            let checked = Instant::now();
+            for agent in 0..n {
+                if recorder.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
+                    self.on_death(
+                        &mut recorder,
+                        step,
+                        agent,
+                        checked.elapsed(),
+                        "exited between turns",
+                    )?;
+                }
+            }
+            for agent in 0..n {
+                if !recorder.alive()[agent] {
+                    continue;
+                }
+                let slot = self.scenario.agents[agent].slot.ideal_position(centre);
+                let seq = self.ipc.publish_world(
+                    step,
+                    agent,
+                    centre,
+                    recorder.bodies(),
+                    recorder.alive(),
+                )?;
+                let granted = Instant::now();
+                self.ipc.notify_turn(agent)?;
+                if self.options.kills.contains(&(agent, step)) {
+                    if let Some(pid) = self.procs.signal_kill(agent) {
+                        recorder.note_fault(
+                            step,
+                            agent,
+                            "killed",
+                            format!("fault injection: SIGKILL to process {pid} during its turn"),
+                            None,
+                        );
+                    }
+                }
+                match self.wait_answer(agent, seq, granted) {
+                    Answer::Move(state) => {
+                        self.missed[agent] = 0;
+                        latency_us.push(granted.elapsed().as_secs_f64() * 1e6);
+                        compute_us.push(state.compute_ns as f64 / 1e3);
+                        accept_or_reject(&monitor, &mut recorder, step, agent, slot, &state);
+                    }
+                    Answer::Dead(after) => {
+                        self.on_death(&mut recorder, step, agent, after, "died during its turn")?;
+                    }
+                    Answer::Missed => self.on_missed(&mut recorder, step, agent, slot)?,
+                    Answer::Interrupted => {
+                        interrupted = true;
+                        break 'steps;
+                    }
+                }
+            }
+            recorder.end_step(step);
+            bar.inc(1);
+            if self.ipc.termination_requested() {
+                interrupted = true;
+                break;
+            }
+        }
+        bar.finish_and_clear();
+
+        let rss: Vec<f64> = (0..n)
+            .filter_map(|i| self.procs.pid(i).and_then(rss_kib))
+            .collect();
+        let timing = Timing {
+            turn_latency_us: Distribution::of(&latency_us),
+            compute_us: Distribution::of(&compute_us),
+            wall_s: 0.0,
+            startup_s,
+            agent_rss_kib: Distribution::of(&rss),
+        };
+        let run = if interrupted {
+            recorder.snapshot()
+        } else {
+            recorder.finish(true)
+        };
+        Ok(RunOutcome {
+            run,
+            timing,
+            interrupted,
+            prefix: String::new(),
+        })
+    }
+
+    /// Wait for `agent`'s move to world `seq`, checking its process every slice.
+    fn wait_answer(&mut self, agent: usize, seq: u64, granted: Instant) -> Answer {
+        let deadline = granted + self.options.turn_deadline;
+        loop {
+            let until = (Instant::now() + LIVENESS_SLICE).min(deadline);
+            let got = self.ipc.wait_state(until, |s| {
+                s.state_kind() == Some(StateKind::Move) && s.agent as usize == agent && s.seq == seq
+            });
+            match got {
+                Ok(Some(state)) => return Answer::Move(Box::new(state)),
+                Ok(None) => {}
+                Err(e) => {
+                    tracing::warn!("agent {agent}: {e:#}");
+                }
+            }
+            if self.ipc.termination_requested() {
+                return Answer::Interrupted;
+            }
+            if self.procs.poll(agent) == Exit::Exited {
+                return Answer::Dead(granted.elapsed());
+            }
+            if Instant::now() >= deadline {
+                return Answer::Missed;
+            }
+        }
+    }
+
+    /// Freeze a dead agent, clean its shared-memory resources, and respawn it if asked.
+    fn on_death(
+        &mut self,
+        recorder: &mut Recorder,
+        step: usize,
+        agent: usize,
+        after: Duration,
+        how: &str,
+    ) -> anyhow::Result<()> {
+        let ms = after.as_secs_f64() * 1e3;
+        tracing::warn!(
+            "step {step}: agent {agent} {how}; frozen as an obstacle ({ms:.1} ms to notice)"
+        );
+        recorder.freeze_dead(step, agent, format!("the agent process {how}"), ms);
+        self.procs.kill_now(agent);
+        let cleaned = self.ipc.cleanup_dead_nodes();
+        tracing::info!("cleaned the resources of {cleaned} dead node(s)");
+        self.missed[agent] = 0;
+        if self.options.respawn {
+            self.respawn(recorder, step, agent)?;
+        }
+        Ok(())
+    }
+
+    fn respawn(
+        &mut self,
+        recorder: &mut Recorder,
+        step: usize,
+        agent: usize,
+    ) -> anyhow::Result<()> {
+        self.spawn(agent, true)?;
+        match wait_ready(self.ipc, self.procs, &[agent], Duration::from_secs(10)) {
+            Ok(()) => {
+                self.ipc.update_connections()?;
+                recorder.mark_alive(agent);
+                let pid = self.procs.pid(agent).unwrap_or(0);
+                recorder.note_fault(
+                    step,
+                    agent,
+                    "respawned",
+                    format!("replacement process {pid} takes the slot from the last position"),
+                    None,
+                );
+            }
+            Err(e) => {
+                tracing::warn!("agent {agent}: the replacement did not start: {e:#}");
+                self.procs.kill_now(agent);
+                recorder.note_fault(step, agent, "respawn_failed", format!("{e:#}"), None);
+            }
+        }
+        Ok(())
+    }
+
+    /// A live agent missed its deadline: it keeps its place; after too many misses in a
+    /// row it is declared hung, killed and frozen.
+    fn on_missed(
+        &mut self,
+        recorder: &mut Recorder,
+        step: usize,
+        agent: usize,
+        slot: Point,
+    ) -> anyhow::Result<()> {
+        self.missed[agent] += 1;
+        recorder.reject(
+            step,
+            agent,
+            slot,
+            "missed",
+            format!(
+                "no move within the {:?} turn deadline",
+                self.options.turn_deadline
+            ),
+        );
+        if self.missed[agent] >= self.options.max_missed_turns {
+            tracing::warn!(
+                "step {step}: agent {agent} missed {} turns in a row: killing it",
+                self.missed[agent]
+            );
+            self.procs.kill_now(agent);
+            recorder.note_fault(
+                step,
+                agent,
+                "hung",
+                format!("missed {} turns in a row; killed", self.missed[agent]),
+                None,
+            );
+            self.on_death(recorder, step, agent, Duration::ZERO, "was killed as hung")?;
+        }
+        Ok(())
+    }
+}
+
+/// Wait for the ready handshake of every agent in `agents`.
 fn wait_ready(
     ipc: &CoordinatorIpc,
     procs: &mut AgentProcesses,
-    n: usize,
+    agents: &[usize],
     timeout: Duration,
 ) -> anyhow::Result<()> {
     let deadline = Instant::now() + timeout;
-    let mut ready = vec![false; n];
-    let mut count = 0;
-    while count < n {
+    let mut pending: Vec<usize> = agents.to_vec();
+    while !pending.is_empty() {
         let got = ipc.wait_state(
-            (Instant::now() + Duration::from_millis(100)).min(deadline),
-            |s| s.state_kind() == Some(StateKind::Ready),
+            (Instant::now() + Duration::from_millis(50)).min(deadline),
+            |s| s.state_kind() == Some(StateKind::Ready) && pending.contains(&(s.agent as usize)),
         )?;
         if let Some(s) = got {
-            let i = s.agent as usize;
-            if i < n && !ready[i] {
-                ready[i] = true;
-                count += 1;
-            }
+            pending.retain(|&i| i != s.agent as usize);
             continue;
         }
         if ipc.termination_requested() {
             bail!("interrupted while the agents were starting");
         }
-        if let Some(i) = (0..n).find(|&i| !ready[i] && procs.poll(i) == Exit::Exited) {
+        if let Some(&i) = pending.iter().find(|&&i| procs.poll(i) == Exit::Exited) {
             bail!("agent {i} exited before it was ready (see its error above)");
         }
         if Instant::now() >= deadline {
-            let missing: Vec<usize> = (0..n).filter(|&i| !ready[i]).collect();
             bail!(
-                "agents {missing:?} were not ready after {:.1} s",
+                "agents {pending:?} were not ready after {:.1} s",
                 timeout.as_secs_f64()
             );
         }
@@ -290,37 +491,5 @@ fn accept_or_reject(
             tracing::warn!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
             recorder.reject(step, agent, slot, "rejected", why);
         }
-    }
-}
-
-/// An agent did not answer in time: dead agents are frozen as obstacles and leave the
-/// formation; live ones keep their place and the miss is recorded.
-fn on_missed_turn(
-    ipc: &CoordinatorIpc,
-    procs: &mut AgentProcesses,
-    recorder: &mut Recorder,
-    step: usize,
-    agent: usize,
-    slot: Point,
-) {
-    let exited = procs.poll(agent) == Exit::Exited;
-    if exited || !ipc.agent_node_alive(agent) {
-        tracing::warn!("step {step}: agent {agent} is dead; frozen as an obstacle");
-        recorder.reject(step, agent, slot, "dead", "the agent process died".into());
-        recorder.mark_dead(agent);
-        if !exited {
-            procs.kill_now(agent);
-        }
-        let cleaned = ipc.cleanup_dead_nodes();
-        tracing::info!("cleaned the resources of {cleaned} dead node(s)");
-    } else {
-        tracing::warn!("step {step}: agent {agent} missed its turn deadline");
-        recorder.reject(
-            step,
-            agent,
-            slot,
-            "missed",
-            "no move before the turn deadline".into(),
-        );
     }
 }

@@ -288,6 +288,12 @@ pub fn shortest_path(space: &FreeSpace, from: &Point, to: &Point) -> Result<Disk
     if from == to || space.is_segment_free(from, to, FREE_TOLERANCE_M) {
         return Ok(DiskPath::straight(*from, *to));
     }
+    search_path(space, from, to)
+}
+
+/// The search part of [`shortest_path`], for free end points whose straight segment is
+/// blocked.
+fn search_path(space: &FreeSpace, from: &Point, to: &Point) -> Result<DiskPath, PathError> {
     let direct_m = (to - from).norm();
     // The ellipse covers the field once it holds the four corners (the field is convex).
     let cover_m = space
@@ -315,6 +321,271 @@ pub fn shortest_path(space: &FreeSpace, from: &Point, to: &Point) -> Result<Disk
             }
         }
         bound_m = (2.0 * bound_m).min(cover_m);
+    }
+}
+
+/// Shortest paths from one start to many goals in the same free space: the reachability
+/// test of one agent's turn, where the candidate best points are tried one after another.
+///
+/// [`PathsFrom::shortest_path`] answers exactly what [`shortest_path`] answers (the same
+/// path, bit for bit, or the same error). It is faster when the goal lies in another free
+/// component than the start, as when the agent stands in a pocket closed by overlapping
+/// disks and its slot lies outside: [`shortest_path`] has to exhaust the pocket before it
+/// may give up, while here a barrier graph of the disks around the start, built once and
+/// shared by every goal, shows most such goals unreachable in one pass over its edges.
+/// The barrier test is sound (a goal it rejects is unreachable, so no answer changes); a
+/// goal it does not reject goes to the search.
+pub struct PathsFrom<'a, 's> {
+    space: &'a FreeSpace<'s>,
+    from: Point,
+    from_is_free: bool,
+    /// Built on the first goal that needs it; rebuilt larger for a goal it does not cover.
+    barriers: Option<BarrierGraph>,
+}
+
+impl<'a, 's> PathsFrom<'a, 's> {
+    /// Paths from `from` in `space` (already inflated disks, as for [`shortest_path`]).
+    pub fn new(space: &'a FreeSpace<'s>, from: &Point) -> Self {
+        Self {
+            space,
+            from: *from,
+            from_is_free: space.is_free(from, FREE_TOLERANCE_M),
+            barriers: None,
+        }
+    }
+
+    /// The common start of every path.
+    pub fn start(&self) -> Point {
+        self.from
+    }
+
+    /// `shortest_path(space, from, to)`, the same answer bit for bit.
+    pub fn shortest_path(&mut self, to: &Point) -> Result<DiskPath, PathError> {
+        if !self.from_is_free {
+            return Err(PathError::StartNotFree);
+        }
+        if !self.space.is_free(to, FREE_TOLERANCE_M) {
+            return Err(PathError::GoalNotFree);
+        }
+        let from = self.from;
+        if from == *to || self.space.is_segment_free(&from, to, FREE_TOLERANCE_M) {
+            return Ok(DiskPath::straight(from, *to));
+        }
+        if self.barriers_for(to).separates(&from, to) {
+            return Err(PathError::Unreachable);
+        }
+        search_path(self.space, &from, to)
+    }
+
+    /// The barrier graph, covering the disks near the start and near `to`.
+    fn barriers_for(&mut self, to: &Point) -> &mut BarrierGraph {
+        // Pockets are small: a few of the largest disks around the start or the goal.
+        let pad_m = BARRIER_PAD_RADII * self.space.max_radius_m();
+        let needed_m = (to - self.from).norm() + pad_m;
+        let reach_m = match &self.barriers {
+            Some(graph) if graph.reach_m >= needed_m => None,
+            Some(graph) => Some(needed_m.max(2.0 * graph.reach_m)),
+            None => Some(needed_m),
+        };
+        if let Some(reach_m) = reach_m {
+            self.barriers = Some(BarrierGraph::new(self.space, &self.from, reach_m));
+        }
+        self.barriers.as_mut().expect("built above")
+    }
+}
+
+/// How far around the start a [`PathsFrom`] barrier graph reaches beyond its farthest goal,
+/// in largest disk radii.
+const BARRIER_PAD_RADII: f64 = 4.0;
+
+/// One barrier edge: a segment through obstacle from vertex `u` to vertex `v`, with its
+/// bounding box.
+#[derive(Clone, Copy, Debug)]
+struct BarrierEdge {
+    u: u32,
+    v: u32,
+    p: Point,
+    q: Point,
+    min: Point,
+    max: Point,
+}
+
+impl BarrierEdge {
+    fn new(u: usize, v: usize, p: &Point, q: &Point) -> Self {
+        Self {
+            u: u as u32,
+            v: v as u32,
+            p: *p,
+            q: *q,
+            min: Point::new(p.x.min(q.x), p.y.min(q.y)),
+            max: Point::new(p.x.max(q.x), p.y.max(q.y)),
+        }
+    }
+
+    /// [`crosses`] `s`-`t`, with `[min, max]` the box of `s`-`t` grown by a slack far
+    /// above rounding (an edge whose box misses it cannot cross).
+    fn crosses(&self, s: &Point, t: &Point, min: &Point, max: &Point) -> bool {
+        self.max.x >= min.x
+            && self.min.x <= max.x
+            && self.max.y >= min.y
+            && self.min.y <= max.y
+            && crosses(s, t, &self.p, &self.q)
+    }
+}
+
+/// The barrier edges ([`visit_barrier_edges`]) of the disks that meet a ball around a start,
+/// reduced to what can close a curve, for the test of [`separated`] against many goals.
+///
+/// A goal is separated from the start iff some cycle of the graph is crossed an odd number
+/// of times by the segment between them. Only the 2-core of the graph (what is left after
+/// repeatedly removing vertices of degree at most one) holds cycles, and the cycle space is
+/// spanned by the fundamental cycles of a spanning forest: with `parity(v)` the parity of
+/// the crossings along the forest path from its root to `v`, some cycle is odd iff some edge
+/// off the forest has `parity(u) ^ parity(v) ^ crosses(edge)` set. One pass, no sorting.
+struct BarrierGraph {
+    /// Radius of the ball around the start: the graph holds every disk that meets it.
+    reach_m: f64,
+    /// Forest edges, parent `u` to child `v`, each parent reached before its children.
+    forest: Vec<BarrierEdge>,
+    /// The other edges of the 2-core, each closing one fundamental cycle.
+    chords: Vec<BarrierEdge>,
+    /// Scratch: crossing parity of the forest path from the root to each vertex.
+    parity: Vec<bool>,
+}
+
+impl BarrierGraph {
+    fn new(space: &FreeSpace, from: &Point, reach_m: f64) -> Self {
+        let field = &space.field;
+        let r_max = space.max_radius_m();
+        let grow = Vector::new(reach_m + r_max, reach_m + r_max);
+        let mut disks = Vec::new();
+        let _ = space.visit_box(&(from - grow), &(from + grow), |_, d| {
+            let usable = d.radius_m > 0.0 && d.radius_m.is_finite();
+            if usable
+                && (field.clamp(&d.center) - d.center).norm() <= d.radius_m
+                && (d.center - from).norm() <= reach_m + d.radius_m
+            {
+                disks.push(*d);
+            }
+            ControlFlow::<()>::Continue(())
+        });
+        let vertices = disks.len() + 1;
+        let mut edges = Vec::new();
+        let _ = visit_barrier_edges(field, &disks, |u, v, p, q| {
+            edges.push(BarrierEdge::new(u, v, p, q));
+            ControlFlow::Continue(())
+        });
+
+        // Adjacency (edge indices per vertex, in edge order).
+        let mut degree = vec![0usize; vertices];
+        for e in &edges {
+            degree[e.u as usize] += 1;
+            degree[e.v as usize] += 1;
+        }
+        let mut first = Vec::with_capacity(vertices + 1);
+        let mut total = 0;
+        for d in &degree {
+            first.push(total);
+            total += d;
+        }
+        first.push(total);
+        let mut fill = first.clone();
+        let mut incident = vec![0usize; total];
+        for (k, e) in edges.iter().enumerate() {
+            for w in [e.u as usize, e.v as usize] {
+                incident[fill[w]] = k;
+                fill[w] += 1;
+            }
+        }
+        let other = |k: usize, w: usize| {
+            let e = &edges[k];
+            if e.u as usize == w {
+                e.v as usize
+            } else {
+                e.u as usize
+            }
+        };
+
+        // 2-core: peel vertices of degree <= 1.
+        let mut removed = vec![false; vertices];
+        let mut peel: Vec<usize> = (0..vertices).filter(|&w| degree[w] <= 1).collect();
+        while let Some(w) = peel.pop() {
+            if removed[w] {
+                continue;
+            }
+            removed[w] = true;
+            for &k in &incident[first[w]..first[w + 1]] {
+                let x = other(k, w);
+                if !removed[x] {
+                    degree[x] -= 1;
+                    if degree[x] <= 1 {
+                        peel.push(x);
+                    }
+                }
+            }
+        }
+
+        // Spanning forest of the 2-core, breadth first, roots in vertex order.
+        let mut used = vec![false; edges.len()];
+        let mut seen = removed.clone();
+        let mut forest = Vec::new();
+        let mut queue = std::collections::VecDeque::new();
+        for root in 0..vertices {
+            if seen[root] {
+                continue;
+            }
+            seen[root] = true;
+            queue.push_back(root);
+            while let Some(w) = queue.pop_front() {
+                for &k in &incident[first[w]..first[w + 1]] {
+                    let x = other(k, w);
+                    if seen[x] {
+                        continue;
+                    }
+                    seen[x] = true;
+                    used[k] = true;
+                    let e = &edges[k];
+                    forest.push(BarrierEdge {
+                        u: w as u32,
+                        v: x as u32,
+                        ..*e
+                    });
+                    queue.push_back(x);
+                }
+            }
+        }
+        let chords = edges
+            .iter()
+            .zip(&used)
+            .filter(|&(e, &in_forest)| {
+                !in_forest && !removed[e.u as usize] && !removed[e.v as usize]
+            })
+            .map(|(e, _)| *e)
+            .collect();
+        Self {
+            reach_m,
+            forest,
+            chords,
+            parity: vec![false; vertices],
+        }
+    }
+
+    /// Whether a cycle of the graph separates `s` from `t` (sound, as [`separated`]).
+    fn separates(&mut self, s: &Point, t: &Point) -> bool {
+        if self.chords.is_empty() {
+            return false;
+        }
+        let slack_m = FREE_TOLERANCE_M * (1.0 + s.x.abs() + s.y.abs() + t.x.abs() + t.y.abs());
+        let min = Point::new(s.x.min(t.x) - slack_m, s.y.min(t.y) - slack_m);
+        let max = Point::new(s.x.max(t.x) + slack_m, s.y.max(t.y) + slack_m);
+        // Roots keep `false`; every other vertex is set after its parent.
+        for e in &self.forest {
+            self.parity[e.v as usize] = self.parity[e.u as usize] ^ e.crosses(s, t, &min, &max);
+        }
+        let parity = &self.parity;
+        self.chords
+            .iter()
+            .any(|e| parity[e.u as usize] ^ parity[e.v as usize] ^ e.crosses(s, t, &min, &max))
     }
 }
 
@@ -904,22 +1175,20 @@ fn crosses(s: &Point, t: &Point, p: &Point, q: &Point) -> bool {
     mu > 0.0 && mu < 1.0
 }
 
-/// Whether some closed chain of overlapping `disks` (the outside of the field counting as
-/// one more obstacle) separates `s` from `t`.
-///
-/// The segment between the centres of two disks that overlap lies inside their union, and
-/// so does the segment from the centre of a disk crossing a field edge to a point beyond
-/// that edge; joining such segments gives closed curves made of obstacle. A curve crossed
-/// an odd number of times by the segment `s`-`t` separates them, which shows as a cycle of
-/// odd parity in a union-find with parities. Overlaps must exceed [`BARRIER_MARGIN_M`], so
-/// `s` and `t` (free within [`FREE_TOLERANCE_M`]) never lie on these curves and no path
-/// within tolerance passes. Sound, not complete: `false` means "not shown".
-fn separated(field: &Field, s: &Point, t: &Point, disks: &[Disk]) -> bool {
-    let n = disks.len();
-    let outside = n;
-    let mut uf = ParityUnionFind::new(n + 1);
+/// Every barrier edge among `disks`: a pair of disks `i < j` that overlap by more than
+/// [`BARRIER_MARGIN_M`], with the segment between their centres, and a disk crossing a field
+/// edge by more than that margin, joined to vertex `disks.len()` (the outside of the field)
+/// by the segment from its centre to a point beyond that edge. Every such segment lies in
+/// the obstacle (the union of the disks and the outside of the field) with a depth far above
+/// [`FREE_TOLERANCE_M`]. Stops when `visit` breaks.
+fn visit_barrier_edges(
+    field: &Field,
+    disks: &[Disk],
+    mut visit: impl FnMut(usize, usize, &Point, &Point) -> ControlFlow<()>,
+) -> ControlFlow<()> {
+    let outside = disks.len();
     let r_max = disks.iter().map(|d| d.radius_m).fold(0.0, f64::max);
-    let mut order: Vec<usize> = (0..n).collect();
+    let mut order: Vec<usize> = (0..disks.len()).collect();
     order.sort_by(|&a, &b| disks[a].center.x.total_cmp(&disks[b].center.x));
     for (pos, &i) in order.iter().enumerate() {
         let di = &disks[i];
@@ -929,10 +1198,8 @@ fn separated(field: &Field, s: &Point, t: &Point, disks: &[Disk]) -> bool {
                 break;
             }
             let reach = di.radius_m + dj.radius_m - BARRIER_MARGIN_M;
-            if (dj.center - di.center).norm() < reach
-                && !uf.union(i, j, crosses(s, t, &di.center, &dj.center))
-            {
-                return true;
+            if (dj.center - di.center).norm() < reach {
+                visit(i, j, &di.center, &dj.center)?;
             }
         }
         let (c, r, m) = (di.center, di.radius_m, BARRIER_MARGIN_M);
@@ -944,12 +1211,35 @@ fn separated(field: &Field, s: &Point, t: &Point, disks: &[Disk]) -> bool {
             (c.y > h - r + m, Point::new(c.x, c.y.max(h) + 1.0)),
         ];
         for (crosses_edge, beyond) in exits {
-            if crosses_edge && !uf.union(i, outside, crosses(s, t, &c, &beyond)) {
-                return true;
+            if crosses_edge {
+                visit(i, outside, &c, &beyond)?;
             }
         }
     }
-    false
+    ControlFlow::Continue(())
+}
+
+/// Whether some closed chain of overlapping `disks` (the outside of the field counting as
+/// one more obstacle) separates `s` from `t`.
+///
+/// The segment between the centres of two disks that overlap lies inside their union, and
+/// so does the segment from the centre of a disk crossing a field edge to a point beyond
+/// that edge; joining such segments gives closed curves made of obstacle
+/// ([`visit_barrier_edges`]). A curve crossed an odd number of times by the segment `s`-`t`
+/// separates them, which shows as a cycle of odd parity in a union-find with parities.
+/// Overlaps must exceed [`BARRIER_MARGIN_M`], so `s` and `t` (free within
+/// [`FREE_TOLERANCE_M`]) never lie on these curves and no path within tolerance passes.
+/// Sound, not complete: `false` means "not shown".
+fn separated(field: &Field, s: &Point, t: &Point, disks: &[Disk]) -> bool {
+    let mut uf = ParityUnionFind::new(disks.len() + 1);
+    visit_barrier_edges(field, disks, |i, j, p, q| {
+        if uf.union(i, j, crosses(s, t, p, q)) {
+            ControlFlow::Continue(())
+        } else {
+            ControlFlow::Break(())
+        }
+    })
+    .is_break()
 }
 
 #[cfg(test)]

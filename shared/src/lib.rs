@@ -16,6 +16,7 @@
 #![warn(missing_docs)]
 
 pub mod best_point;
+pub mod cbf;
 pub mod clcbs;
 pub mod disk_path;
 pub mod dubins;

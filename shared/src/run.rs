@@ -80,6 +80,10 @@ pub struct Fault {
     pub kind: String,
     /// Details for people.
     pub detail: String,
+    /// For a detected death: milliseconds from the moment the coordinator started waiting
+    /// on the agent (its turn, or the step's liveness check) to the detection.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub detection_ms: Option<f64>,
 }
 
 /// A whole run.
@@ -305,22 +309,48 @@ impl<'a> Recorder<'a> {
             step,
             kind: kind.to_string(),
             detail,
+            detection_ms: None,
         });
     }
 
-    /// Record a fault that does not change the agent's move (for example a respawn).
-    pub fn note_fault(&mut self, step: usize, agent: usize, kind: &str, detail: String) {
+    /// Record a fault that does not change the agent's move (a kill, a respawn, a
+    /// detected death).
+    pub fn note_fault(
+        &mut self,
+        step: usize,
+        agent: usize,
+        kind: &str,
+        detail: String,
+        detection_ms: Option<f64>,
+    ) {
         self.run.faults.push(Fault {
             agent,
             step,
             kind: kind.to_string(),
             detail,
+            detection_ms,
         });
     }
 
-    /// Take `agent` out of the formation: it stays as a static obstacle where it stands.
-    pub fn mark_dead(&mut self, agent: usize) {
+    /// Take `agent` out of the formation because its process died: it stays as a static
+    /// obstacle where it stands, and the death is recorded with how long it took to
+    /// notice.
+    pub fn freeze_dead(&mut self, step: usize, agent: usize, detail: String, detection_ms: f64) {
+        let here = self.bodies[agent].position;
+        let centre = self
+            .run
+            .centre_path
+            .get(step)
+            .copied()
+            .unwrap_or(self.scenario.path.start);
+        self.pending[agent] = Some(Move {
+            slot: self.scenario.agents[agent].slot.ideal_position(&centre),
+            best: here,
+            status: MoveStatus::Dead,
+            waypoints: vec![here],
+        });
         self.alive[agent] = false;
+        self.note_fault(step, agent, "dead", detail, Some(detection_ms));
     }
 
     /// Put `agent` back into the formation (a replacement process took its place).

@@ -18,8 +18,13 @@ pub const MAX_OBSTACLES: usize = 16_384;
 /// Largest field side accepted, in metres: beyond this the numbers stop being a field.
 pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
 /// Bound on the number of centre steps: `step_m` may not cut the field's diagonal into
-/// more than a quarter of this many steps.
+/// more than a quarter of this many steps. It also bounds how finely the centre path
+/// planner samples the path: every `turning_radius_m / 16` and `center_clearance_m / 2`
+/// at most, so neither may cut the diagonal into more than this many samples.
 pub const MAX_STEPS: usize = 200_000;
+/// Largest magnitude of an angle in degrees (headings and slot angles): beyond it an
+/// angle is a typo, and far beyond it a double has no precision left for the angle.
+pub const MAX_ANGLE_DEG: f64 = 360.0;
 
 /// The paper's example (section III), embedded so `coordinator run` works with no file.
 pub const PAPER_SCENARIO_TOML: &str = include_str!("../../scenarios/paper.toml");
@@ -156,8 +161,10 @@ struct FieldFile {
 struct ObstaclesFile {
     #[serde(default = "default_obstacle_radius_m")]
     radius_m: f64,
+    /// `[x_m, y_m]` pairs; the length is checked by the [`Checker`] (serde would take the
+    /// first two numbers of a longer array without a word).
     #[serde(default)]
-    positions_m: Vec<[f64; 2]>,
+    positions_m: Vec<Vec<f64>>,
     #[serde(default)]
     disk: Vec<DiskFile>,
     random: Option<RandomFile>,
@@ -293,28 +300,101 @@ fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
         reason: one_line(e.message()),
     };
     let deserializer = toml::Deserializer::parse(text).map_err(syntax)?;
-    serde_path_to_error::deserialize(deserializer).map_err(|e| {
+    let raw = serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
+        let top = path == "." || path.is_empty();
+        // A missing field is reported at the table that lacks it: name the field itself.
+        let missing = inner
+            .message()
+            .strip_prefix("missing field `")
+            .and_then(|rest| rest.strip_suffix('`'))
+            .map(str::to_owned);
+        let field = match missing {
+            Some(name) if top => name,
+            Some(name) => format!("{path}.{name}"),
+            None if top => inner
+                .span()
+                .map(|s| line_column(text, s.start))
+                .unwrap_or_else(|| "(top level)".into()),
+            None => path,
+        };
         ScenarioError::Parse {
             file: file.to_string(),
-            field: if path == "." || path.is_empty() {
-                inner
-                    .span()
-                    .map(|s| line_column(text, s.start))
-                    .unwrap_or_else(|| "(top level)".into())
-            } else {
-                path
-            },
+            field,
             reason: one_line(inner.message()),
         }
+    })?;
+    let document: toml::Table = toml::from_str(text).map_err(syntax)?;
+    if let Some(field) = table_given_as_array(&document) {
+        return Err(ScenarioError::Parse {
+            file: file.to_string(),
+            field,
+            reason:
+                "invalid type: array, expected a table of named values (units are in the names)"
+                    .into(),
+        });
+    }
+    Ok(raw)
+}
+
+/// The first table of the format written as an array (`start = [3.0, 5.0, 0.0]`), if
+/// any. Serde fills a struct from an array by position, silently dropping extra items;
+/// the format wants every value named with its unit.
+fn table_given_as_array(document: &toml::Table) -> Option<String> {
+    const TABLES: [&str; 7] = [
+        "field",
+        "obstacles",
+        "obstacles.random",
+        "formation",
+        "path",
+        "path.start",
+        "path.goal",
+    ];
+    const ARRAYS_OF_TABLES: [&str; 2] = ["obstacles.disk", "formation.slots"];
+    let lookup = |path: &str| {
+        let mut parts = path.split('.');
+        let mut value = document.get(parts.next()?)?;
+        for part in parts {
+            value = value.as_table()?.get(part)?;
+        }
+        Some(value)
+    };
+    if let Some(path) = TABLES
+        .into_iter()
+        .find(|path| lookup(path).is_some_and(toml::Value::is_array))
+    {
+        return Some(path.to_string());
+    }
+    ARRAYS_OF_TABLES.into_iter().find_map(|path| {
+        let items = lookup(path)?.as_array()?;
+        let i = items.iter().position(toml::Value::is_array)?;
+        Some(format!("{path}[{i}]"))
     })
 }
 
+/// A number for a message: plain when short, in exponent form when huge or tiny (a
+/// 1e308 m field should not print 309 digits).
+fn num(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// `line L, column C` of a byte offset (both from 1, the column in characters). An
+/// offset past the end or inside a character is taken back to the character's start.
 fn line_column(text: &str, offset: usize) -> String {
-    let before = &text[..offset.min(text.len())];
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
     let line = before.matches('\n').count() + 1;
-    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = before[line_start..].chars().count() + 1;
     format!("line {line}, column {column}")
 }
 
@@ -343,13 +423,30 @@ impl Checker<'_> {
         }
     }
 
+    fn angle_deg(&self, field: &str, v: f64) -> Result<f64, ScenarioError> {
+        self.finite(field, v)?;
+        if v.abs() > MAX_ANGLE_DEG {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "{} degrees is outside -{MAX_ANGLE_DEG}..={MAX_ANGLE_DEG}",
+                    num(v)
+                ),
+            ));
+        }
+        Ok(v)
+    }
+
     fn positive(&self, field: &str, v: f64, max: f64) -> Result<f64, ScenarioError> {
         self.finite(field, v)?;
         if v <= 0.0 {
-            return Err(self.invalid(field, format!("must be positive, got {v}")));
+            return Err(self.invalid(field, format!("must be positive, got {}", num(v))));
         }
         if v > max {
-            return Err(self.invalid(field, format!("{v} is larger than the limit {max}")));
+            return Err(self.invalid(
+                field,
+                format!("{} is larger than the limit {}", num(v), num(max)),
+            ));
         }
         Ok(v)
     }
@@ -357,10 +454,13 @@ impl Checker<'_> {
     fn non_negative(&self, field: &str, v: f64, max: f64) -> Result<f64, ScenarioError> {
         self.finite(field, v)?;
         if v < 0.0 {
-            return Err(self.invalid(field, format!("must not be negative, got {v}")));
+            return Err(self.invalid(field, format!("must not be negative, got {}", num(v))));
         }
         if v > max {
-            return Err(self.invalid(field, format!("{v} is larger than the limit {max}")));
+            return Err(self.invalid(
+                field,
+                format!("{} is larger than the limit {}", num(v), num(max)),
+            ));
         }
         Ok(v)
     }
@@ -368,13 +468,16 @@ impl Checker<'_> {
     fn pose(&self, field: &str, p: &PoseFile, area: &Field) -> Result<Pose, ScenarioError> {
         self.finite(&format!("{field}.x_m"), p.x_m)?;
         self.finite(&format!("{field}.y_m"), p.y_m)?;
-        self.finite(&format!("{field}.heading_deg"), p.heading_deg)?;
+        self.angle_deg(&format!("{field}.heading_deg"), p.heading_deg)?;
         if !area.contains(&Point::new(p.x_m, p.y_m), 0.0) {
             return Err(self.invalid(
                 field,
                 format!(
                     "({}, {}) is outside the {} x {} m field",
-                    p.x_m, p.y_m, area.width_m, area.height_m
+                    num(p.x_m),
+                    num(p.y_m),
+                    area.width_m,
+                    area.height_m
                 ),
             ));
         }
@@ -412,14 +515,37 @@ impl Checker<'_> {
                 "path.step_m",
                 format!(
                     "{} m is too small for a {width_m} x {height_m} m field (more than {MAX_STEPS} steps)",
-                    path.step_m
+                    num(path.step_m)
+                ),
+            ));
+        }
+        // The planner samples the centre path every turning_radius_m / 16 and
+        // center_clearance_m / 2 at most: bound the samples as the steps are bounded.
+        let finest_m = diagonal_m / MAX_STEPS as f64;
+        if path.turning_radius_m / 16.0 < finest_m {
+            return Err(self.invalid(
+                "path.turning_radius_m",
+                format!(
+                    "{} m is too small for a {width_m} x {height_m} m field (the planner would sample the path more than {MAX_STEPS} times across it; at least {} m)",
+                    num(path.turning_radius_m),
+                    num(16.0 * finest_m)
+                ),
+            ));
+        }
+        if path.center_clearance_m > 0.0 && path.center_clearance_m / 2.0 < finest_m {
+            return Err(self.invalid(
+                "path.center_clearance_m",
+                format!(
+                    "{} m is too small for a {width_m} x {height_m} m field (the planner would sample the path more than {MAX_STEPS} times across it; 0 or at least {} m)",
+                    num(path.center_clearance_m),
+                    num(2.0 * finest_m)
                 ),
             ));
         }
 
         let obstacles = self.obstacles(&raw.obstacles, &field, &path, raw.seed)?;
         let agents = self.agents(&raw.formation, &field)?;
-        self.start_and_goal_clear(&obstacles, &path)?;
+        self.start_and_goal_clear(&obstacles, &field, &path)?;
         self.formation_fits_at_start(&agents, &obstacles, &field, &path)?;
 
         Ok(Scenario {
@@ -442,42 +568,69 @@ impl Checker<'_> {
     ) -> Result<Vec<Disk>, ScenarioError> {
         let side_m = field.width_m.max(field.height_m);
         let default_radius_m = self.positive("obstacles.radius_m", raw.radius_m, side_m)?;
-        let mut obstacles = Vec::new();
-        let mut place = |name: String, x_m: f64, y_m: f64, radius_m: f64| {
-            self.finite(&format!("{name}.x"), x_m)?;
-            self.finite(&format!("{name}.y"), y_m)?;
+        let explicit = raw.positions_m.len() + raw.disk.len();
+        if explicit > MAX_OBSTACLES {
+            return Err(self.invalid(
+                "obstacles",
+                format!(
+                    "{} explicit obstacles ({} in positions_m, {} in disk) exceed the capacity of {MAX_OBSTACLES}",
+                    explicit,
+                    raw.positions_m.len(),
+                    raw.disk.len()
+                ),
+            ));
+        }
+        let mut obstacles = Vec::with_capacity(explicit);
+        // `name` is the obstacle's path, `x` and `y` those of its coordinates.
+        let mut place = |name: String, x: (String, f64), y: (String, f64), radius_m: f64| {
+            let x_m = self.finite(&x.0, x.1)?;
+            let y_m = self.finite(&y.0, y.1)?;
             if !field.contains(&Point::new(x_m, y_m), 0.0) {
                 return Err(self.invalid(
                     name,
-                    format!("obstacle centre ({x_m}, {y_m}) is outside the field"),
+                    format!(
+                        "obstacle centre ({}, {}) is outside the {} x {} m field",
+                        num(x_m),
+                        num(y_m),
+                        field.width_m,
+                        field.height_m
+                    ),
                 ));
             }
             obstacles.push(Disk::new(x_m, y_m, radius_m));
             Ok(())
         };
-        for (i, [x_m, y_m]) in raw.positions_m.iter().enumerate() {
+        for (i, xy) in raw.positions_m.iter().enumerate() {
+            let name = format!("obstacles.positions_m[{i}]");
+            let &[x_m, y_m] = xy.as_slice() else {
+                return Err(self.invalid(
+                    name,
+                    format!("must be a pair [x_m, y_m], got {} value(s)", xy.len()),
+                ));
+            };
             place(
-                format!("obstacles.positions_m[{i}]"),
-                *x_m,
-                *y_m,
+                name.clone(),
+                (format!("{name}[0]"), x_m),
+                (format!("{name}[1]"), y_m),
                 default_radius_m,
             )?;
         }
         for (i, d) in raw.disk.iter().enumerate() {
             let name = format!("obstacles.disk[{i}]");
+            let x = (format!("{name}.x_m"), d.x_m);
+            let y = (format!("{name}.y_m"), d.y_m);
             let radius_m = match d.radius_m {
                 Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
                 None => default_radius_m,
             };
-            place(name, d.x_m, d.y_m, radius_m)?;
+            place(name, x, y, radius_m)?;
         }
         if let Some(random) = &raw.random {
-            let explicit = obstacles.len();
-            if random.count > MAX_OBSTACLES.saturating_sub(explicit) {
+            if random.count > MAX_OBSTACLES - explicit {
                 return Err(self.invalid(
                     "obstacles.random.count",
                     format!(
-                        "{} obstacles exceed the capacity of {MAX_OBSTACLES} (with {explicit} explicit ones)",
+                        "{} random obstacles and {explicit} explicit ones exceed the capacity of {MAX_OBSTACLES}",
                         random.count
                     ),
                 ));
@@ -577,7 +730,7 @@ impl Checker<'_> {
                 s.r_m,
                 field.width_m.hypot(field.height_m),
             )?;
-            let theta_deg = self.finite(&format!("{name}.theta_deg"), s.theta_deg)?;
+            let theta_deg = self.angle_deg(&format!("{name}.theta_deg"), s.theta_deg)?;
             let radius_m = match s.radius_m {
                 Some(r) => self.positive(&format!("{name}.radius_m"), r, hold_m)?,
                 None => default_radius_m,
@@ -611,10 +764,20 @@ impl Checker<'_> {
     fn start_and_goal_clear(
         &self,
         obstacles: &[Disk],
+        field: &Field,
         path: &PathSpec,
     ) -> Result<(), ScenarioError> {
         for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
             let p = pose.position();
+            if field.signed_inset_m(&p) < path.center_clearance_m {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "({}, {}) is closer to the field's edge than the centre clearance {} m",
+                        p.x, p.y, path.center_clearance_m
+                    ),
+                ));
+            }
             if let Some((k, o)) = obstacles
                 .iter()
                 .enumerate()

@@ -186,10 +186,15 @@ impl AgentPlanner {
         };
 
         let mut found: Option<(Point, DiskPath)> = None;
-        let best = best_point::nearest_reachable_free_point(&space, &slot_p, &me_p, |p| {
-            match disk_path::shortest_path(&space, &me_p, p) {
+        let best = best_point::nearest_reachable_free_point(&space, &slot_p, &me_p, {
+            // One context for every candidate of the turn (same space, same start): it
+            // answers as `disk_path::shortest_path` does, but proves most candidates in
+            // another free component unreachable without a search.
+            let mut paths = disk_path::PathsFrom::new(&space, &me_p);
+            let found = &mut found;
+            move |p| match paths.shortest_path(p) {
                 Ok(path) => {
-                    found = Some((*p, path));
+                    *found = Some((*p, path));
                     true
                 }
                 Err(_) => false,

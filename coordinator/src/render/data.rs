@@ -1,0 +1,363 @@
+//! Reading a run directory written by `coordinator run` back into memory: the scenario
+//! (obstacles included, rebuilt deterministically from `scenario.toml`), the centre path,
+//! every agent's state and move at every step, and the faults. Nothing is re-planned.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use shared::geometry::{Point, Pose};
+use shared::scenario::Scenario;
+
+/// The files a run directory must hold, in the order they are checked.
+pub const REQUIRED_FILES: [&str; 5] = [
+    "scenario.toml",
+    "path.csv",
+    "trajectory.csv",
+    "moves.csv",
+    "summary.json",
+];
+
+/// Why a run directory cannot be read. Every message is one line naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum RunDirError {
+    /// The directory itself is missing or is not a directory.
+    #[error("{}: not a directory", .dir.display())]
+    NotADirectory {
+        /// The directory as given.
+        dir: PathBuf,
+    },
+    /// A required file is missing.
+    #[error("{}: not found (is {} a run directory written by `coordinator run`?)", .path.display(), .dir.display())]
+    Missing {
+        /// The missing file.
+        path: PathBuf,
+        /// The run directory.
+        dir: PathBuf,
+    },
+    /// A file is present but unreadable or not what `coordinator run` writes.
+    #[error("{}: {reason}", .path.display())]
+    Invalid {
+        /// The offending file.
+        path: PathBuf,
+        /// What is wrong, on one line.
+        reason: String,
+    },
+}
+
+/// The formation centre at one step (`path.csv`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CentrePose {
+    /// The step.
+    pub step: usize,
+    /// The centre's pose.
+    pub pose: Pose,
+}
+
+/// One agent at the end of one step (`trajectory.csv` with its `moves.csv` polyline).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AgentRecord {
+    /// Where the agent is.
+    pub position: Point,
+    /// Its ideal slot.
+    pub slot: Point,
+    /// The best point it aimed for.
+    pub best: Point,
+    /// Distance from its slot, in metres.
+    pub deviation_m: f64,
+    /// Clearance to the nearest other body, as the run recorded it, in metres.
+    pub clearance_m: f64,
+    /// Outcome of its turn (`MoveStatus::name()`).
+    pub status: String,
+    /// Whether it is still in the formation.
+    pub alive: bool,
+    /// The polyline it followed in this step (a single point when it did not move).
+    pub path: Vec<Point>,
+}
+
+/// Every agent at the end of one step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepRecord {
+    /// The step.
+    pub step: usize,
+    /// The agents, indexed by agent id.
+    pub agents: Vec<AgentRecord>,
+}
+
+/// A fault from `summary.json`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct FaultRecord {
+    /// The agent.
+    pub agent: usize,
+    /// The step it happened in.
+    pub step: usize,
+    /// Short name (`dead`, `missed`, `rejected`, ...).
+    pub kind: String,
+    /// Details for people.
+    #[serde(default)]
+    pub detail: String,
+}
+
+/// A run directory, read and checked.
+#[derive(Clone, Debug)]
+pub struct RunData {
+    /// The directory it was read from.
+    pub dir: PathBuf,
+    /// The scenario, rebuilt from `scenario.toml` (obstacles with their true radii).
+    pub scenario: Scenario,
+    /// The centre path, one pose per step, in step order.
+    pub centre: Vec<CentrePose>,
+    /// The steps, in step order.
+    pub steps: Vec<StepRecord>,
+    /// The faults, in the order the run recorded them.
+    pub faults: Vec<FaultRecord>,
+    /// Whether the run went through the whole centre path (`None` when not recorded).
+    pub completed: Option<bool>,
+}
+
+impl RunData {
+    /// Read the run directory `dir`.
+    pub fn load(dir: &Path) -> Result<Self, RunDirError> {
+        if !dir.is_dir() {
+            return Err(RunDirError::NotADirectory {
+                dir: dir.to_path_buf(),
+            });
+        }
+        for name in REQUIRED_FILES {
+            let path = dir.join(name);
+            if !path.is_file() {
+                return Err(RunDirError::Missing {
+                    path,
+                    dir: dir.to_path_buf(),
+                });
+            }
+        }
+        let scenario = read_scenario(&dir.join("scenario.toml"))?;
+        let centre = read_centre(&dir.join("path.csv"))?;
+        let mut steps = read_trajectory(&dir.join("trajectory.csv"), scenario.agents.len())?;
+        read_moves(&dir.join("moves.csv"), &mut steps)?;
+        let (faults, completed) = read_summary(&dir.join("summary.json"))?;
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            scenario,
+            centre,
+            steps,
+            faults,
+            completed,
+        })
+    }
+
+    /// The last step recorded (0 for an empty run).
+    pub fn last_step(&self) -> usize {
+        let traj = self.steps.last().map_or(0, |s| s.step);
+        let path = self.centre.last().map_or(0, |c| c.step);
+        traj.max(path)
+    }
+
+    /// The centre pose at `step`, or the nearest recorded one before it.
+    pub fn centre_at(&self, step: usize) -> Option<Pose> {
+        let i = self.centre.partition_point(|c| c.step <= step);
+        self.centre.get(i.checked_sub(1)?).map(|c| c.pose)
+    }
+}
+
+fn invalid(path: &Path, reason: impl std::fmt::Display) -> RunDirError {
+    RunDirError::Invalid {
+        path: path.to_path_buf(),
+        reason: reason.to_string().replace('\n', " "),
+    }
+}
+
+fn read_text(path: &Path) -> Result<String, RunDirError> {
+    std::fs::read_to_string(path).map_err(|e| invalid(path, e))
+}
+
+fn read_scenario(path: &Path) -> Result<Scenario, RunDirError> {
+    let text = read_text(path)?;
+    // The scenario error already reads `FILE: FIELD: REASON`.
+    Scenario::parse(&text, &path.display().to_string()).map_err(|e| RunDirError::Invalid {
+        path: path.to_path_buf(),
+        reason: e
+            .to_string()
+            .trim_start_matches(&format!("{}: ", path.display()))
+            .to_string(),
+    })
+}
+
+/// Rows of a CSV file deserialized by header name, each with its line number.
+fn csv_rows<T: for<'de> Deserialize<'de>>(
+    path: &Path,
+    mut each: impl FnMut(u64, T) -> Result<(), String>,
+) -> Result<(), RunDirError> {
+    let mut reader = csv::Reader::from_path(path).map_err(|e| invalid(path, e))?;
+    let headers = reader.headers().map_err(|e| invalid(path, e))?.clone();
+    let mut record = csv::StringRecord::new();
+    loop {
+        match reader.read_record(&mut record) {
+            Ok(false) => return Ok(()),
+            Ok(true) => {}
+            Err(e) => return Err(invalid(path, e)),
+        }
+        let line = record.position().map_or(0, |p| p.line());
+        let row: T = record
+            .deserialize(Some(&headers))
+            .map_err(|e| invalid(path, format!("line {line}: {e}")))?;
+        each(line, row).map_err(|reason| invalid(path, format!("line {line}: {reason}")))?;
+    }
+}
+
+fn finite(name: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{name} is {v}, not a finite number"))
+    }
+}
+
+fn point(x_name: &str, x: f64, y_name: &str, y: f64) -> Result<Point, String> {
+    Ok(Point::new(finite(x_name, x)?, finite(y_name, y)?))
+}
+
+#[derive(Deserialize)]
+struct PathRow {
+    step: usize,
+    x_m: f64,
+    y_m: f64,
+    heading_rad: f64,
+}
+
+fn read_centre(path: &Path) -> Result<Vec<CentrePose>, RunDirError> {
+    let mut centre: Vec<CentrePose> = Vec::new();
+    csv_rows(path, |_, r: PathRow| {
+        if centre.last().is_some_and(|c| c.step >= r.step) {
+            return Err(format!("step {} is out of order", r.step));
+        }
+        centre.push(CentrePose {
+            step: r.step,
+            pose: Pose::new(
+                finite("x_m", r.x_m)?,
+                finite("y_m", r.y_m)?,
+                finite("heading_rad", r.heading_rad)?,
+            ),
+        });
+        Ok(())
+    })?;
+    if centre.is_empty() {
+        return Err(invalid(path, "no rows"));
+    }
+    Ok(centre)
+}
+
+#[derive(Deserialize)]
+struct TrajectoryRow {
+    step: usize,
+    agent: usize,
+    x: f64,
+    y: f64,
+    slot_x: f64,
+    slot_y: f64,
+    best_x: f64,
+    best_y: f64,
+    deviation_m: f64,
+    clearance_m: f64,
+    status: String,
+    alive: u8,
+}
+
+fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDirError> {
+    let mut steps: Vec<(usize, Vec<Option<AgentRecord>>)> = Vec::new();
+    csv_rows(path, |_, r: TrajectoryRow| {
+        if r.agent >= agents {
+            return Err(format!(
+                "agent {} does not exist (scenario.toml has {agents} agents)",
+                r.agent
+            ));
+        }
+        let record = AgentRecord {
+            position: point("x", r.x, "y", r.y)?,
+            slot: point("slot_x", r.slot_x, "slot_y", r.slot_y)?,
+            best: point("best_x", r.best_x, "best_y", r.best_y)?,
+            deviation_m: r.deviation_m,
+            clearance_m: r.clearance_m,
+            status: r.status,
+            alive: r.alive != 0,
+            path: Vec::new(),
+        };
+        match steps.last_mut() {
+            Some((step, _)) if *step > r.step => {
+                return Err(format!("step {} is out of order", r.step));
+            }
+            Some((step, _)) if *step == r.step => {}
+            _ => steps.push((r.step, vec![None; agents])),
+        }
+        let Some((_, slots)) = steps.last_mut() else {
+            return Err("internal: no step".into());
+        };
+        if slots[r.agent].replace(record).is_some() {
+            return Err(format!("agent {} appears twice in step {}", r.agent, r.step));
+        }
+        Ok(())
+    })?;
+    if steps.is_empty() {
+        return Err(invalid(path, "no rows"));
+    }
+    steps
+        .into_iter()
+        .map(|(step, slots)| {
+            let have = slots.iter().filter(|a| a.is_some()).count();
+            let complete: Option<Vec<AgentRecord>> = slots.into_iter().collect();
+            complete
+                .map(|records| StepRecord {
+                    step,
+                    agents: records,
+                })
+                .ok_or_else(|| invalid(path, format!("step {step} has {have} of {agents} agents")))
+        })
+        .collect()
+}
+
+#[derive(Deserialize)]
+struct MoveRow {
+    step: usize,
+    agent: usize,
+    index: usize,
+    x: f64,
+    y: f64,
+}
+
+fn read_moves(path: &Path, steps: &mut [StepRecord]) -> Result<(), RunDirError> {
+    let at: HashMap<usize, usize> = steps.iter().enumerate().map(|(i, s)| (s.step, i)).collect();
+    let mut indexed: HashMap<(usize, usize), Vec<(usize, Point)>> = HashMap::new();
+    csv_rows(path, |_, r: MoveRow| {
+        let Some(&i) = at.get(&r.step) else {
+            return Err(format!("step {} is not in trajectory.csv", r.step));
+        };
+        if r.agent >= steps[i].agents.len() {
+            return Err(format!("agent {} does not exist", r.agent));
+        }
+        indexed
+            .entry((i, r.agent))
+            .or_default()
+            .push((r.index, point("x", r.x, "y", r.y)?));
+        Ok(())
+    })?;
+    for ((i, agent), mut points) in indexed {
+        points.sort_by_key(|&(index, _)| index);
+        steps[i].agents[agent].path = points.into_iter().map(|(_, p)| p).collect();
+    }
+    Ok(())
+}
+
+#[derive(Deserialize)]
+struct SummaryFile {
+    #[serde(default)]
+    faults: Vec<FaultRecord>,
+    #[serde(default)]
+    completed: Option<bool>,
+}
+
+fn read_summary(path: &Path) -> Result<(Vec<FaultRecord>, Option<bool>), RunDirError> {
+    let text = read_text(path)?;
+    let summary: SummaryFile = serde_json::from_str(&text).map_err(|e| invalid(path, e))?;
+    Ok((summary.faults, summary.completed))
+}

@@ -1,0 +1,38 @@
+//! The embedded font. Plots draw text with Roboto Regular (Apache-2.0, see
+//! `coordinator/assets/fonts/`), compiled into the binary, so rendering needs no system
+//! font library and looks the same on every machine.
+
+use std::sync::OnceLock;
+
+use plotters::style::{FontStyle, IntoFont, TextStyle, register_font};
+
+use super::palette;
+
+/// The font family every figure uses. SVG files name it too, so a viewer falls back to
+/// its own sans-serif face.
+pub const FAMILY: &str = "sans-serif";
+
+/// Roboto Regular, embedded.
+const ROBOTO_REGULAR: &[u8] = include_bytes!("../../assets/fonts/Roboto-Regular.ttf");
+
+/// Register the embedded font with plotters (once per process; later calls are free).
+pub fn ensure_registered() -> anyhow::Result<()> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            register_font(FAMILY, FontStyle::Normal, ROBOTO_REGULAR)
+                .map_err(|_| "the embedded font (Roboto-Regular.ttf) is not a valid font".into())
+        })
+        .clone()
+        .map_err(anyhow::Error::msg)
+}
+
+/// Text of `size_px` pixels in the default colour.
+pub fn text(size_px: f64) -> TextStyle<'static> {
+    (FAMILY, size_px).into_font().color(&palette::BLACK)
+}
+
+/// Width and height of `s` in `style`, in pixels (0 when the font cannot measure it).
+pub fn measure(s: &str, style: &TextStyle<'_>) -> (u32, u32) {
+    style.font.box_size(s).unwrap_or((0, 0))
+}

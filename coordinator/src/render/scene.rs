@@ -1,0 +1,443 @@
+//! Drawing the world in metres: the map chart (equal scale, axes in metres), obstacles
+//! with their safety margins, circles, polylines and arrows clipped to the view, and the
+//! header (title, subtitle, legend) that every figure carries above its plot.
+
+use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
+use plotters::prelude::{
+    Cartesian2d, ChartBuilder, ChartContext, DashedPathElement, DrawingArea, PathElement,
+    Polygon, Rectangle, Text,
+};
+use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
+use shared::geometry::Disk;
+
+use super::canvas::Backend;
+use super::font;
+use super::geom::{self, View, Xy};
+use super::layout::MapLayout;
+use super::palette;
+
+/// A chart whose both axes are in metres.
+pub type MapChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Space for the y tick labels and description left of a map, in pixels.
+pub const MAP_LEFT_PX: u32 = 64;
+/// Space for the x tick labels and description below a map, in pixels.
+pub const MAP_BOTTOM_PX: u32 = 50;
+/// Space right of a map, in pixels.
+pub const MAP_RIGHT_PX: u32 = 24;
+
+/// A line style: `color` at `width` pixels.
+pub fn line(color: RGBAColor, width: u32) -> ShapeStyle {
+    ShapeStyle {
+        color,
+        filled: false,
+        stroke_width: width,
+    }
+}
+
+/// A fill style.
+pub fn fill(color: RGBAColor) -> ShapeStyle {
+    ShapeStyle {
+        color,
+        filled: true,
+        stroke_width: 1,
+    }
+}
+
+/// `color` at `alpha` opacity.
+pub fn alpha(color: RGBColor, alpha: f64) -> RGBAColor {
+    color.mix(alpha)
+}
+
+/// `color`, opaque.
+pub fn solid(color: RGBColor) -> RGBAColor {
+    color.to_rgba()
+}
+
+/// The map chart of `layout` on `root`, with its grid and axes in metres drawn.
+pub fn map_chart<'a, DB: Backend>(
+    root: &'a DrawingArea<DB, Shift>,
+    layout: &MapLayout,
+) -> anyhow::Result<MapChart<'a, DB>> {
+    let m = layout.margins;
+    let mut chart = ChartBuilder::on(root)
+        .margin_top(m.top)
+        .margin_right(m.right)
+        .y_label_area_size(m.left)
+        .x_label_area_size(m.bottom)
+        .build_cartesian_2d(layout.x_m.clone(), layout.y_m.clone())?;
+    chart
+        .configure_mesh()
+        .x_desc("x (m)")
+        .y_desc("y (m)")
+        .label_style(font::text(14.0))
+        .axis_desc_style(font::text(15.0))
+        .bold_line_style(line(solid(palette::GRID), 1))
+        .light_line_style(line(alpha(palette::GRID, 0.0), 0))
+        .axis_style(line(solid(palette::TEXT_MUTED), 1))
+        .x_labels(10)
+        .y_labels(8)
+        .draw()?;
+    Ok(chart)
+}
+
+/// The view rectangle of `layout`.
+pub fn view_of(layout: &MapLayout) -> View {
+    View {
+        x0: layout.x_m.start,
+        x1: layout.x_m.end,
+        y0: layout.y_m.start,
+        y1: layout.y_m.end,
+    }
+}
+
+/// Draws clipped shapes in metres onto a map.
+pub struct Painter<'c, 'a, DB: Backend> {
+    chart: &'c MapChart<'a, DB>,
+    view: View,
+    px_per_m: f64,
+}
+
+impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
+    /// A painter for `chart` laid out as `layout`.
+    pub fn new(chart: &'c MapChart<'a, DB>, layout: &MapLayout) -> Self {
+        Self {
+            chart,
+            view: view_of(layout),
+            px_per_m: layout.px_per_m,
+        }
+    }
+
+    /// Metres for `px` pixels.
+    pub fn m(&self, px: f64) -> f64 {
+        px / self.px_per_m
+    }
+
+    /// A filled polygon, clipped.
+    pub fn polygon(&self, points: &[Xy], style: ShapeStyle) -> anyhow::Result<()> {
+        let clipped = self.view.clip_polygon(points);
+        if clipped.len() >= 3 {
+            self.chart
+                .plotting_area()
+                .draw(&Polygon::new(clipped, style))?;
+        }
+        Ok(())
+    }
+
+    /// A polyline, clipped.
+    pub fn polyline(&self, points: &[Xy], style: ShapeStyle) -> anyhow::Result<()> {
+        for piece in self.view.clip_polyline(points) {
+            self.chart
+                .plotting_area()
+                .draw(&PathElement::new(piece, style))?;
+        }
+        Ok(())
+    }
+
+    /// A dashed polyline, clipped: dashes of `dash_px` with gaps of `gap_px`.
+    pub fn dashed(
+        &self,
+        points: &[Xy],
+        dash_px: u32,
+        gap_px: u32,
+        style: ShapeStyle,
+    ) -> anyhow::Result<()> {
+        for piece in self.view.clip_polyline(points) {
+            self.chart.plotting_area().draw(&DashedPathElement::new(
+                piece,
+                dash_px,
+                gap_px,
+                style,
+            ))?;
+        }
+        Ok(())
+    }
+
+    /// A disk of radius `r` metres: `fill_style` inside (if any), `edge` around (if any).
+    pub fn disk(
+        &self,
+        c: Xy,
+        r: f64,
+        fill_style: Option<ShapeStyle>,
+        edge: Option<ShapeStyle>,
+    ) -> anyhow::Result<()> {
+        if !self.view.touches_disk(c, r) {
+            return Ok(());
+        }
+        let poly = geom::circle(c, r, self.px_per_m);
+        if let Some(f) = fill_style {
+            self.polygon(&poly, f)?;
+        }
+        if let Some(e) = edge {
+            self.polyline(&geom::closed(poly), e)?;
+        }
+        Ok(())
+    }
+
+    /// A disk of `radius_px` pixels whatever the scale (a marker).
+    pub fn marker(&self, c: Xy, radius_px: f64, style: ShapeStyle) -> anyhow::Result<()> {
+        let r = self.m(radius_px);
+        if !self.view.touches_disk(c, r) {
+            return Ok(());
+        }
+        self.polygon(&geom::circle(c, r, self.px_per_m), style)
+    }
+
+    /// An arrow from `tail` along `heading_rad`, `len_px` long.
+    pub fn arrow(
+        &self,
+        tail: Xy,
+        heading_rad: f64,
+        len_px: f64,
+        color: RGBAColor,
+        width: u32,
+    ) -> anyhow::Result<()> {
+        let head_px = (len_px * 0.45).clamp(6.0, 12.0);
+        let (shaft, head) = geom::arrow(tail, heading_rad, self.m(len_px), self.m(head_px));
+        self.polyline(&shaft, line(color, width))?;
+        self.polygon(&head, fill(color))
+    }
+
+    /// Text at `at` (metres), if it is inside the view.
+    pub fn text(&self, s: &str, at: Xy, style: &TextStyle<'_>) -> anyhow::Result<()> {
+        if self.view.contains(at) {
+            self.chart
+                .plotting_area()
+                .draw(&Text::new(s.to_string(), at, style.clone()))?;
+        }
+        Ok(())
+    }
+
+    /// The obstacles, each with its safety margin (grown by `margin_m`, translucent, with
+    /// a dashed edge when there are few enough to keep the file small).
+    pub fn obstacles(&self, obstacles: &[Disk], margin_m: f64) -> anyhow::Result<()> {
+        let dashed = obstacles.len() <= 400;
+        for o in obstacles {
+            let c = (o.center.x, o.center.y);
+            let r = o.radius_m + margin_m;
+            if !self.view.touches_disk(c, r) {
+                continue;
+            }
+            let ring = geom::circle(c, r, self.px_per_m);
+            self.polygon(&ring, fill(alpha(palette::SAFETY_MARGIN, 0.16)))?;
+            if dashed {
+                self.dashed(&geom::closed(ring), 4, 3, line(solid(palette::SAFETY_MARGIN), 1))?;
+            } else {
+                self.polyline(&geom::closed(ring), line(alpha(palette::SAFETY_MARGIN, 0.7), 1))?;
+            }
+        }
+        for o in obstacles {
+            self.disk(
+                (o.center.x, o.center.y),
+                o.radius_m,
+                Some(fill(solid(palette::OBSTACLE))),
+                None,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// What a legend entry shows beside its label.
+#[derive(Clone, Copy, Debug)]
+pub enum Swatch {
+    /// A line (dashed or not).
+    Line {
+        /// Colour.
+        color: RGBAColor,
+        /// Width, in pixels.
+        width: u32,
+        /// Whether it is dashed.
+        dashed: bool,
+    },
+    /// A disk with a fill and an edge.
+    Disk {
+        /// Fill.
+        fill: RGBAColor,
+        /// Edge.
+        edge: Option<RGBAColor>,
+        /// Whether the edge is dashed.
+        dashed: bool,
+    },
+    /// An arrow pointing right.
+    Arrow {
+        /// Colour.
+        color: RGBAColor,
+    },
+    /// A translucent band.
+    Band {
+        /// Colour.
+        color: RGBAColor,
+    },
+}
+
+/// A legend entry.
+#[derive(Clone, Debug)]
+pub struct LegendItem {
+    /// The swatch.
+    pub swatch: Swatch,
+    /// The label.
+    pub label: String,
+}
+
+impl LegendItem {
+    /// An entry.
+    pub fn new(swatch: Swatch, label: impl Into<String>) -> Self {
+        Self {
+            swatch,
+            label: label.into(),
+        }
+    }
+}
+
+/// The header above a plot: a title, an optional subtitle and a legend that wraps.
+#[derive(Clone, Debug)]
+pub struct Header {
+    /// The title (names the scenario).
+    pub title: String,
+    /// A line under the title.
+    pub subtitle: Option<String>,
+    /// The legend.
+    pub legend: Vec<LegendItem>,
+}
+
+const PAD_PX: i32 = 16;
+const TITLE_ROW_PX: u32 = 36;
+const SUBTITLE_ROW_PX: u32 = 22;
+const LEGEND_ROW_PX: u32 = 24;
+const SWATCH_W_PX: i32 = 30;
+
+fn title_style() -> TextStyle<'static> {
+    font::text(22.0)
+}
+
+fn small_style() -> TextStyle<'static> {
+    font::text(15.0)
+}
+
+impl Header {
+    /// Where each legend entry goes (x, row) for a canvas `width_px` wide.
+    fn places(&self, width_px: u32) -> Vec<(i32, u32)> {
+        let style = small_style();
+        let mut x = PAD_PX;
+        let mut row = 0;
+        let limit = width_px as i32 - PAD_PX;
+        self.legend
+            .iter()
+            .map(|item| {
+                let w = SWATCH_W_PX + 6 + font::measure(&item.label, &style).0 as i32 + 20;
+                if x > PAD_PX && x + w > limit {
+                    x = PAD_PX;
+                    row += 1;
+                }
+                let place = (x, row);
+                x += w;
+                place
+            })
+            .collect()
+    }
+
+    /// Height of the header on a canvas `width_px` wide, in pixels.
+    pub fn height_px(&self, width_px: u32) -> u32 {
+        let rows = self.places(width_px).last().map_or(0, |&(_, r)| r + 1);
+        TITLE_ROW_PX
+            + self.subtitle.as_ref().map_or(0, |_| SUBTITLE_ROW_PX)
+            + rows * LEGEND_ROW_PX
+            + 8
+    }
+
+    /// Draw the header at the top of `root`.
+    pub fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        let (width_px, _) = root.dim_in_pixel();
+        root.draw(&Text::new(
+            self.title.clone(),
+            (PAD_PX, 10),
+            title_style(),
+        ))?;
+        let mut top = TITLE_ROW_PX as i32;
+        if let Some(sub) = &self.subtitle {
+            root.draw(&Text::new(
+                sub.clone(),
+                (PAD_PX, top),
+                small_style().color(&palette::TEXT_MUTED),
+            ))?;
+            top += SUBTITLE_ROW_PX as i32;
+        }
+        for (item, (x, row)) in self.legend.iter().zip(self.places(width_px)) {
+            let y = top + (row * LEGEND_ROW_PX) as i32 + 9;
+            draw_swatch(root, item.swatch, x, y)?;
+            root.draw(&Text::new(
+                item.label.clone(),
+                (x + SWATCH_W_PX + 6, y - 8),
+                small_style(),
+            ))?;
+        }
+        Ok(())
+    }
+}
+
+/// Draw `swatch` with its left end at `x` and its middle at `y`.
+fn draw_swatch<DB: Backend>(
+    root: &DrawingArea<DB, Shift>,
+    swatch: Swatch,
+    x: i32,
+    y: i32,
+) -> anyhow::Result<()> {
+    let circle = |r: f64| -> Vec<(i32, i32)> {
+        geom::circle((f64::from(x + SWATCH_W_PX / 2), f64::from(y)), r, 1.0)
+            .into_iter()
+            .map(|(a, b)| (a.round() as i32, b.round() as i32))
+            .collect()
+    };
+    match swatch {
+        Swatch::Line {
+            color,
+            width,
+            dashed,
+        } => {
+            let pts = vec![(x, y), (x + SWATCH_W_PX, y)];
+            if dashed {
+                root.draw(&DashedPathElement::new(pts, 5, 3, line(color, width)))?;
+            } else {
+                root.draw(&PathElement::new(pts, line(color, width)))?;
+            }
+        }
+        Swatch::Disk {
+            fill: f,
+            edge,
+            dashed,
+        } => {
+            root.draw(&Polygon::new(circle(7.0), fill(f)))?;
+            if let Some(e) = edge {
+                let ring = geom::closed(circle(7.0));
+                if dashed {
+                    root.draw(&DashedPathElement::new(ring, 3, 2, line(e, 1)))?;
+                } else {
+                    root.draw(&PathElement::new(ring, line(e, 2)))?;
+                }
+            }
+        }
+        Swatch::Arrow { color } => {
+            root.draw(&PathElement::new(
+                vec![(x, y), (x + SWATCH_W_PX - 8, y)],
+                line(color, 2),
+            ))?;
+            root.draw(&Polygon::new(
+                vec![
+                    (x + SWATCH_W_PX, y),
+                    (x + SWATCH_W_PX - 10, y - 5),
+                    (x + SWATCH_W_PX - 10, y + 5),
+                ],
+                fill(color),
+            ))?;
+        }
+        Swatch::Band { color } => {
+            root.draw(&Rectangle::new(
+                [(x, y - 6), (x + SWATCH_W_PX, y + 6)],
+                fill(color),
+            ))?;
+        }
+    }
+    Ok(())
+}

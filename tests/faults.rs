@@ -1,0 +1,396 @@
+//! Faults with real processes and real signals: agents killed (by the built-in injection
+//! and from outside, at random moments), respawned, misbehaving; the coordinator killed
+//! or interrupted. Each test checks the exit code, `summary.json`, the processes left
+//! (none) and the shared-memory files left (none).
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use nix::sys::signal::{Signal, kill};
+use nix::unistd::Pid;
+use serde_json::Value;
+
+/// The run prefixes a coordinator process uses start with this.
+fn prefix_stem(coordinator_pid: u32) -> String {
+    format!("fc{coordinator_pid}x")
+}
+
+fn coordinator(args: &[&str], out: &Path) -> Command {
+    let mut c = Command::new(support::coordinator_bin());
+    c.arg("run")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    c
+}
+
+fn summary(out: &Path) -> Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary.json parses")
+}
+
+/// Nothing of the coordinator process `pid` is left: no agent process, no iceoryx2 file.
+fn assert_nothing_left(pid: u32) {
+    let stem = prefix_stem(pid);
+    let deadline = Instant::now() + Duration::from_secs(2);
+    while !support::processes_mentioning(&format!("--run {stem}")).is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "agent processes of {stem} left running"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let left = support::leftovers(&stem);
+    assert!(left.is_empty(), "iceoryx2 files left: {left:?}");
+}
+
+fn run_to_end(args: &[&str], out: &Path) -> (Output, u32) {
+    let child = coordinator(args, out).spawn().expect("start coordinator");
+    let pid = child.id();
+    let output = child.wait_with_output().expect("coordinator output");
+    (output, pid)
+}
+
+fn faults_of(s: &Value, kind: &str) -> Vec<Value> {
+    s["faults"]
+        .as_array()
+        .expect("faults")
+        .iter()
+        .filter(|f| f["kind"] == kind)
+        .cloned()
+        .collect()
+}
+
+fn assert_safe(s: &Value) {
+    assert_eq!(s["collisions"], 0, "{s:#}");
+    assert!(
+        s["min_clearance_m"].as_f64().expect("min_clearance_m") >= -1e-9,
+        "{s:#}"
+    );
+}
+
+/// Rows of trajectory.csv for one agent: (step, x, y, alive).
+fn agent_rows(out: &Path, agent: usize) -> Vec<(usize, f64, f64, bool)> {
+    let mut reader = csv::Reader::from_path(out.join("trajectory.csv")).expect("trajectory.csv");
+    reader
+        .records()
+        .map(|r| r.expect("row"))
+        .filter(|r| r[1].parse::<usize>().ok() == Some(agent))
+        .map(|r| {
+            (
+                r[0].parse().expect("step"),
+                r[2].parse().expect("x"),
+                r[3].parse().expect("y"),
+                &r[11] == "1",
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_killed_agent_is_frozen_as_an_obstacle_and_the_run_completes_safely() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let (output, pid) = run_to_end(&["--kill-agent", "2@40"], &out);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let s = summary(&out);
+    assert_eq!(s["completed"], true);
+    assert_safe(&s);
+    assert_eq!(faults_of(&s, "killed").len(), 1);
+    let dead = faults_of(&s, "dead");
+    assert_eq!(dead.len(), 1);
+    assert_eq!(
+        (dead[0]["agent"].as_u64(), dead[0]["step"].as_u64()),
+        (Some(2), Some(40))
+    );
+    assert!(dead[0]["detection_ms"].as_f64().expect("detection_ms") < 250.0);
+    // Frozen where it stood, out of the formation from step 40 on.
+    let rows = agent_rows(&out, 2);
+    let frozen: Vec<_> = rows.iter().filter(|r| r.0 >= 40).collect();
+    assert!(
+        frozen
+            .iter()
+            .all(|r| !r.3 && r.1 == frozen[0].1 && r.2 == frozen[0].2)
+    );
+    assert!(rows.iter().filter(|r| r.0 < 40).all(|r| r.3));
+    assert_nothing_left(pid);
+}
+
+#[test]
+fn a_respawned_agent_takes_its_slot_again() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let (output, pid) = run_to_end(&["--kill-agent", "1@30", "--respawn"], &out);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let s = summary(&out);
+    assert_safe(&s);
+    assert_eq!(faults_of(&s, "dead").len(), 1);
+    assert_eq!(faults_of(&s, "respawned").len(), 1);
+    let rows = agent_rows(&out, 1);
+    let last = rows.last().expect("rows");
+    assert!(last.3, "the replacement is alive at the end");
+    assert!(
+        s["final_mean_deviation_m"].as_f64().expect("final") < 0.05,
+        "{s:#}"
+    );
+    assert_nothing_left(pid);
+}
+
+#[test]
+fn every_misbehaviour_is_refused_and_nobody_collides() {
+    for (mode, kind) in [
+        ("nan", "rejected"),
+        ("teleport", "rejected"),
+        ("through-obstacle", "rejected"),
+        ("garbage", "rejected"),
+        ("silent", "hung"),
+    ] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let (output, pid) = run_to_end(&["--misbehave", &format!("3={mode}")], &out);
+        assert!(
+            output.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = summary(&out);
+        assert_safe(&s);
+        let found = faults_of(&s, kind);
+        assert!(!found.is_empty(), "{mode}: no {kind} fault: {s:#}");
+        assert!(found.iter().all(|f| f["agent"] == 3), "{mode}");
+        if kind == "rejected" {
+            // Every turn of agent 3 was refused: it never moved.
+            let steps = s["steps"].as_u64().expect("steps") as usize;
+            assert_eq!(found.len(), steps, "{mode}");
+            let rows = agent_rows(&out, 3);
+            assert!(
+                rows.iter().all(|r| r.1 == rows[0].1 && r.2 == rows[0].2),
+                "{mode}"
+            );
+        }
+        assert_nothing_left(pid);
+    }
+}
+
+/// A tiny deterministic generator for the randomized trials.
+fn splitmix(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+#[test]
+fn random_agents_killed_at_random_steps_over_twenty_seeds() {
+    let mut detections = Vec::new();
+    for seed in 0..20u64 {
+        let mut rng = seed;
+        let agent = (splitmix(&mut rng) % 6) as usize;
+        let step = 1 + (splitmix(&mut rng) % 169) as usize;
+        let respawn = seed % 2 == 1;
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let kill_arg = format!("{agent}@{step}");
+        let mut args = vec!["--kill-agent", &kill_arg];
+        if respawn {
+            args.push("--respawn");
+        }
+        let (output, pid) = run_to_end(&args, &out);
+        let context = format!("seed {seed}: agent {agent} at step {step}, respawn {respawn}");
+        assert!(
+            output.status.success(),
+            "{context}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = summary(&out);
+        assert_safe(&s);
+        assert_eq!(s["completed"], true, "{context}");
+        let dead = faults_of(&s, "dead");
+        assert_eq!(dead.len(), 1, "{context}: {s:#}");
+        assert_eq!(dead[0]["agent"].as_u64(), Some(agent as u64), "{context}");
+        // The kill lands during the turn; if the agent still got its move out first, the
+        // death is noticed by the liveness check at the start of the next step.
+        let noticed = dead[0]["step"].as_u64().expect("step") as usize;
+        assert!(
+            noticed == step || noticed == step + 1,
+            "{context}: noticed at {noticed}"
+        );
+        detections.push(dead[0]["detection_ms"].as_f64().expect("detection_ms"));
+        assert_eq!(
+            faults_of(&s, "respawned").len(),
+            usize::from(respawn),
+            "{context}"
+        );
+        assert_nothing_left(pid);
+    }
+    detections.sort_by(f64::total_cmp);
+    eprintln!(
+        "detection over {} kills: p50 {:.2} ms, max {:.2} ms",
+        detections.len(),
+        detections[detections.len() / 2],
+        detections[detections.len() - 1]
+    );
+    assert!(detections.iter().all(|&d| d < 250.0), "{detections:?}");
+}
+
+/// Wait until `count` agent processes of coordinator `pid` run.
+fn wait_for_agents(pid: u32, count: usize) {
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while support::processes_mentioning(&format!("--run {}", prefix_stem(pid))).len() < count {
+        assert!(Instant::now() < deadline, "agents did not start");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+fn large_scenario() -> PathBuf {
+    support::repo_root().join("scenarios/large.toml")
+}
+
+#[test]
+fn agents_killed_from_outside_at_random_moments_are_survived() {
+    for seed in 0..3u64 {
+        let mut rng = 100 + seed;
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let scenario = large_scenario();
+        let child = coordinator(&[scenario.to_str().expect("utf-8 path")], &out)
+            .spawn()
+            .expect("start");
+        let pid = child.id();
+        wait_for_agents(pid, 64);
+        std::thread::sleep(Duration::from_millis(200 + splitmix(&mut rng) % 1500));
+        let victims = support::processes_mentioning(&format!("--run {}", prefix_stem(pid)));
+        let victim = victims[(splitmix(&mut rng) % victims.len() as u64) as usize];
+        kill(Pid::from_raw(victim as i32), Signal::SIGKILL).expect("kill agent");
+        let output = child.wait_with_output().expect("wait");
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = summary(&out);
+        assert_safe(&s);
+        assert_eq!(faults_of(&s, "dead").len(), 1, "{s:#}");
+        assert_nothing_left(pid);
+    }
+}
+
+#[test]
+fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_cleans_up() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scenario = large_scenario();
+    let mut child: Child = coordinator(
+        &[scenario.to_str().expect("utf-8 path")],
+        &dir.path().join("a"),
+    )
+    .spawn()
+    .expect("start");
+    let pid = child.id();
+    wait_for_agents(pid, 64);
+    std::thread::sleep(Duration::from_millis(300));
+    kill(Pid::from_raw(pid as i32), Signal::SIGKILL).expect("kill coordinator");
+    let killed = Instant::now();
+    let _ = child.wait();
+    let needle = format!("--run {}", prefix_stem(pid));
+    while !support::processes_mentioning(&needle).is_empty() {
+        assert!(
+            killed.elapsed() < Duration::from_secs(1),
+            "agents still running 1 s after the coordinator died"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    eprintln!(
+        "agents gone {:.0} ms after the coordinator was killed",
+        killed.elapsed().as_secs_f64() * 1e3
+    );
+    assert!(
+        !dir.path().join("a").exists(),
+        "a killed run writes nothing half-way"
+    );
+    // The dead coordinator's files are still there; the next run cleans them.
+    assert!(!support::leftovers(&prefix_stem(pid)).is_empty());
+    let (output, next) = run_to_end(&[], &dir.path().join("b"));
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_nothing_left(pid);
+    assert_nothing_left(next);
+}
+
+#[test]
+fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
+    for signal in [Signal::SIGTERM, Signal::SIGINT] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let scenario = large_scenario();
+        let mut command = coordinator(&[scenario.to_str().expect("utf-8 path")], &out);
+        // Like a terminal: the coordinator leads its own process group, and the signal
+        // goes to the whole group (agents run in groups of their own).
+        std::os::unix::process::CommandExt::process_group(&mut command, 0);
+        let child = command.spawn().expect("start");
+        let pid = child.id();
+        wait_for_agents(pid, 64);
+        std::thread::sleep(Duration::from_millis(800));
+        kill(Pid::from_raw(-(pid as i32)), signal).expect("signal the group");
+        let output = child.wait_with_output().expect("wait");
+        assert_eq!(
+            output.status.code(),
+            Some(1),
+            "{signal}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = summary(&out);
+        assert_eq!(s["completed"], false, "{signal}");
+        let last = s["last_step"].as_u64().expect("last_step") as usize;
+        assert!(last > 0 && last < 235, "{signal}: last step {last}");
+        assert_eq!(s["steps"].as_u64(), Some(last as u64));
+        let rows = csv::Reader::from_path(out.join("trajectory.csv"))
+            .expect("trajectory.csv")
+            .records()
+            .map(|r| r.expect("a whole row"))
+            .count();
+        assert_eq!(rows, (last + 1) * 64, "{signal}: complete steps only");
+        assert_safe(&s);
+        assert_nothing_left(pid);
+    }
+}
+
+#[test]
+fn two_coordinators_at_once_do_not_interfere() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let a = coordinator(&[], &dir.path().join("a")).spawn().expect("a");
+    let b = coordinator(&[], &dir.path().join("b")).spawn().expect("b");
+    let (pa, pb) = (a.id(), b.id());
+    let (oa, ob) = (
+        a.wait_with_output().expect("a"),
+        b.wait_with_output().expect("b"),
+    );
+    assert!(oa.status.success() && ob.status.success());
+    let ta = std::fs::read(dir.path().join("a/trajectory.csv")).expect("a");
+    let tb = std::fs::read(dir.path().join("b/trajectory.csv")).expect("b");
+    assert_eq!(
+        ta, tb,
+        "the same scenario gives the same trajectory, byte for byte"
+    );
+    assert_nothing_left(pa);
+    assert_nothing_left(pb);
+}
