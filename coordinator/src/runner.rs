@@ -232,16 +232,16 @@ impl Driver<'_> {
                 )?;
                 let granted = Instant::now();
                 self.ipc.notify_turn(agent)?;
-                if self.options.kills.contains(&(agent, step)) {
-                    if let Some(pid) = self.procs.signal_kill(agent) {
-                        recorder.note_fault(
-                            step,
-                            agent,
-                            "killed",
-                            format!("fault injection: SIGKILL to process {pid} during its turn"),
-                            None,
-                        );
-                    }
+                if self.options.kills.contains(&(agent, step))
+                    && let Some(pid) = self.procs.signal_kill(agent)
+                {
+                    recorder.note_fault(
+                        step,
+                        agent,
+                        "killed",
+                        format!("fault injection: SIGKILL to process {pid} during its turn"),
+                        None,
+                    );
                 }
                 match self.wait_answer(agent, seq, granted) {
                     Answer::Move(state) => {

@@ -441,3 +441,42 @@ fn draw_swatch<DB: Backend>(
     }
     Ok(())
 }
+
+/// The margin obstacles are grown by on maps (the largest agent radius) and the legend
+/// entries for obstacles and their margins.
+pub fn obstacle_legend(scenario: &shared::scenario::Scenario) -> (f64, Vec<LegendItem>) {
+    let radii = scenario.agents.iter().map(|a| a.radius_m);
+    let max = radii.clone().fold(0.0, f64::max);
+    let min = radii.fold(f64::INFINITY, f64::min);
+    let margin_label = if (max - min).abs() < 1e-12 {
+        format!("safety margin (+{} m agent radius)", fmt_m(max))
+    } else {
+        format!("safety margin (+{} m, largest agent radius)", fmt_m(max))
+    };
+    let legend = vec![
+        LegendItem::new(
+            Swatch::Disk {
+                fill: solid(palette::OBSTACLE),
+                edge: None,
+                dashed: false,
+            },
+            "obstacle",
+        ),
+        LegendItem::new(
+            Swatch::Disk {
+                fill: alpha(palette::SAFETY_MARGIN, 0.16),
+                edge: Some(solid(palette::SAFETY_MARGIN)),
+                dashed: true,
+            },
+            margin_label,
+        ),
+    ];
+    (max, legend)
+}
+
+/// A length in metres, shortest form up to millimetres (`0.25`, `2`, `1.125`).
+pub fn fmt_m(v: f64) -> String {
+    let s = format!("{v:.3}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}

@@ -1,0 +1,220 @@
+//! The formation figure (the paper's Fig. 7): every agent at its slot with the formation
+//! centre at the start pose, each agent's safety circle, and slot labels.
+
+use plotters::coord::Shift;
+use plotters::prelude::DrawingArea;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use shared::geometry::Point;
+
+use super::canvas::{Backend, Figure};
+use super::data::RunData;
+use super::font;
+use super::geom::Xy;
+use super::layout::{MapLayout, Margins};
+use super::palette;
+use super::scene::{
+    self, Header, LegendItem, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, Swatch, alpha,
+    fmt_m, line, solid,
+};
+
+/// Largest plotting area of the formation figure, in pixels.
+pub const MAX_PLOT_PX: (u32, u32) = (900, 680);
+/// Up to this many agents, each label gives the slot's polar coordinates.
+const FULL_LABELS_UP_TO: usize = 12;
+/// Up to this many agents, each circle is labelled with the agent's index.
+const INDEX_LABELS_UP_TO: usize = 64;
+
+/// The formation figure of a run.
+pub struct FormationFigure<'a> {
+    data: &'a RunData,
+    header: Header,
+    layout: MapLayout,
+    margin_m: f64,
+    /// Each agent's position at the start pose.
+    positions: Vec<Point>,
+}
+
+impl<'a> FormationFigure<'a> {
+    /// Lay out the formation figure of `data`.
+    pub fn new(data: &'a RunData) -> Self {
+        let s = &data.scenario;
+        let start = s.path.start;
+        let positions: Vec<Point> = s
+            .agents
+            .iter()
+            .map(|a| a.slot.ideal_position(&start))
+            .collect();
+        // The view: every safety circle and the centre, with room for labels.
+        let (mut x0, mut x1, mut y0, mut y1) = (start.x_m, start.x_m, start.y_m, start.y_m);
+        for (p, a) in positions.iter().zip(&s.agents) {
+            x0 = x0.min(p.x - a.radius_m);
+            x1 = x1.max(p.x + a.radius_m);
+            y0 = y0.min(p.y - a.radius_m);
+            y1 = y1.max(p.y + a.radius_m);
+        }
+        let extent = (x1 - x0).max(y1 - y0).max(2.0);
+        let pad = if s.agents.len() <= FULL_LABELS_UP_TO {
+            0.3 * extent
+        } else {
+            0.1 * extent
+        };
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let half_w = ((x1 - x0) / 2.0 + pad).max(extent * 0.4);
+        let half_h = ((y1 - y0) / 2.0 + pad).max(extent * 0.3);
+
+        let (margin_m, obstacle_items) = scene::obstacle_legend(s);
+        let mut legend = vec![
+            LegendItem::new(
+                Swatch::Disk {
+                    fill: alpha(palette::AGENT, 0.45),
+                    edge: Some(solid(palette::AGENT_EDGE)),
+                    dashed: false,
+                },
+                "agent safety circle",
+            ),
+            LegendItem::new(
+                Swatch::Arrow {
+                    color: solid(palette::CENTRE_PATH),
+                },
+                "formation centre and heading",
+            ),
+            LegendItem::new(
+                Swatch::Line {
+                    color: solid(palette::TEXT_MUTED),
+                    width: 1,
+                    dashed: true,
+                },
+                "slot offset",
+            ),
+        ];
+        legend.extend(obstacle_items);
+        let n = s.agents.len();
+        let labels = if n <= FULL_LABELS_UP_TO {
+            "labels: agent (r, θ) of its slot"
+        } else if n <= INDEX_LABELS_UP_TO {
+            "labels: agent index"
+        } else {
+            "too many agents to label"
+        };
+        let header = Header {
+            title: format!("{}: formation at the start pose", s.name),
+            subtitle: Some(format!(
+                "{n} agents around the centre ({}, {}) m, heading {}°; {labels}",
+                fmt_m(start.x_m),
+                fmt_m(start.y_m),
+                fmt_m(start.heading_rad.to_degrees()),
+            )),
+            legend,
+        };
+        let layout = MapLayout::fit(
+            cx - half_w..cx + half_w,
+            cy - half_h..cy + half_h,
+            MAX_PLOT_PX,
+            super::field::MIN_WIDTH_PX,
+            |w| Margins {
+                top: header.height_px(w),
+                left: MAP_LEFT_PX,
+                bottom: MAP_BOTTOM_PX,
+                right: MAP_RIGHT_PX,
+            },
+        );
+        Self {
+            data,
+            header,
+            layout,
+            margin_m,
+            positions,
+        }
+    }
+
+    /// The figure's layout.
+    pub fn layout(&self) -> &MapLayout {
+        &self.layout
+    }
+
+    /// Each agent's position at the start pose, in metres.
+    pub fn positions(&self) -> &[Point] {
+        &self.positions
+    }
+}
+
+impl Figure for FormationFigure<'_> {
+    fn size_px(&self) -> (u32, u32) {
+        (self.layout.width_px, self.layout.height_px)
+    }
+
+    fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        root.fill(&palette::WHITE)?;
+        self.header.draw(root)?;
+        let chart = scene::map_chart(root, &self.layout)?;
+        let p = Painter::new(&chart, &self.layout);
+        let s = &self.data.scenario;
+        let start = s.path.start;
+        let centre: Xy = (start.x_m, start.y_m);
+        p.obstacles(&s.obstacles, self.margin_m)?;
+        for (pos, a) in self.positions.iter().zip(&s.agents) {
+            if a.slot.r_m > 0.0 {
+                p.dashed(
+                    &[centre, (pos.x, pos.y)],
+                    5,
+                    4,
+                    line(solid(palette::TEXT_MUTED), 1),
+                )?;
+            }
+        }
+        for (pos, a) in self.positions.iter().zip(&s.agents) {
+            p.disk(
+                (pos.x, pos.y),
+                a.radius_m,
+                Some(scene::fill(alpha(palette::AGENT, 0.45))),
+                Some(line(solid(palette::AGENT_EDGE), 2)),
+            )?;
+            p.marker((pos.x, pos.y), 2.0, scene::fill(solid(palette::BLACK)))?;
+        }
+        p.arrow(centre, start.heading_rad, 56.0, solid(palette::CENTRE_PATH), 3)?;
+        p.marker(centre, 5.0, scene::fill(solid(palette::CENTRE_PATH)))?;
+
+        let n = s.agents.len();
+        let px_per_m = self.layout.px_per_m;
+        for (i, (pos, a)) in self.positions.iter().zip(&s.agents).enumerate() {
+            let r_px = a.radius_m * px_per_m;
+            if n <= INDEX_LABELS_UP_TO && r_px >= 9.0 {
+                let size = (r_px * 0.9).clamp(11.0, 18.0);
+                let style = font::text(size).pos(Pos::new(HPos::Center, VPos::Center));
+                p.text(&i.to_string(), (pos.x, pos.y + p.m(size * 0.15)), &style)?;
+            }
+            if n <= FULL_LABELS_UP_TO {
+                // Outward from the centre, beyond the circle (below for the centre slot).
+                let dir = if a.slot.r_m > 1e-9 {
+                    a.slot.theta_rad + start.heading_rad
+                } else {
+                    -std::f64::consts::FRAC_PI_2
+                };
+                let (sn, cs) = dir.sin_cos();
+                let reach = a.radius_m + p.m(8.0);
+                let at = (pos.x + reach * cs, pos.y + reach * sn);
+                let h = if cs > 0.35 {
+                    HPos::Left
+                } else if cs < -0.35 {
+                    HPos::Right
+                } else {
+                    HPos::Center
+                };
+                let v = if sn > 0.35 {
+                    VPos::Bottom
+                } else if sn < -0.35 {
+                    VPos::Top
+                } else {
+                    VPos::Center
+                };
+                let label = format!(
+                    "{i}: ({} m, {}°)",
+                    fmt_m(a.slot.r_m),
+                    fmt_m(a.slot.theta_rad.to_degrees())
+                );
+                p.text(&label, at, &font::text(15.0).pos(Pos::new(h, v)))?;
+            }
+        }
+        Ok(())
+    }
+}
