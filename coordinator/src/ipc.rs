@@ -12,6 +12,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::turn::Body;
@@ -40,6 +41,26 @@ fn service_name(s: &str) -> anyhow::Result<ServiceName> {
     ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
 }
 
+/// A coordinator-to-agents publish-subscribe service: one publisher, one subscriber per
+/// agent, and only the newest sample kept (history 1: an agent that connects late gets
+/// the last one).
+fn broadcast_service<T: std::fmt::Debug + ZeroCopySend>(
+    node: &Node<ipc::Service>,
+    name: &str,
+    agents: usize,
+) -> anyhow::Result<PubSubFactory<ipc::Service, T, ()>> {
+    node.service_builder(&service_name(name)?)
+        .publish_subscribe::<T>()
+        .max_publishers(1)
+        .max_subscribers(agents.max(1))
+        .max_nodes(agents + 1)
+        .history_size(1)
+        .subscriber_max_buffer_size(1)
+        .subscriber_max_borrowed_samples(1)
+        .create()
+        .map_err(|e| anyhow!("creating {name}: {e:?}"))
+}
+
 impl CoordinatorIpc {
     /// Create the node and every service of run `prefix` for `agents` agents.
     pub fn create(prefix: &str, agents: usize) -> anyhow::Result<Self> {
@@ -54,28 +75,8 @@ impl CoordinatorIpc {
         let _ = node.wait(Duration::ZERO);
         let nodes = agents + 1;
 
-        let mission = node
-            .service_builder(&service_name(MISSION_SERVICE)?)
-            .publish_subscribe::<Mission>()
-            .max_publishers(1)
-            .max_subscribers(agents.max(1))
-            .max_nodes(nodes)
-            .history_size(1)
-            .subscriber_max_buffer_size(1)
-            .subscriber_max_borrowed_samples(1)
-            .create()
-            .map_err(|e| anyhow!("creating {MISSION_SERVICE}: {e:?}"))?;
-        let world = node
-            .service_builder(&service_name(WORLD_SERVICE)?)
-            .publish_subscribe::<World>()
-            .max_publishers(1)
-            .max_subscribers(agents.max(1))
-            .max_nodes(nodes)
-            .history_size(1)
-            .subscriber_max_buffer_size(1)
-            .subscriber_max_borrowed_samples(1)
-            .create()
-            .map_err(|e| anyhow!("creating {WORLD_SERVICE}: {e:?}"))?;
+        let mission = broadcast_service::<Mission>(&node, MISSION_SERVICE, agents)?;
+        let world = broadcast_service::<World>(&node, WORLD_SERVICE, agents)?;
         // The buffer is per publisher-subscriber connection: the ready handshake and one
         // move per agent fit in 2.
         let state = node
