@@ -21,7 +21,7 @@ fn options() -> RunOptions {
 /// (f64 equality is bit equality here: no NaN in a record).
 fn run_and_compare(scenario: &Scenario) -> Run {
     let path = plan_centre_path(scenario).expect("centre path");
-    let reference = simulate_along(scenario, &path);
+    let reference = simulate_along(scenario, &path).expect("reference simulation");
     let outcome = run_scenario(scenario, &path, &options()).expect("multi-process run");
     assert!(!outcome.interrupted);
     assert!(

@@ -117,11 +117,16 @@ impl IpcTransport {
         &self,
         fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
-        let sample = self
+        let mut sample = self
             .state_pub
             .loan_uninit()
             .map_err(|e| anyhow!("loaning a state sample: {e:?}"))?;
-        let mut sample = sample.write_payload(AgentState::default());
+        // Initialise the ~8 kB state in place in shared memory (the waypoint array stays
+        // uninitialised behind its length), not on the stack and then copied.
+        // SAFETY: the pointer is the sample's own payload slot, valid and exclusive.
+        unsafe { AgentState::placement_default(sample.payload_mut().as_mut_ptr()) };
+        // SAFETY: placement_default initialised the payload.
+        let mut sample = unsafe { sample.assume_init() };
         let state = sample.payload_mut();
         state.agent = self.agent as u32;
         state.pid = std::process::id();
@@ -229,10 +234,14 @@ impl Transport for IpcTransport {
             .receive()
             .map_err(|e| anyhow!("receiving the mission: {e:?}"))?
         {
+            let planner = m
+                .planner()
+                .with_context(|| format!("unknown planner code {} in the mission", m.planner))?;
             self.mission = Some(MissionView {
                 field: m.field(),
                 obstacles: m.obstacles(),
                 agents: m.agents(),
+                planner,
             });
         }
         self.mission

@@ -6,13 +6,14 @@
 
 pub mod ipc;
 pub mod misbehave;
+pub mod pingpong;
 pub mod transport;
 
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use clap::Parser;
-use shared::turn::{AgentPlanner, Body};
+use shared::turn::{Body, TurnPlanner};
 
 use crate::misbehave::Misbehave;
 
@@ -34,6 +35,13 @@ pub struct Args {
     /// Test mode: publish bad results on purpose (the safety monitor must refuse them).
     #[arg(long, value_enum)]
     pub misbehave: Option<Misbehave>,
+    /// Benchmark mode (`coordinator bench`): answer the latency floor's iceoryx2
+    /// ping-pong, then the Unix-socket one on `--uds`, instead of taking turns.
+    #[arg(long)]
+    pub pingpong: bool,
+    /// Benchmark mode: the coordinator's Unix socket for the socket ping-pong.
+    #[arg(long, requires = "pingpong")]
+    pub uds: Option<std::path::PathBuf>,
 }
 
 /// Install the stderr logger (`RUST_LOG`, default `warn`) and route iceoryx2's own log
@@ -52,6 +60,10 @@ pub fn init_logging() {
 
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.pingpong {
+        let liveness = Duration::from_millis(args.liveness_ms.max(1));
+        return pingpong::run(&args.run, args.uds.as_deref(), liveness);
+    }
     let mut transport = ipc::IpcTransport::open(
         &args.run,
         args.agent,
@@ -69,7 +81,7 @@ pub fn serve<T: Transport>(
     misbehave: Option<Misbehave>,
 ) -> anyhow::Result<()> {
     transport.announce_ready()?;
-    let mut planner: Option<AgentPlanner> = None;
+    let mut planner: Option<TurnPlanner> = None;
     let mut obstacles = Vec::new();
     loop {
         let turn = match transport.next_command()? {
@@ -84,7 +96,10 @@ pub fn serve<T: Transport>(
                     mission.agents.len()
                 )
             })?;
-            planner = Some(AgentPlanner::new(mission.field, &mission.obstacles, spec));
+            planner = Some(
+                TurnPlanner::new(&mission.planner, mission.field, &mission.obstacles, spec)
+                    .context("the mission's planner settings")?,
+            );
             obstacles = mission.obstacles.clone();
         }
         let Some(planner) = planner.as_ref() else {

@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Pose};
-use shared::scenario::AgentSpec;
+use shared::scenario::{AgentSpec, PlannerSpec};
 use shared::turn::Move;
 
 /// The static scenario as an agent sees it.
@@ -15,6 +15,8 @@ pub struct MissionView {
     pub obstacles: Vec<Disk>,
     /// Every agent, in agent order.
     pub agents: Vec<AgentSpec>,
+    /// The controller and its settings.
+    pub planner: PlannerSpec,
 }
 
 /// The world at the start of this agent's turn.

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use shared::scenario::PlannerKind;
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
 /// talking over iceoryx2 shared memory.
@@ -23,6 +24,15 @@ pub enum Command {
     Plan(PlanArgs),
     /// Run a scenario with one agent process per agent and write the outputs.
     Run(RunArgs),
+    /// Run every planner on every scenario and tabulate safety, deviation, deadlocks and
+    /// compute time (CSV and Markdown).
+    Compare(CompareArgs),
+    /// Draw the plots (PNG and SVG) and the animation (GIF) of a run directory into
+    /// RUN_DIR/plots/, from the files `run` wrote (nothing is re-planned).
+    Render(RenderArgs),
+    /// Measure turn latency over real agent processes against the iceoryx2 floor and a
+    /// Unix socket (JSON on stdout, a table on stderr, a histogram SVG beside --out).
+    Bench(BenchArgs),
 }
 
 /// Arguments of `run`.
@@ -40,6 +50,10 @@ pub struct RunArgs {
     /// on and, if dead, frozen as an obstacle.
     #[arg(long, default_value_t = 250)]
     pub turn_deadline_ms: u64,
+    /// The controller, overriding the scenario's `planner` (best-point, cbf,
+    /// zcbf-logsumexp).
+    #[arg(long, value_parser = parse_planner)]
+    pub planner: Option<PlannerKind>,
     /// Start a replacement process for every agent that dies; it re-joins from where the
     /// dead one stood and takes its slot again.
     #[arg(long)]
@@ -55,6 +69,30 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// Arguments of `compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// Scenario files (TOML); the embedded paper example when none is given.
+    pub scenarios: Vec<PathBuf>,
+    /// The planners to compare (comma-separated; default: all).
+    #[arg(long, value_delimiter = ',', value_parser = parse_planner)]
+    pub planners: Vec<PlannerKind>,
+    /// Output folder for `compare.csv` and `compare.md` (default `runs/compare-<UTC time>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// The agent executable (default: `agent` beside this program).
+    #[arg(long)]
+    pub agent_bin: Option<PathBuf>,
+}
+
+/// A planner name.
+fn parse_planner(s: &str) -> Result<PlannerKind, String> {
+    PlannerKind::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = PlannerKind::ALL.iter().map(PlannerKind::name).collect();
+        format!("{s:?}: one of {}", names.join(", "))
+    })
 }
 
 /// `AGENT@STEP`.
@@ -103,4 +141,39 @@ pub struct PlanArgs {
     /// Where to write the CSV (`step,x_m,y_m,heading_rad`); standard output when omitted.
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+/// Arguments of `render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// A run directory written by `run` (scenario.toml, path.csv, trajectory.csv,
+    /// moves.csv, summary.json).
+    pub run_dir: PathBuf,
+}
+
+/// Arguments of `bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Formation sizes to measure (repeatable or comma-separated).
+    #[arg(long, value_name = "N", value_delimiter = ',', default_values_t = [6, 200])]
+    pub agents: Vec<usize>,
+    /// Steps of the straight path (default: about 3000 turns, at least 40 steps).
+    #[arg(long, value_name = "K")]
+    pub steps: Option<usize>,
+    /// Round trips of each ping-pong (floor and socket), after a 10% warm-up.
+    #[arg(long, default_value_t = 2000)]
+    pub round_trips: usize,
+    /// How long the agents are held idle to measure their idle CPU time, ms.
+    #[arg(long, default_value_t = 1000)]
+    pub idle_ms: u64,
+    /// Machine output only: the JSON on stdout, no table on stderr.
+    #[arg(long)]
+    pub json: bool,
+    /// Where to write the JSON report (default `runs/bench-<UTC time>.json`); the
+    /// histogram goes beside it, with the extension `.svg`.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// The agent executable (default: `agent` beside this program).
+    #[arg(long)]
+    pub agent_bin: Option<PathBuf>,
 }

@@ -170,9 +170,7 @@ impl CoordinatorIpc {
         unsafe { Mission::placement_default(sample.payload_mut().as_mut_ptr()) };
         // SAFETY: placement_default initialised every byte of the payload.
         let mut sample = unsafe { sample.assume_init() };
-        sample
-            .payload_mut()
-            .fill(&scenario.field, &scenario.obstacles, &scenario.agents)?;
+        sample.payload_mut().fill(scenario)?;
         sample
             .send()
             .map_err(|e| anyhow!("sending the mission: {e:?}"))?;

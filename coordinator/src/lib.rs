@@ -2,13 +2,16 @@
 //! writes the outputs. The binary's `main` calls [`run_cli`].
 
 pub mod agents;
+pub mod bench;
 pub mod cli;
+pub mod compare;
 pub mod error;
 pub mod ipc;
 pub mod logging;
 pub mod monitor;
 pub mod output;
 pub mod plan;
+pub mod render;
 pub mod run_cmd;
 pub mod runner;
 pub mod stats;
@@ -22,5 +25,8 @@ pub fn run_cli(cli: cli::Cli) -> Result<(), CliError> {
         cli::Command::Validate(args) => validate::run(&args),
         cli::Command::Plan(args) => plan::run(&args),
         cli::Command::Run(args) => run_cmd::run(&args),
+        cli::Command::Compare(args) => compare::run(&args),
+        cli::Command::Render(args) => render::run(&args),
+        cli::Command::Bench(args) => bench::run(&args),
     }
 }

@@ -13,7 +13,11 @@ use crate::validate::load_and_plan;
 /// completed, and exits 1.
 pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
-    let (scenario, centre_path) = (&loaded.scenario, &loaded.centre_path);
+    let scenario = &match args.planner {
+        Some(kind) => loaded.scenario.with_planner(kind),
+        None => loaded.scenario.clone(),
+    };
+    let centre_path = &loaded.centre_path;
     let n = scenario.agents.len();
     let mut named = args.kill_agent.iter().map(|(a, _)| *a);
     let mut misbehaving = args.misbehave.iter().map(|(a, _)| *a);

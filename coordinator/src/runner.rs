@@ -49,6 +49,9 @@ pub struct RunOptions {
     pub misbehave: Vec<(usize, String)>,
     /// Show a progress bar on stderr (only drawn on a terminal).
     pub progress: bool,
+    /// Benchmark hook: after the ready handshake, hold every agent idle this long (no
+    /// turn) and measure the CPU time they used meanwhile ([`RunOutcome::idle_cpu`]).
+    pub idle_probe: Option<Duration>,
 }
 
 impl Default for RunOptions {
@@ -62,6 +65,7 @@ impl Default for RunOptions {
             kills: Vec::new(),
             misbehave: Vec::new(),
             progress: true,
+            idle_probe: None,
         }
     }
 }
@@ -77,6 +81,23 @@ pub struct RunOutcome {
     pub interrupted: bool,
     /// The run's iceoryx2 prefix (every resource of the run starts with it).
     pub prefix: String,
+    /// Every answered turn, in order (for benchmarks: per-turn latency and compute).
+    pub turn_samples: Vec<TurnSample>,
+    /// The agents' CPU time while held idle ([`RunOptions::idle_probe`]).
+    pub idle_cpu: Option<crate::bench::IdleCpu>,
+}
+
+/// One answered turn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TurnSample {
+    /// The step.
+    pub step: usize,
+    /// The agent.
+    pub agent: usize,
+    /// Turn latency: from ringing the turn to holding the move, microseconds.
+    pub latency_us: f64,
+    /// The agent's own compute time for the move, microseconds.
+    pub compute_us: f64,
 }
 
 /// Prefix of every run prefix: `fc<coordinator pid>x<counter>_`.
@@ -192,6 +213,11 @@ impl Driver<'_> {
         wait_ready(self.ipc, self.procs, &all, self.options.startup_timeout)?;
         let startup_s = started.elapsed().as_secs_f64();
         self.ipc.update_connections()?;
+        let idle_cpu = self.options.idle_probe.map(|hold| {
+            let pids: Vec<u32> = (0..n).filter_map(|i| self.procs.pid(i)).collect();
+            crate::bench::IdleCpu::measure(&pids, hold)
+        });
+        let mut turn_samples = Vec::with_capacity(n * centre_path.len());
 
         let monitor = SafetyMonitor::new(self.scenario.field, &self.scenario.obstacles);
         let mut recorder = Recorder::new(self.scenario, centre_path);
@@ -246,8 +272,15 @@ impl Driver<'_> {
                 match self.wait_answer(agent, seq, granted) {
                     Answer::Move(state) => {
                         self.missed[agent] = 0;
-                        latency_us.push(granted.elapsed().as_secs_f64() * 1e6);
-                        compute_us.push(state.compute_ns as f64 / 1e3);
+                        let sample = TurnSample {
+                            step,
+                            agent,
+                            latency_us: granted.elapsed().as_secs_f64() * 1e6,
+                            compute_us: state.compute_ns as f64 / 1e3,
+                        };
+                        latency_us.push(sample.latency_us);
+                        compute_us.push(sample.compute_us);
+                        turn_samples.push(sample);
                         accept_or_reject(&monitor, &mut recorder, step, agent, slot, &state);
                     }
                     Answer::Dead(after) => {
@@ -289,6 +322,8 @@ impl Driver<'_> {
             timing,
             interrupted,
             prefix: String::new(),
+            turn_samples,
+            idle_cpu,
         })
     }
 

@@ -5,12 +5,24 @@
 //! 100 in 100 m x 100 m, 10 000 in 1000 m x 1000 m), plus a crowded field of 10 000 disks
 //! in 300 m x 300 m (one per 9 m^2, about 45 % of the field covered, heavy overlaps).
 //! Queries either land inside a disk (the non-trivial case) or are free.
+//!
+//! `packed_formation`: one agent's turn in a tightly packed formation (200 agents of radius
+//! 0.3 m in a 20 x 10 block at 1 m spacing, through a sparse field), on the turns of six
+//! steps of the reference simulation: neighbours' inflated disks overlap into a closed
+//! pocket around each agent, and its slot often lies outside. The reachable best point
+//! with one `shortest_path` per candidate against `PathsFrom` (one barrier graph per turn),
+//! and the whole `plan_move`.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use shared::best_point::nearest_free_point;
-use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Vector};
+use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
+use shared::disk_path::{PathsFrom, shortest_path};
+use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
+use shared::run::Recorder;
+use shared::scenario::Scenario;
+use shared::simulate::plan_centre_path;
+use shared::turn::{AgentPlanner, Body, PLANNING_MARGIN_M};
 
 /// Radius of every (inflated) disk, in metres.
 const DISK_RADIUS_M: f64 = 1.3;
@@ -102,5 +114,136 @@ fn bench_best_point(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_best_point);
+/// The packed scale test: 200 agents of radius 0.3 m in a 20 x 10 block at 1 m spacing
+/// (inflated disks of neighbours overlap), through a sparse field of 20 obstacles.
+fn packed_scenario() -> Scenario {
+    let mut text = String::from(
+        "name = \"packed-200\"\nseed = 13\n\
+         [field]\nwidth_m = 100.0\nheight_m = 60.0\n\
+         [obstacles]\nradius_m = 1.5\n\
+         [obstacles.random]\ncount = 20\nkeep_clear_m = 12.0\n\
+         [formation]\nagent_radius_m = 0.3\nslots = [\n",
+    );
+    for j in 0..10 {
+        for i in 0..20 {
+            let (x, y) = (i as f64 - 9.5, j as f64 - 4.5);
+            let theta_deg = y.atan2(x).to_degrees();
+            text += &format!("  {{ r_m = {}, theta_deg = {theta_deg} }},\n", x.hypot(y));
+        }
+    }
+    text += "]\n[path]\n\
+             start = { x_m = 15.0, y_m = 15.0, heading_deg = 0.0 }\n\
+             goal = { x_m = 85.0, y_m = 45.0, heading_deg = 23.0 }\n\
+             turning_radius_m = 8.0\nstep_m = 0.3\ncenter_clearance_m = 1.0\n\
+             allow_reverse = false\n";
+    Scenario::parse(&text, "packed-200").expect("a valid scenario")
+}
+
+/// One agent's turn: its planner's index, the centre, its position, the other bodies.
+type Turn = (usize, Pose, Point, Vec<Body>);
+
+/// Every turn of the steps `sampled` of the reference simulation of `scenario` (the same
+/// turns as `simulate`), run up to the last of them.
+fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<AgentPlanner>, Vec<Turn>) {
+    let path = plan_centre_path(scenario).expect("a centre path");
+    let planners: Vec<AgentPlanner> = scenario
+        .agents
+        .iter()
+        .map(|spec| AgentPlanner::new(scenario.field, &scenario.obstacles, spec))
+        .collect();
+    let mut recorder = Recorder::new(scenario, &path);
+    let mut turns = Vec::new();
+    let last = sampled
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(0)
+        .min(path.len() - 1);
+    for (step, centre) in path.iter().enumerate().take(last + 1).skip(1) {
+        for (agent, planner) in planners.iter().enumerate() {
+            let me = recorder.bodies()[agent].position;
+            let others = recorder.others(agent);
+            if sampled.contains(&step) {
+                turns.push((agent, *centre, me, others.clone()));
+            }
+            let _ = recorder.submit(step, agent, planner.plan_move(centre, &me, &others));
+        }
+        recorder.end_step(step);
+    }
+    (planners, turns)
+}
+
+fn bench_packed_formation(c: &mut Criterion) {
+    let scenario = packed_scenario();
+    let (planners, turns) = recorded_turns(&scenario, &[10, 40, 80, 120, 160, 200]);
+    // Each turn's free space as `plan_move` sees it (the field inset by the inflation
+    // aside), its slot and its start.
+    let radius_m = scenario.agents[0].radius_m;
+    let grow_m = radius_m + PLANNING_MARGIN_M;
+    let spaces: Vec<(DiskGrid, DiskGrid, Point, Point)> = turns
+        .iter()
+        .map(|(agent, centre, me, others)| {
+            let inflate = |d: &Disk| Disk {
+                center: d.center,
+                radius_m: d.radius_m + grow_m,
+            };
+            let obstacles = DiskGrid::new(scenario.obstacles.iter().map(inflate).collect());
+            let agents = DiskGrid::new(
+                others
+                    .iter()
+                    .map(|b| {
+                        inflate(&Disk {
+                            center: b.position,
+                            radius_m: b.radius_m,
+                        })
+                    })
+                    .collect(),
+            );
+            (
+                obstacles,
+                agents,
+                planners[*agent].slot_position(centre),
+                *me,
+            )
+        })
+        .collect();
+    let mut group = c.benchmark_group("packed_formation");
+    group.sample_size(10);
+    let mut next = 0;
+    group.bench_function("reachable_best_point/shortest_path_each", |b| {
+        b.iter(|| {
+            next = (next + 1) % spaces.len();
+            let (obstacles, agents, slot, me) = &spaces[next];
+            let layers = [obstacles, agents];
+            let space = FreeSpace::new(scenario.field, &layers);
+            black_box(nearest_reachable_free_point(&space, slot, me, |p| {
+                shortest_path(&space, me, p).is_ok()
+            }))
+        })
+    });
+    let mut next = 0;
+    group.bench_function("reachable_best_point/paths_from", |b| {
+        b.iter(|| {
+            next = (next + 1) % spaces.len();
+            let (obstacles, agents, slot, me) = &spaces[next];
+            let layers = [obstacles, agents];
+            let space = FreeSpace::new(scenario.field, &layers);
+            let mut paths = PathsFrom::new(&space, me);
+            black_box(nearest_reachable_free_point(&space, slot, me, |p| {
+                paths.shortest_path(p).is_ok()
+            }))
+        })
+    });
+    let mut next = 0;
+    group.bench_function("plan_move", |b| {
+        b.iter(|| {
+            next = (next + 1) % turns.len();
+            let (agent, centre, me, others) = &turns[next];
+            black_box(planners[*agent].plan_move(centre, me, others))
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_best_point, bench_packed_formation);
 criterion_main!(benches);

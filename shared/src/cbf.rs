@@ -174,24 +174,34 @@ pub fn solve_qp_2d(u_nom: &Vector, constraints: &[HalfPlane]) -> Result<Vector, 
         // foot is the projection of u_nom (t = 0 is the unconstrained optimum on the line).
         let foot = u_nom - (normal.dot(u_nom) - offset) * normal;
         let direction = Vector::new(-normal.y, normal.x);
+        // The interval the earlier rows leave on the line: exact, and relaxed by their
+        // slacks (which decides feasibility, so that rounding never makes it empty).
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        let (mut lo_relaxed, mut hi_relaxed) = (f64::NEG_INFINITY, f64::INFINITY);
         for &(n_j, d_j, s_j) in &rows[..k] {
-            // n_j . (foot + t direction) <= d_j + s_j
+            // n_j . (foot + t direction) <= d_j (+ s_j)
             let rate = n_j.dot(&direction);
-            let room = d_j + s_j - n_j.dot(&foot);
+            let room = d_j - n_j.dot(&foot);
             if rate > 0.0 {
                 hi = hi.min(room / rate);
+                hi_relaxed = hi_relaxed.min((room + s_j) / rate);
             } else if rate < 0.0 {
                 lo = lo.max(room / rate);
-            } else if room < 0.0 {
+                lo_relaxed = lo_relaxed.max((room + s_j) / rate);
+            } else if room + s_j < 0.0 {
                 // Parallel, and line k lies wholly outside row j.
                 return Err(QpError::Infeasible);
             }
         }
-        if lo > hi || lo.is_nan() || hi.is_nan() {
+        if lo_relaxed > hi_relaxed || lo_relaxed.is_nan() || hi_relaxed.is_nan() {
             return Err(QpError::Infeasible);
         }
-        let t = 0.0f64.clamp(lo, hi);
+        let t = if lo <= hi {
+            0.0f64.clamp(lo, hi)
+        } else {
+            // Empty only by rounding: the middle of the gap, within the relaxed interval.
+            (0.5 * (lo + hi)).clamp(lo_relaxed, hi_relaxed)
+        };
         u = foot + t * direction;
     }
     Ok(u)

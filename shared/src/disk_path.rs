@@ -335,6 +335,7 @@ fn search_path(space: &FreeSpace, from: &Point, to: &Point) -> Result<DiskPath, 
 /// shared by every goal, shows most such goals unreachable in one pass over its edges.
 /// The barrier test is sound (a goal it rejects is unreachable, so no answer changes); a
 /// goal it does not reject goes to the search.
+#[derive(Debug)]
 pub struct PathsFrom<'a, 's> {
     space: &'a FreeSpace<'s>,
     from: Point,
@@ -442,6 +443,7 @@ impl BarrierEdge {
 /// spanned by the fundamental cycles of a spanning forest: with `parity(v)` the parity of
 /// the crossings along the forest path from its root to `v`, some cycle is odd iff some edge
 /// off the forest has `parity(u) ^ parity(v) ^ crosses(edge)` set. One pass, no sorting.
+#[derive(Debug)]
 struct BarrierGraph {
     /// Radius of the ball around the start: the graph holds every disk that meets it.
     reach_m: f64,
@@ -1610,6 +1612,89 @@ mod tests {
             &Point::new(2.0, 15.0),
             &wall
         ));
+    }
+
+    /// A packed block of agents at 1 m spacing, each inflated to 0.601 m (radius 0.3 m
+    /// twice plus a margin): orthogonal neighbours overlap, so every agent's position is a
+    /// pocket closed by its eight neighbours.
+    fn packed_block() -> (Field, Vec<Disk>) {
+        let mut disks = Vec::new();
+        for i in 0..9 {
+            for j in 0..7 {
+                disks.push(Disk::new(2.0 + i as f64, 2.0 + j as f64, 0.601));
+            }
+        }
+        (Field::new(14.0, 12.0), disks)
+    }
+
+    #[test]
+    fn barrier_graph_agrees_with_the_barrier_test() {
+        let (field, mut disks) = packed_block();
+        // An open pocket, and disks crossing the field edges (barriers through the outside).
+        disks.remove(30);
+        disks.push(Disk::new(0.2, 6.0, 0.8));
+        disks.push(Disk::new(13.5, 11.5, 1.0));
+        let grid = DiskGrid::new(disks.clone());
+        let layers = [&grid];
+        let space = FreeSpace::new(field, &layers);
+        let s = Point::new(5.5, 4.5);
+        let mut graph = BarrierGraph::new(&space, &s, 100.0);
+        let (mut separated_count, mut free_count) = (0, 0);
+        for i in 0..=56 {
+            for j in 0..=48 {
+                let t = Point::new(0.25 * i as f64, 0.25 * j as f64);
+                if !space.is_free(&t, 0.0) {
+                    continue;
+                }
+                free_count += 1;
+                let expected = separated(&field, &s, &t, &disks);
+                assert_eq!(graph.separates(&s, &t), expected, "{t:?}");
+                separated_count += usize::from(expected);
+            }
+        }
+        assert!(separated_count > 0 && separated_count < free_count);
+    }
+
+    #[test]
+    fn paths_from_a_pocket_match_shortest_path() {
+        let (field, disks) = packed_block();
+        let grid = DiskGrid::new(disks.clone());
+        let layers = [&grid];
+        let space = FreeSpace::new(field, &layers);
+        // An agent's position in the block: a pocket.
+        let me = Point::new(5.5, 4.5);
+        let mut paths = PathsFrom::new(&space, &me);
+        let goals = [
+            Point::new(5.6, 4.3),   // same pocket, straight
+            Point::new(6.5, 4.5),   // a neighbouring pocket
+            Point::new(1.0, 1.0),   // outside the block
+            Point::new(20.0, 1.0),  // outside the field
+            Point::new(5.0, 6.0),   // inside a disk
+            Point::new(13.0, 11.0), // far outside the block
+        ];
+        let mut unreachable = 0;
+        for goal in &goals {
+            let fast = paths.shortest_path(goal);
+            let slow = shortest_path(&space, &me, goal);
+            assert_eq!(format!("{fast:?}"), format!("{slow:?}"), "{goal:?}");
+            unreachable += usize::from(fast == Err(PathError::Unreachable));
+        }
+        assert_eq!(unreachable, 3);
+        // The barrier graph alone shows the pocket closed.
+        let graph = paths
+            .barriers
+            .as_mut()
+            .expect("built for the blocked goals");
+        assert!(graph.separates(&me, &Point::new(1.0, 1.0)));
+        assert!(!graph.separates(&me, &Point::new(5.4, 4.6)));
+        // From outside the block, a path around it.
+        let mut outside = PathsFrom::new(&space, &Point::new(1.0, 1.0));
+        let around = outside.shortest_path(&Point::new(13.0, 11.0));
+        assert_eq!(
+            around,
+            shortest_path(&space, &Point::new(1.0, 1.0), &Point::new(13.0, 11.0))
+        );
+        assert!(around.is_ok());
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::path::Path;
 use rand::{Rng, SeedableRng};
 use serde::Deserialize;
 
+use crate::cbf::{CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
 use crate::formation::Slot;
 use crate::geometry::{Disk, Field, Point, Pose};
 
@@ -38,6 +39,62 @@ pub enum PlannerKind {
     /// The paper's method: exact best point, then a shortest collision-free path to it.
     #[default]
     BestPoint,
+    /// A control-barrier-function QP with one constraint per neighbour (DESIGN.md
+    /// section 4): safe by construction, may deadlock.
+    Cbf,
+    /// The paper's failed zeroing barrier with a LogSumExp-smoothed max: kept to show its
+    /// violations (the safety monitor refuses them).
+    ZcbfLogsumexp,
+}
+
+impl PlannerKind {
+    /// Every planner, in code order.
+    pub const ALL: [PlannerKind; 3] = [Self::BestPoint, Self::Cbf, Self::ZcbfLogsumexp];
+
+    /// The name used in files and on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::BestPoint => "best-point",
+            Self::Cbf => "cbf",
+            Self::ZcbfLogsumexp => "zcbf-logsumexp",
+        }
+    }
+
+    /// The planner called `name`, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// The wire code.
+    pub fn code(&self) -> u32 {
+        *self as u32
+    }
+
+    /// The planner with wire code `code`, if any.
+    pub fn from_code(code: u32) -> Option<Self> {
+        Self::ALL.get(code as usize).copied()
+    }
+}
+
+/// The controller and its settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlannerSpec {
+    /// Which controller.
+    pub kind: PlannerKind,
+    /// Settings of the barrier-function planners (unused by the best-point planner).
+    pub cbf: CbfSettings,
+    /// Sharpness of the LogSumExp smooth max, in 1/m (`zcbf-logsumexp` only).
+    pub lse_sharpness_per_m: f64,
+}
+
+impl Default for PlannerSpec {
+    fn default() -> Self {
+        Self {
+            kind: PlannerKind::BestPoint,
+            cbf: CbfSettings::default(),
+            lse_sharpness_per_m: DEFAULT_LSE_SHARPNESS_PER_M,
+        }
+    }
 }
 
 /// A validated scenario: every number finite and in range, every body placed legally.
@@ -56,8 +113,8 @@ pub struct Scenario {
     pub agents: Vec<AgentSpec>,
     /// Formation centre path settings.
     pub path: PathSpec,
-    /// The controller.
-    pub planner: PlannerKind,
+    /// The controller and its settings.
+    pub planner: PlannerSpec,
 }
 
 /// One agent: its formation slot and body radius.
@@ -147,6 +204,18 @@ struct ScenarioFile {
     path: PathFile,
     #[serde(default)]
     planner: PlannerKind,
+    cbf: Option<CbfFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CbfFile {
+    gamma_per_s: Option<f64>,
+    dt_s: Option<f64>,
+    gain_per_s: Option<f64>,
+    max_speed_m_per_s: Option<f64>,
+    sensing_radius_m: Option<f64>,
+    lse_sharpness_per_m: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -252,7 +321,25 @@ impl PoseFile {
 
 // ---------------------------------------------------------------------------------------
 
+impl PlannerSpec {
+    /// Check the barrier settings for every agent (unused settings are still checked, so
+    /// switching planners on the command line cannot meet an invalid file).
+    pub fn check(&self, agents: &[AgentSpec]) -> Result<(), CbfSettingsError> {
+        for a in agents {
+            self.cbf.validate_for_agent(a.radius_m)?;
+        }
+        Ok(())
+    }
+}
+
 impl Scenario {
+    /// The same scenario run by another planner.
+    pub fn with_planner(&self, kind: PlannerKind) -> Self {
+        let mut s = self.clone();
+        s.planner.kind = kind;
+        s
+    }
+
     /// Read and validate the scenario file at `path`.
     pub fn load(path: &Path) -> Result<Self, ScenarioError> {
         let file = path.display().to_string();
@@ -547,6 +634,7 @@ impl Checker<'_> {
         let agents = self.agents(&raw.formation, &field)?;
         self.start_and_goal_clear(&obstacles, &field, &path)?;
         self.formation_fits_at_start(&agents, &obstacles, &field, &path)?;
+        let planner = self.planner(raw.planner, raw.cbf.as_ref(), &agents, side_m)?;
 
         Ok(Scenario {
             name: raw.name,
@@ -555,8 +643,50 @@ impl Checker<'_> {
             obstacles,
             agents,
             path,
-            planner: raw.planner,
+            planner,
         })
+    }
+
+    fn planner(
+        &self,
+        kind: PlannerKind,
+        raw: Option<&CbfFile>,
+        agents: &[AgentSpec],
+        side_m: f64,
+    ) -> Result<PlannerSpec, ScenarioError> {
+        let mut spec = PlannerSpec {
+            kind,
+            ..PlannerSpec::default()
+        };
+        if let Some(c) = raw {
+            let set = |name: &str, v: Option<f64>, slot: &mut f64| -> Result<(), ScenarioError> {
+                if let Some(v) = v {
+                    *slot = self.positive(&format!("cbf.{name}"), v, side_m.max(1e3))?;
+                }
+                Ok(())
+            };
+            set("gamma_per_s", c.gamma_per_s, &mut spec.cbf.gamma_per_s)?;
+            set("dt_s", c.dt_s, &mut spec.cbf.dt_s)?;
+            set("gain_per_s", c.gain_per_s, &mut spec.cbf.gain_per_s)?;
+            set(
+                "max_speed_m_per_s",
+                c.max_speed_m_per_s,
+                &mut spec.cbf.max_speed_m_per_s,
+            )?;
+            set(
+                "sensing_radius_m",
+                c.sensing_radius_m,
+                &mut spec.cbf.sensing_radius_m,
+            )?;
+            set(
+                "lse_sharpness_per_m",
+                c.lse_sharpness_per_m,
+                &mut spec.lse_sharpness_per_m,
+            )?;
+        }
+        spec.check(agents)
+            .map_err(|e| self.invalid("cbf", e.to_string()))?;
+        Ok(spec)
     }
 
     fn obstacles(

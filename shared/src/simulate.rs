@@ -5,11 +5,12 @@
 //! move is checked against the safety invariant before it is taken. The multi-process
 //! run must reproduce this trajectory to the bit.
 
+use crate::cbf::CbfSettingsError;
 use crate::geometry::Pose;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::run::{Recorder, Run};
 use crate::scenario::Scenario;
-use crate::turn::AgentPlanner;
+use crate::turn::TurnPlanner;
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
@@ -26,24 +27,36 @@ pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
     Ok(hybrid_astar::resample(&dense, p.step_m))
 }
 
-/// One planner per agent, in agent order.
-pub fn agent_planners(scenario: &Scenario) -> Vec<AgentPlanner> {
+/// One planner per agent, in agent order, of the scenario's kind. The scenario's
+/// settings were validated for every agent, so this cannot fail on a loaded scenario.
+pub fn agent_planners(scenario: &Scenario) -> Result<Vec<TurnPlanner>, CbfSettingsError> {
     scenario
         .agents
         .iter()
-        .map(|a| AgentPlanner::new(scenario.field, &scenario.obstacles, a))
+        .map(|a| TurnPlanner::new(&scenario.planner, scenario.field, &scenario.obstacles, a))
         .collect()
 }
 
+/// Why the reference simulation could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimulateError {
+    /// The formation centre has no path.
+    #[error("centre path: {0}")]
+    Path(#[from] PlanError),
+    /// The barrier-function settings do not suit an agent.
+    #[error("planner settings: {0}")]
+    Planner(#[from] CbfSettingsError),
+}
+
 /// Plan the centre path and run the whole scenario.
-pub fn simulate(scenario: &Scenario) -> Result<Run, PlanError> {
+pub fn simulate(scenario: &Scenario) -> Result<Run, SimulateError> {
     let path = plan_centre_path(scenario)?;
-    Ok(simulate_along(scenario, &path))
+    simulate_along(scenario, &path)
 }
 
 /// Run the scenario along a given centre path (one pose per step).
-pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Run {
-    let planners = agent_planners(scenario);
+pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, SimulateError> {
+    let planners = agent_planners(scenario)?;
     let mut recorder = Recorder::new(scenario, centre_path);
     for (step, centre) in centre_path.iter().enumerate().skip(1) {
         for (agent, planner) in planners.iter().enumerate() {
@@ -54,5 +67,5 @@ pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Run {
         }
         recorder.end_step(step);
     }
-    recorder.finish(true)
+    Ok(recorder.finish(true))
 }

@@ -5,10 +5,11 @@
 //! process both call [`AgentPlanner::plan_move`], so their trajectories agree to the bit.
 
 use crate::best_point::{self, BestPointError};
+use crate::cbf::{CbfPlanner, CbfSettingsError, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
-use crate::scenario::AgentSpec;
+use crate::scenario::{AgentSpec, PlannerKind, PlannerSpec};
 
 /// Extra inflation of every disk when choosing the best point and planning the path, in
 /// metres. It absorbs rounding and the chords of arcs: the followed polyline stays at
@@ -243,6 +244,50 @@ impl AgentPlanner {
             best,
             status,
             waypoints,
+        }
+    }
+}
+
+/// Any of the controllers, behind one `plan_move`: what the reference simulation and the
+/// agent processes call.
+#[derive(Clone, Debug)]
+pub enum TurnPlanner {
+    /// The paper's method, exact ([`AgentPlanner`]).
+    BestPoint(AgentPlanner),
+    /// The control-barrier-function QP.
+    Cbf(CbfPlanner),
+    /// The paper's failed LogSumExp barrier, for comparison.
+    ZcbfLogSumExp(ZcbfLogSumExpPlanner),
+}
+
+impl TurnPlanner {
+    /// The planner `planner.kind` for agent `spec` in `field` among `obstacles` (true
+    /// radii).
+    pub fn new(
+        planner: &PlannerSpec,
+        field: Field,
+        obstacles: &[Disk],
+        spec: &AgentSpec,
+    ) -> Result<Self, CbfSettingsError> {
+        Ok(match planner.kind {
+            PlannerKind::BestPoint => Self::BestPoint(AgentPlanner::new(field, obstacles, spec)),
+            PlannerKind::Cbf => Self::Cbf(CbfPlanner::new(field, obstacles, spec, planner.cbf)?),
+            PlannerKind::ZcbfLogsumexp => Self::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
+                field,
+                obstacles,
+                spec,
+                planner.cbf,
+                planner.lse_sharpness_per_m,
+            )?),
+        })
+    }
+
+    /// Plan this agent's move while every `other` body stands still.
+    pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        match self {
+            Self::BestPoint(p) => p.plan_move(centre, me, others),
+            Self::Cbf(p) => p.plan_move(centre, me, others),
+            Self::ZcbfLogSumExp(p) => p.plan_move(centre, me, others),
         }
     }
 }

@@ -14,9 +14,10 @@
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
 
+use crate::cbf::CbfSettings;
 use crate::formation::Slot;
 use crate::geometry::{Disk, Field, Point, Pose};
-use crate::scenario::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES};
+use crate::scenario::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec, Scenario};
 use crate::turn::{Body, MAX_WAYPOINTS, MoveStatus};
 
 /// Name of the mission service.
@@ -129,6 +130,22 @@ pub struct Mission {
     pub obstacles: StaticVec<WireDisk, MAX_OBSTACLES>,
     /// Every agent, in agent order.
     pub agents: StaticVec<WireAgent, MAX_AGENTS>,
+    /// The controller: a [`PlannerKind`] code.
+    pub planner: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+    /// Barrier-function settings (see [`CbfSettings`]).
+    pub cbf_gamma_per_s: f64,
+    /// Duration of one barrier-function move, in seconds.
+    pub cbf_dt_s: f64,
+    /// Gain of the nominal control, in 1/s.
+    pub cbf_gain_per_s: f64,
+    /// Speed limit, in m/s.
+    pub cbf_max_speed_m_per_s: f64,
+    /// Sensing radius, in metres.
+    pub cbf_sensing_radius_m: f64,
+    /// LogSumExp sharpness, in 1/m.
+    pub lse_sharpness_per_m: f64,
 }
 
 /// Why a scenario does not fit the wire.
@@ -146,13 +163,17 @@ pub enum CapacityError {
 }
 
 impl Mission {
-    /// Fill an (emptied) mission in place from the scenario's parts.
-    pub fn fill(
-        &mut self,
-        field: &Field,
-        obstacles: &[Disk],
-        agents: &[AgentSpec],
-    ) -> Result<(), CapacityError> {
+    /// Fill the mission in place from `scenario`.
+    pub fn fill(&mut self, scenario: &Scenario) -> Result<(), CapacityError> {
+        let (field, obstacles, agents) = (&scenario.field, &scenario.obstacles, &scenario.agents);
+        let p = &scenario.planner;
+        self.planner = p.kind.code();
+        self.cbf_gamma_per_s = p.cbf.gamma_per_s;
+        self.cbf_dt_s = p.cbf.dt_s;
+        self.cbf_gain_per_s = p.cbf.gain_per_s;
+        self.cbf_max_speed_m_per_s = p.cbf.max_speed_m_per_s;
+        self.cbf_sensing_radius_m = p.cbf.sensing_radius_m;
+        self.lse_sharpness_per_m = p.lse_sharpness_per_m;
         self.field_width_m = field.width_m;
         self.field_height_m = field.height_m;
         self.obstacles.clear();
@@ -176,6 +197,21 @@ impl Mission {
                 .map_err(|_| CapacityError::Agents(agents.len()))?;
         }
         Ok(())
+    }
+
+    /// The controller and its settings (`None` for an unknown planner code).
+    pub fn planner(&self) -> Option<PlannerSpec> {
+        Some(PlannerSpec {
+            kind: PlannerKind::from_code(self.planner)?,
+            cbf: CbfSettings {
+                gamma_per_s: self.cbf_gamma_per_s,
+                dt_s: self.cbf_dt_s,
+                gain_per_s: self.cbf_gain_per_s,
+                max_speed_m_per_s: self.cbf_max_speed_m_per_s,
+                sensing_radius_m: self.cbf_sensing_radius_m,
+            },
+            lse_sharpness_per_m: self.lse_sharpness_per_m,
+        })
     }
 
     /// The field.
@@ -367,6 +403,32 @@ pub fn ipc_config(prefix: &str, role: Role) -> Result<Config, PrefixError> {
     Ok(config)
 }
 
+/// Benchmark floor (`coordinator bench`): coordinator to ping-pong process, one small
+/// sample per round trip.
+pub const BENCH_PING_SERVICE: &str = "bench/ping";
+/// Benchmark floor: ping-pong process to coordinator (the ready handshake has `seq` 0).
+pub const BENCH_PONG_SERVICE: &str = "bench/pong";
+/// Benchmark floor: event "a ping is published" (or [`EVENT_QUIT`]).
+pub const BENCH_PING_EVENT: &str = "bench/ping-event";
+/// Benchmark floor: event "the pong is published".
+pub const BENCH_PONG_EVENT: &str = "bench/pong-event";
+/// Event id on [`BENCH_PING_EVENT`]: answer framed requests on the Unix socket now,
+/// until the coordinator sends the frame header [`BENCH_SOCKET_DONE`].
+pub const BENCH_EVENT_SOCKET: usize = 3;
+/// Request length in a socket frame header meaning "back to the iceoryx2 ping-pong".
+pub const BENCH_SOCKET_DONE: u32 = u32::MAX;
+
+/// The small sample of the benchmark floor's ping-pong, each way.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::BenchPing")]
+pub struct BenchPing {
+    /// Round trip number (0: the ping-pong process's ready handshake).
+    pub seq: u64,
+    /// Filler, so the sample is as small as a turn's header.
+    pub payload: [u64; 3],
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -389,7 +451,8 @@ mod tests {
     fn a_mission_round_trips_the_scenario_exactly() {
         let s = crate::scenario::Scenario::paper();
         let mut m = Mission::default();
-        m.fill(&s.field, &s.obstacles, &s.agents).unwrap();
+        m.fill(&s).unwrap();
+        assert_eq!(m.planner(), Some(s.planner));
         assert_eq!(m.field(), s.field);
         assert_eq!(m.obstacles(), s.obstacles);
         assert_eq!(m.agents(), s.agents);

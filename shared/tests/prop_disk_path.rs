@@ -12,13 +12,17 @@
 //!   the only slack is floating-point rounding (1e-9 m);
 //! - reachability: `Unreachable` only when the approximate planner finds nothing either,
 //!   and (on ring instances with unambiguous gaps) exactly when the ring is closed;
-//! - `polyline(e)`: vertices on the path, chords within `e` of it, clearance `>= -e`.
+//! - `polyline(e)`: vertices on the path, chords within `e` of it, clearance `>= -e`;
+//! - `PathsFrom` (one start, many goals) answers exactly as `shortest_path`, bit for bit,
+//!   on packed lattices of disks (pockets, near-tangent overlaps around the barrier margin),
+//!   and the reachable best point chosen with it is the same point with the same path.
 
 use std::f64::consts::TAU;
 
 use proptest::prelude::*;
 use proptest::test_runner::Config;
-use shared::disk_path::{DiskPath, PathError, PathPiece, shortest_path};
+use shared::best_point::nearest_reachable_free_point;
+use shared::disk_path::{DiskPath, PathError, PathPiece, PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 
 const TOL_M: f64 = 1e-9;
@@ -441,5 +445,145 @@ proptest! {
             let a = approx.ok_or_else(|| TestCaseError::fail("approximate planner found no way through the gap"))?;
             prop_assert!(path.length_m() <= a + 1e-9);
         }
+    }
+}
+
+/// A packed lattice of disks (a tight formation, every agent inflated): pockets closed by
+/// overlapping neighbours, some disks missing, overlaps from clear to within rounding of
+/// tangency (around the barrier margin of 1e-6 m), a start, goals and a query.
+#[derive(Clone, Debug)]
+struct Lattice {
+    field: Field,
+    disks: Vec<Disk>,
+    start: Point,
+    goals: Vec<Point>,
+    query: Point,
+}
+
+/// Overlap `2 r - spacing` of lattice neighbours: clear, or near tangency.
+fn lattice_overlap() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        3 => 0.01..0.25f64,
+        1 => prop::sample::select(vec![
+            -2e-6, -1e-7, -2e-9, -1e-9, 0.0, 1e-9, 2e-9, 1e-7, 5e-7, 1e-6 - 1e-9, 1e-6,
+            1e-6 + 1e-9, 2e-6,
+        ]),
+    ]
+}
+
+fn lattices() -> impl Strategy<Value = Lattice> {
+    let raw_point = (0.0..1.0f64, 0.0..1.0f64, 0u8..4, 0usize..1024);
+    (
+        (0.7..1.6f64, lattice_overlap(), 0.0..0.08f64),
+        (3usize..9, 3usize..8, 0.0..1.0f64, 0.0..1.0f64),
+        prop::collection::vec((0.0..1.0f64, 0.0..1.0f64, 0.0..1.0f64), 64),
+        0.0..0.15f64,
+        prop::collection::vec(raw_point.clone(), 8),
+        prop::collection::vec(raw_point, 24),
+        (0.0..1.0f64, 0.0..1.0f64),
+    )
+        .prop_filter_map(
+            "no free start",
+            |((spacing, overlap, jitter), (cols, rows, ox, oy), noise, holes, starts, goals, q)| {
+                let radius = 0.5 * (spacing + overlap);
+                let field =
+                    Field::new((cols as f64 + 1.5) * spacing, (rows as f64 + 1.5) * spacing);
+                // The lattice may stick out of the field on the low side (walls close pockets).
+                let origin = Point::new((ox - 0.3) * spacing, (oy - 0.3) * spacing);
+                let mut disks = Vec::new();
+                for i in 0..cols {
+                    for j in 0..rows {
+                        let (nx, ny, keep) = noise[(i * rows + j) % noise.len()];
+                        if keep < holes {
+                            continue;
+                        }
+                        let c = origin
+                            + spacing * nalgebra::Vector2::new(i as f64 + 0.5, j as f64 + 0.5)
+                            + jitter * spacing * nalgebra::Vector2::new(nx - 0.5, ny - 0.5);
+                        disks.push(Disk {
+                            center: c,
+                            radius_m: radius,
+                        });
+                    }
+                }
+                // Pocket centres, points exactly on circles or at crossings of two circles
+                // (where best points lie), or anywhere.
+                let place = |(u, v, kind, pick): (f64, f64, u8, usize)| -> Point {
+                    let n = disks.len().max(1);
+                    match kind {
+                        0 => {
+                            let i = (u * (cols + 1) as f64).floor();
+                            let j = (v * (rows + 1) as f64).floor();
+                            origin + spacing * nalgebra::Vector2::new(i, j)
+                        }
+                        1 if !disks.is_empty() => disks[pick % n].boundary_point(u * TAU),
+                        2 if disks.len() > 1 => {
+                            let a = disks[pick % n];
+                            let b = disks[(pick + 1 + (v * 8.0) as usize) % n];
+                            shared::geometry::circle_circle_intersections(
+                                &a.center, a.radius_m, &b.center, b.radius_m,
+                            )
+                            .map_or(a.boundary_point(u * TAU), |x| x[(u < 0.5) as usize])
+                        }
+                        _ => Point::new(u * field.width_m, v * field.height_m),
+                    }
+                };
+                let start = starts
+                    .into_iter()
+                    .map(place)
+                    .find(|p| is_free(p, &disks, &field, 0.0))?;
+                Some(Lattice {
+                    field,
+                    start,
+                    goals: goals.into_iter().map(place).collect(),
+                    query: Point::new(q.0 * field.width_m, q.1 * field.height_m),
+                    disks,
+                })
+            },
+        )
+}
+
+proptest! {
+    #![proptest_config(config(64))]
+
+    /// One start, many goals: the same answer as `shortest_path`, bit for bit (the barrier
+    /// test only ever rejects unreachable goals).
+    #[test]
+    fn paths_from_one_start_match_shortest_path(lattice in lattices()) {
+        let grid = DiskGrid::new(lattice.disks.clone());
+        let layers = [&grid];
+        let space = FreeSpace::new(lattice.field, &layers);
+        let mut paths = PathsFrom::new(&space, &lattice.start);
+        for goal in &lattice.goals {
+            let fast = paths.shortest_path(goal);
+            let slow = shortest_path(&space, &lattice.start, goal);
+            // Debug output of f64 round-trips: equal text, equal bits.
+            prop_assert_eq!(format!("{fast:?}"), format!("{slow:?}"), "goal {:?}", goal);
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(config(24))]
+
+    /// The reachable best point (the agent's turn) is the same point with the same path
+    /// whether candidates are tested with `PathsFrom` or one `shortest_path` each.
+    #[test]
+    fn reachable_best_point_is_unchanged_by_paths_from(lattice in lattices()) {
+        let grid = DiskGrid::new(lattice.disks.clone());
+        let layers = [&grid];
+        let space = FreeSpace::new(lattice.field, &layers);
+        let from = lattice.start;
+        let mut slow_path = None;
+        let slow = nearest_reachable_free_point(&space, &lattice.query, &from, |p| {
+            shortest_path(&space, &from, p).map(|path| slow_path = Some(path)).is_ok()
+        });
+        let mut fast_path = None;
+        let mut paths = PathsFrom::new(&space, &from);
+        let fast = nearest_reachable_free_point(&space, &lattice.query, &from, |p| {
+            paths.shortest_path(p).map(|path| fast_path = Some(path)).is_ok()
+        });
+        prop_assert_eq!(format!("{fast:?}"), format!("{slow:?}"));
+        prop_assert_eq!(format!("{fast_path:?}"), format!("{slow_path:?}"));
     }
 }

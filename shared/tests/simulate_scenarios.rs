@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use shared::geometry::DiskGrid;
 use shared::run::Run;
 use shared::safety::{self, SAFETY_TOLERANCE_M};
-use shared::scenario::Scenario;
+use shared::scenario::{PlannerKind, Scenario};
 use shared::simulate::simulate;
 use shared::turn::{Body, MAX_WAYPOINTS, MoveStatus};
 
@@ -112,5 +112,30 @@ fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
                 .iter()
                 .all(|a| a.status == MoveStatus::AtSlot || a.deviation_m < 0.05)
         );
+    }
+}
+
+#[test]
+fn the_barrier_function_planner_never_breaks_clearance_on_any_shipped_scenario() {
+    for file in scenario_files() {
+        let scenario = Scenario::load(&file)
+            .unwrap()
+            .with_planner(PlannerKind::Cbf);
+        let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        let summary = run.summary();
+        assert_eq!(summary.collisions, 0, "{}", scenario.name);
+        assert!(
+            summary.min_clearance_m >= -SAFETY_TOLERANCE_M,
+            "{}",
+            scenario.name
+        );
+        // Safe by construction: not one move needed refusing.
+        assert!(
+            summary.faults.is_empty(),
+            "{}: {:?}",
+            scenario.name,
+            summary.faults
+        );
+        recheck_every_move(&scenario, &run);
     }
 }

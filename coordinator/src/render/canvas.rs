@@ -6,6 +6,7 @@ use anyhow::Context;
 use plotters::coord::Shift;
 use plotters::prelude::{BitMapBackend, DrawingArea, DrawingBackend, IntoDrawingArea, SVGBackend};
 
+use super::text::TextSetter;
 use crate::output::write_atomically;
 
 /// A plotters backend whose errors can travel in an [`anyhow::Error`].
@@ -26,7 +27,8 @@ pub fn render_rgb(figure: &impl Figure) -> anyhow::Result<Vec<u8>> {
     let (w, h) = figure.size_px();
     let mut rgb = vec![255u8; w as usize * h as usize * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+        let root =
+            TextSetter::new(BitMapBackend::with_buffer(&mut rgb, (w, h))).into_drawing_area();
         figure.draw(&root)?;
         root.present()?;
     }

@@ -294,7 +294,10 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
             return Err("internal: no step".into());
         };
         if slots[r.agent].replace(record).is_some() {
-            return Err(format!("agent {} appears twice in step {}", r.agent, r.step));
+            return Err(format!(
+                "agent {} appears twice in step {}",
+                r.agent, r.step
+            ));
         }
         Ok(())
     })?;

@@ -64,7 +64,11 @@ impl<'a> FieldFigure<'a> {
                 data.centre.len().saturating_sub(1),
                 fmt_m(s.path.step_m),
                 fmt_m(s.path.turning_radius_m),
-                if s.path.allow_reverse { ", reverse allowed" } else { "" },
+                if s.path.allow_reverse {
+                    ", reverse allowed"
+                } else {
+                    ""
+                },
             )),
             legend,
         };
@@ -147,11 +151,13 @@ impl Figure for FieldFigure<'_> {
             p.arrow(at, pose.heading_rad, 34.0, solid(color), 3)?;
             p.marker(at, 8.0, scene::fill(solid(palette::WHITE)))?;
             p.marker(at, 6.5, scene::fill(solid(color)))?;
-            // The label sits beside the marker, away from the arrow.
-            let side = pose.heading_rad + std::f64::consts::PI * 0.75;
-            let off = p.m(14.0);
+            // The label sits to the right of the direction of travel, off the arrow.
+            let side = pose.heading_rad - std::f64::consts::FRAC_PI_2;
+            let off = p.m(13.0);
             let at_label = (at.0 + off * side.cos(), at.1 + off * side.sin());
-            let style = font::text(15.0).color(&color);
+            let style = font::text(16.0)
+                .color(&color)
+                .pos(scene::anchor_towards(side));
             p.text(label, at_label, &style)?;
         }
         Ok(())

@@ -8,9 +8,9 @@ use plotters::style::{FontStyle, IntoFont, TextStyle, register_font};
 
 use super::palette;
 
-/// The font family every figure uses. SVG files name it too, so a viewer falls back to
-/// its own sans-serif face.
-pub const FAMILY: &str = "sans-serif";
+/// The font family every figure uses. SVG files name it as it stands, so a viewer uses
+/// Roboto where it has it and a similar sans-serif face otherwise.
+pub const FAMILY: &str = "Roboto, Helvetica, Arial, sans-serif";
 
 /// Roboto Regular, embedded.
 const ROBOTO_REGULAR: &[u8] = include_bytes!("../../assets/fonts/Roboto-Regular.ttf");
@@ -20,7 +20,10 @@ pub fn ensure_registered() -> anyhow::Result<()> {
     static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
     REGISTERED
         .get_or_init(|| {
-            register_font(FAMILY, FontStyle::Normal, ROBOTO_REGULAR)
+            // Also as plain `sans-serif`, the family plotters falls back to.
+            [FAMILY, "sans-serif"]
+                .into_iter()
+                .try_for_each(|family| register_font(family, FontStyle::Normal, ROBOTO_REGULAR))
                 .map_err(|_| "the embedded font (Roboto-Regular.ttf) is not a valid font".into())
         })
         .clone()
@@ -35,4 +38,14 @@ pub fn text(size_px: f64) -> TextStyle<'static> {
 /// Width and height of `s` in `style`, in pixels (0 when the font cannot measure it).
 pub fn measure(s: &str, style: &TextStyle<'_>) -> (u32, u32) {
     style.font.box_size(s).unwrap_or((0, 0))
+}
+
+/// The embedded face, parsed once, for setting text on bitmaps ([`super::text`]).
+pub fn face() -> anyhow::Result<&'static ab_glyph::FontRef<'static>> {
+    static FACE: OnceLock<Option<ab_glyph::FontRef<'static>>> = OnceLock::new();
+    FACE.get_or_init(|| ab_glyph::FontRef::try_from_slice(ROBOTO_REGULAR).ok())
+        .as_ref()
+        .ok_or_else(|| {
+            anyhow::anyhow!("the embedded font (Roboto-Regular.ttf) is not a valid font")
+        })
 }

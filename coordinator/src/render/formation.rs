@@ -9,7 +9,7 @@ use shared::geometry::Point;
 use super::canvas::{Backend, Figure};
 use super::data::RunData;
 use super::font;
-use super::geom::Xy;
+use super::geom::{View, Xy};
 use super::layout::{MapLayout, Margins};
 use super::palette;
 use super::scene::{
@@ -21,6 +21,8 @@ use super::scene::{
 pub const MAX_PLOT_PX: (u32, u32) = (900, 680);
 /// Up to this many agents, each label gives the slot's polar coordinates.
 const FULL_LABELS_UP_TO: usize = 12;
+/// Up to this many agents, a dashed line joins the centre to each slot.
+const SPOKES_UP_TO: usize = 24;
 /// Up to this many agents, each circle is labelled with the agent's index.
 const INDEX_LABELS_UP_TO: usize = 64;
 
@@ -78,17 +80,30 @@ impl<'a> FormationFigure<'a> {
                 },
                 "formation centre and heading",
             ),
-            LegendItem::new(
+        ];
+        let n = s.agents.len();
+        if n <= SPOKES_UP_TO {
+            legend.push(LegendItem::new(
                 Swatch::Line {
                     color: solid(palette::TEXT_MUTED),
                     width: 1,
                     dashed: true,
                 },
                 "slot offset",
-            ),
-        ];
-        legend.extend(obstacle_items);
-        let n = s.agents.len();
+            ));
+        }
+        let view = View {
+            x0: cx - half_w,
+            x1: cx + half_w,
+            y0: cy - half_h,
+            y1: cy + half_h,
+        };
+        if s.obstacles
+            .iter()
+            .any(|o| view.touches_disk((o.center.x, o.center.y), o.radius_m + margin_m))
+        {
+            legend.extend(obstacle_items);
+        }
         let labels = if n <= FULL_LABELS_UP_TO {
             "labels: agent (r, θ) of its slot"
         } else if n <= INDEX_LABELS_UP_TO {
@@ -152,36 +167,45 @@ impl Figure for FormationFigure<'_> {
         let start = s.path.start;
         let centre: Xy = (start.x_m, start.y_m);
         p.obstacles(&s.obstacles, self.margin_m)?;
+        let n = s.agents.len();
         for (pos, a) in self.positions.iter().zip(&s.agents) {
-            if a.slot.r_m > 0.0 {
+            if n <= SPOKES_UP_TO && a.slot.r_m > 0.0 {
                 p.dashed(
                     &[centre, (pos.x, pos.y)],
                     5,
                     4,
-                    line(solid(palette::TEXT_MUTED), 1),
+                    line(alpha(palette::TEXT_MUTED, 0.7), 1),
                 )?;
             }
         }
+        let px_per_m = self.layout.px_per_m;
+        let labelled = |r_m: f64| n <= INDEX_LABELS_UP_TO && r_m * px_per_m >= 9.0;
         for (pos, a) in self.positions.iter().zip(&s.agents) {
+            let edge = if a.radius_m * px_per_m >= 12.0 { 2 } else { 1 };
             p.disk(
                 (pos.x, pos.y),
                 a.radius_m,
                 Some(scene::fill(alpha(palette::AGENT, 0.45))),
-                Some(line(solid(palette::AGENT_EDGE), 2)),
+                Some(line(solid(palette::AGENT_EDGE), edge)),
             )?;
-            p.marker((pos.x, pos.y), 2.0, scene::fill(solid(palette::BLACK)))?;
+            if !labelled(a.radius_m) {
+                p.marker((pos.x, pos.y), 1.5, scene::fill(solid(palette::BLACK)))?;
+            }
         }
-        p.arrow(centre, start.heading_rad, 56.0, solid(palette::CENTRE_PATH), 3)?;
-        p.marker(centre, 5.0, scene::fill(solid(palette::CENTRE_PATH)))?;
+        p.arrow(
+            centre,
+            start.heading_rad,
+            56.0,
+            solid(palette::CENTRE_PATH),
+            3,
+        )?;
+        p.marker(centre, 3.5, scene::fill(solid(palette::CENTRE_PATH)))?;
 
-        let n = s.agents.len();
-        let px_per_m = self.layout.px_per_m;
         for (i, (pos, a)) in self.positions.iter().zip(&s.agents).enumerate() {
-            let r_px = a.radius_m * px_per_m;
-            if n <= INDEX_LABELS_UP_TO && r_px >= 9.0 {
-                let size = (r_px * 0.9).clamp(11.0, 18.0);
+            if labelled(a.radius_m) {
+                let size = (a.radius_m * px_per_m * 0.9).clamp(11.0, 18.0);
                 let style = font::text(size).pos(Pos::new(HPos::Center, VPos::Center));
-                p.text(&i.to_string(), (pos.x, pos.y + p.m(size * 0.15)), &style)?;
+                p.text(&i.to_string(), (pos.x, pos.y), &style)?;
             }
             if n <= FULL_LABELS_UP_TO {
                 // Outward from the centre, beyond the circle (below for the centre slot).
@@ -193,26 +217,16 @@ impl Figure for FormationFigure<'_> {
                 let (sn, cs) = dir.sin_cos();
                 let reach = a.radius_m + p.m(8.0);
                 let at = (pos.x + reach * cs, pos.y + reach * sn);
-                let h = if cs > 0.35 {
-                    HPos::Left
-                } else if cs < -0.35 {
-                    HPos::Right
-                } else {
-                    HPos::Center
-                };
-                let v = if sn > 0.35 {
-                    VPos::Bottom
-                } else if sn < -0.35 {
-                    VPos::Top
-                } else {
-                    VPos::Center
-                };
                 let label = format!(
                     "{i}: ({} m, {}°)",
                     fmt_m(a.slot.r_m),
                     fmt_m(a.slot.theta_rad.to_degrees())
                 );
-                p.text(&label, at, &font::text(15.0).pos(Pos::new(h, v)))?;
+                p.text(
+                    &label,
+                    at,
+                    &font::text(15.0).pos(scene::anchor_towards(dir)),
+                )?;
             }
         }
         Ok(())

@@ -184,7 +184,10 @@ mod tests {
     #[test]
     fn polyline_leaving_and_reentering_splits() {
         let pieces = V.clip_polyline(&[(5.0, 5.0), (15.0, 5.0), (15.0, 8.0), (5.0, 8.0)]);
-        assert_eq!(pieces, vec![vec![(5.0, 5.0), (10.0, 5.0)], vec![(10.0, 8.0), (5.0, 8.0)]]);
+        assert_eq!(
+            pieces,
+            vec![vec![(5.0, 5.0), (10.0, 5.0)], vec![(10.0, 8.0), (5.0, 8.0)]]
+        );
         assert!(V.clip_polyline(&[(-5.0, -5.0), (-1.0, 20.0)]).is_empty());
     }
 
@@ -194,14 +197,20 @@ mod tests {
         let cut = V.clip_polygon(&square);
         assert!(cut.iter().all(|&p| V.contains(p)));
         assert!(cut.contains(&(5.0, 5.0)) && cut.contains(&(0.0, 0.0)));
-        assert!(V.clip_polygon(&[(20.0, 20.0), (30.0, 20.0), (30.0, 30.0)]).is_empty());
+        assert!(
+            V.clip_polygon(&[(20.0, 20.0), (30.0, 20.0), (30.0, 30.0)])
+                .is_empty()
+        );
     }
 
     #[test]
     fn circle_and_arrow() {
         let c = circle((1.0, 2.0), 3.0, 10.0);
         assert!(c.len() >= 12);
-        assert!(c.iter().all(|p| ((p.0 - 1.0).hypot(p.1 - 2.0) - 3.0).abs() < 1e-12));
+        assert!(
+            c.iter()
+                .all(|p| ((p.0 - 1.0).hypot(p.1 - 2.0) - 3.0).abs() < 1e-12)
+        );
         let (shaft, head) = arrow((0.0, 0.0), 0.0, 2.0, 0.5);
         assert_eq!(head[0], (2.0, 0.0));
         assert_eq!(shaft[1], (1.5, 0.0));

@@ -47,7 +47,7 @@ impl MapLayout {
         y_m: Range<f64>,
         max_plot_px: (u32, u32),
         min_width_px: u32,
-        margins: impl FnOnce(u32) -> Margins,
+        margins: impl Fn(u32) -> Margins,
     ) -> Self {
         let dx = (x_m.end - x_m.start).max(1e-9);
         let dy = (y_m.end - y_m.start).max(1e-9);
@@ -87,7 +87,8 @@ impl MapLayout {
         let w = f64::from(self.plot_width_px - 1);
         let h = f64::from(self.plot_height_px - 1);
         let px = self.margins.left as i32 + (w * fx + 1e-3).floor() as i32;
-        let py = (self.margins.top + self.plot_height_px - 1) as i32 - (h * fy + 1e-3).floor() as i32;
+        let py =
+            (self.margins.top + self.plot_height_px - 1) as i32 - (h * fy + 1e-3).floor() as i32;
         (px, py)
     }
 

@@ -27,7 +27,11 @@ pub struct StepMetrics {
 pub fn per_step(data: &RunData) -> Vec<StepMetrics> {
     let radii: Vec<f64> = data.scenario.agents.iter().map(|a| a.radius_m).collect();
     let obstacles = DiskGrid::new(data.scenario.obstacles.clone());
-    let diagonal = data.scenario.field.width_m.hypot(data.scenario.field.height_m);
+    let diagonal = data
+        .scenario
+        .field
+        .width_m
+        .hypot(data.scenario.field.height_m);
     data.steps
         .iter()
         .map(|s| {
@@ -50,7 +54,9 @@ pub fn per_step(data: &RunData) -> Vec<StepMetrics> {
                 .agents
                 .iter()
                 .zip(&radii)
-                .filter_map(|(a, &r)| nearest_obstacle_clearance(&obstacles, &a.position, r, diagonal))
+                .filter_map(|(a, &r)| {
+                    nearest_obstacle_clearance(&obstacles, &a.position, r, diagonal)
+                })
                 .reduce(f64::min);
             StepMetrics {
                 step: s.step,
@@ -106,6 +112,9 @@ mod tests {
         let want = (10.0f64 * 10.0 * 2.0).sqrt() - 2.0 - 0.3;
         assert!((c.unwrap_or(f64::NAN) - want).abs() < 1e-12);
         let empty = DiskGrid::new(Vec::new());
-        assert_eq!(nearest_obstacle_clearance(&empty, &Point::new(0.0, 0.0), 0.3, 10.0), None);
+        assert_eq!(
+            nearest_obstacle_clearance(&empty, &Point::new(0.0, 0.0), 0.3, 10.0),
+            None
+        );
     }
 }

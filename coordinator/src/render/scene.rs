@@ -4,10 +4,11 @@
 
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
+use plotters::element::DashedPathElement;
 use plotters::prelude::{
-    Cartesian2d, ChartBuilder, ChartContext, DashedPathElement, DrawingArea, PathElement,
-    Polygon, Rectangle, Text,
+    Cartesian2d, ChartBuilder, ChartContext, DrawingArea, PathElement, Polygon, Rectangle, Text,
 };
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
 use shared::geometry::Disk;
 
@@ -60,13 +61,7 @@ pub fn map_chart<'a, DB: Backend>(
     root: &'a DrawingArea<DB, Shift>,
     layout: &MapLayout,
 ) -> anyhow::Result<MapChart<'a, DB>> {
-    let m = layout.margins;
-    let mut chart = ChartBuilder::on(root)
-        .margin_top(m.top)
-        .margin_right(m.right)
-        .y_label_area_size(m.left)
-        .x_label_area_size(m.bottom)
-        .build_cartesian_2d(layout.x_m.clone(), layout.y_m.clone())?;
+    let mut chart = map_chart_bare(root, layout)?;
     chart
         .configure_mesh()
         .x_desc("x (m)")
@@ -78,8 +73,24 @@ pub fn map_chart<'a, DB: Backend>(
         .axis_style(line(solid(palette::TEXT_MUTED), 1))
         .x_labels(10)
         .y_labels(8)
+        .x_label_formatter(&|v| fmt_m(*v))
+        .y_label_formatter(&|v| fmt_m(*v))
         .draw()?;
     Ok(chart)
+}
+
+/// The map chart of `layout` on `root`, drawing nothing (for layers over a drawn map).
+pub fn map_chart_bare<'a, DB: Backend>(
+    root: &'a DrawingArea<DB, Shift>,
+    layout: &MapLayout,
+) -> anyhow::Result<MapChart<'a, DB>> {
+    let m = layout.margins;
+    Ok(ChartBuilder::on(root)
+        .margin_top(m.top)
+        .margin_right(m.right)
+        .y_label_area_size(m.left)
+        .x_label_area_size(m.bottom)
+        .build_cartesian_2d(layout.x_m.clone(), layout.y_m.clone())?)
 }
 
 /// The view rectangle of `layout`.
@@ -144,12 +155,9 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
         style: ShapeStyle,
     ) -> anyhow::Result<()> {
         for piece in self.view.clip_polyline(points) {
-            self.chart.plotting_area().draw(&DashedPathElement::new(
-                piece,
-                dash_px,
-                gap_px,
-                style,
-            ))?;
+            self.chart
+                .plotting_area()
+                .draw(&DashedPathElement::new(piece, dash_px, gap_px, style))?;
         }
         Ok(())
     }
@@ -222,9 +230,17 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
             let ring = geom::circle(c, r, self.px_per_m);
             self.polygon(&ring, fill(alpha(palette::SAFETY_MARGIN, 0.16)))?;
             if dashed {
-                self.dashed(&geom::closed(ring), 4, 3, line(solid(palette::SAFETY_MARGIN), 1))?;
+                self.dashed(
+                    &geom::closed(ring),
+                    4,
+                    3,
+                    line(solid(palette::SAFETY_MARGIN), 1),
+                )?;
             } else {
-                self.polyline(&geom::closed(ring), line(alpha(palette::SAFETY_MARGIN, 0.7), 1))?;
+                self.polyline(
+                    &geom::closed(ring),
+                    line(alpha(palette::SAFETY_MARGIN, 0.7), 1),
+                )?;
             }
         }
         for o in obstacles {
@@ -326,7 +342,7 @@ impl Header {
         self.legend
             .iter()
             .map(|item| {
-                let w = SWATCH_W_PX + 6 + font::measure(&item.label, &style).0 as i32 + 20;
+                let w = SWATCH_W_PX + 6 + font::measure(&item.label, &style).0 as i32 + 26;
                 if x > PAD_PX && x + w > limit {
                     x = PAD_PX;
                     row += 1;
@@ -336,6 +352,15 @@ impl Header {
                 place
             })
             .collect()
+    }
+
+    /// Where the subtitle starts (its top-left corner), in pixels, and its style: for
+    /// figures that write a changing subtitle themselves.
+    pub fn subtitle_place() -> ((i32, i32), TextStyle<'static>) {
+        (
+            (PAD_PX, TITLE_ROW_PX as i32),
+            small_style().color(&palette::TEXT_MUTED),
+        )
     }
 
     /// Height of the header on a canvas `width_px` wide, in pixels.
@@ -350,11 +375,7 @@ impl Header {
     /// Draw the header at the top of `root`.
     pub fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
         let (width_px, _) = root.dim_in_pixel();
-        root.draw(&Text::new(
-            self.title.clone(),
-            (PAD_PX, 10),
-            title_style(),
-        ))?;
+        root.draw(&Text::new(self.title.clone(), (PAD_PX, 10), title_style()))?;
         let mut top = TITLE_ROW_PX as i32;
         if let Some(sub) = &self.subtitle {
             root.draw(&Text::new(
@@ -479,4 +500,25 @@ pub fn fmt_m(v: f64) -> String {
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.into() }
+}
+
+/// The text anchor that puts a label on the side of its point that `dir_rad` points to
+/// (0: the label to the right of the point, pi/2: above it, ...).
+pub fn anchor_towards(dir_rad: f64) -> Pos {
+    let (sn, cs) = dir_rad.sin_cos();
+    let h = if cs > 0.35 {
+        HPos::Left
+    } else if cs < -0.35 {
+        HPos::Right
+    } else {
+        HPos::Center
+    };
+    let v = if sn > 0.35 {
+        VPos::Bottom
+    } else if sn < -0.35 {
+        VPos::Top
+    } else {
+        VPos::Center
+    };
+    Pos::new(h, v)
 }

@@ -1,0 +1,200 @@
+//! `agent --pingpong --run PREFIX --agent 0 [--uds PATH]`: the other end of the latency
+//! floor that `coordinator bench` measures in the same run as the turns.
+//!
+//! - iceoryx2: the same wake-up as a turn. The process blocks in
+//!   `Listener::timed_wait` on [`BENCH_PING_EVENT`]; on a ping it takes the small
+//!   [`BenchPing`] sample, publishes one back on [`BENCH_PONG_SERVICE`] and rings
+//!   [`BENCH_PONG_EVENT`].
+//! - Unix domain socket (with `--uds`), what a user would otherwise pick: the process
+//!   connects to the coordinator's socket at start-up. On [`BENCH_EVENT_SOCKET`] it
+//!   reads framed requests (`u32` request length, `u32` reply length, request bytes)
+//!   with blocking reads and writes a reply of the asked length, until the header
+//!   [`BENCH_SOCKET_DONE`] sends it back to the iceoryx2 ping-pong.
+//!
+//! The coordinator alternates the two in blocks, so both see the same machine.
+//! [`EVENT_QUIT`], a closed socket, SIGTERM or the coordinator's death end the process.
+
+use std::io::{ErrorKind, Read, Write};
+use std::os::unix::net::UnixStream;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, anyhow, bail};
+use iceoryx2::node::NodeWaitFailure;
+use iceoryx2::port::listener::ListenerWaitError;
+use iceoryx2::prelude::*;
+use nix::unistd::getppid;
+use shared::wire::{
+    self, BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
+    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+};
+
+/// Serve the ping-pong of run `prefix` (and the socket at `uds`, if given).
+/// `liveness` is how often the process checks that the coordinator is still there.
+pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result<()> {
+    #[cfg(target_os = "linux")]
+    let _ = nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGTERM);
+    let parent = getppid();
+    // Connect first: the coordinator accepts while it waits for the handshake below.
+    let mut stream = uds
+        .map(|p| UnixStream::connect(p).with_context(|| format!("connecting to {}", p.display())))
+        .transpose()?;
+
+    let config = wire::ipc_config(prefix, Role::Agent)?;
+    let node = NodeBuilder::new()
+        .name(&NodeName::new("pingpong").map_err(|e| anyhow!("{e:?}"))?)
+        .config(&config)
+        .create::<ipc::Service>()
+        .map_err(|e| anyhow!("creating the node: {e:?}"))?;
+    // Install iceoryx2's signal handlers: SIGTERM interrupts the waits below.
+    let _ = node.wait(Duration::ZERO);
+    let name = |s: &str| ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"));
+    let ping_sub = node
+        .service_builder(&name(BENCH_PING_SERVICE)?)
+        .publish_subscribe::<BenchPing>()
+        .open()
+        .map_err(|e| anyhow!("opening {BENCH_PING_SERVICE}: {e:?}"))?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| anyhow!("ping subscriber: {e:?}"))?;
+    let pong_pub = node
+        .service_builder(&name(BENCH_PONG_SERVICE)?)
+        .publish_subscribe::<BenchPing>()
+        .open()
+        .map_err(|e| anyhow!("opening {BENCH_PONG_SERVICE}: {e:?}"))?
+        .publisher_builder()
+        .max_loaned_samples(1)
+        .create()
+        .map_err(|e| anyhow!("pong publisher: {e:?}"))?;
+    let ping_listener = node
+        .service_builder(&name(BENCH_PING_EVENT)?)
+        .event()
+        .open()
+        .map_err(|e| anyhow!("opening {BENCH_PING_EVENT}: {e:?}"))?
+        .listener_builder()
+        .create()
+        .map_err(|e| anyhow!("ping listener: {e:?}"))?;
+    let pong_notifier = node
+        .service_builder(&name(BENCH_PONG_EVENT)?)
+        .event()
+        .open()
+        .map_err(|e| anyhow!("opening {BENCH_PONG_EVENT}: {e:?}"))?
+        .notifier_builder()
+        .create()
+        .map_err(|e| anyhow!("pong notifier: {e:?}"))?;
+
+    let pong = |seq: u64| -> anyhow::Result<()> {
+        pong_pub
+            .send_copy(BenchPing {
+                seq,
+                payload: [seq; 3],
+            })
+            .map_err(|e| anyhow!("sending a pong: {e:?}"))?;
+        pong_notifier
+            .notify()
+            .map_err(|e| anyhow!("notifying the pong: {e:?}"))?;
+        Ok(())
+    };
+    pong(0)?; // ready
+
+    loop {
+        let waited = Instant::now();
+        let (mut ping, mut socket, mut quit) = (false, false, false);
+        let woke = ping_listener.timed_wait(
+            |event| match event.id.as_value() {
+                EVENT_TURN => ping = true,
+                BENCH_EVENT_SOCKET => socket = true,
+                EVENT_QUIT => quit = true,
+                _ => {}
+            },
+            liveness,
+        );
+        match woke {
+            Ok(_) if quit => return Ok(()),
+            Ok(_) if socket => {
+                let stream = stream
+                    .as_mut()
+                    .context("asked for the socket ping-pong without --uds")?;
+                if !serve_socket(stream, &node)? {
+                    return Ok(());
+                }
+            }
+            Ok(_) if ping => {
+                let mut last = None;
+                while let Some(s) = ping_sub
+                    .receive()
+                    .map_err(|e| anyhow!("receiving a ping: {e:?}"))?
+                {
+                    last = Some(s.seq);
+                }
+                if let Some(seq) = last {
+                    pong(seq)?;
+                }
+            }
+            // Timed out, or woke early with nothing: check the coordinator on the clock.
+            Ok(_) => {
+                if waited.elapsed() >= liveness && getppid() != parent {
+                    return Ok(());
+                }
+            }
+            Err(ListenerWaitError::InterruptSignal) => {
+                if let Err(NodeWaitFailure::TerminationRequest) = node.wait(Duration::ZERO) {
+                    return Ok(());
+                }
+            }
+            Err(e) => bail!("waiting for a ping: {e:?}"),
+        }
+    }
+}
+
+/// Answer framed requests on `stream`: true when sent back to the iceoryx2 ping-pong,
+/// false when the coordinator closed the socket (or SIGTERM came).
+fn serve_socket(stream: &mut UnixStream, node: &Node<ipc::Service>) -> anyhow::Result<bool> {
+    let mut header = [0u8; 8];
+    let mut request = Vec::new();
+    let mut reply = Vec::new();
+    loop {
+        if !read_full(stream, &mut header, node)? {
+            return Ok(false);
+        }
+        let [a, b, c, d, e, f, g, h] = header;
+        let request_len = u32::from_le_bytes([a, b, c, d]);
+        if request_len == BENCH_SOCKET_DONE {
+            return Ok(true);
+        }
+        let request_len = request_len as usize;
+        let reply_len = u32::from_le_bytes([e, f, g, h]) as usize;
+        request.resize(request_len, 0);
+        if !read_full(stream, &mut request, node)? {
+            return Ok(false);
+        }
+        reply.resize(reply_len, 0);
+        // Echo the head of the request, so the reply depends on what was read.
+        let n = reply_len.min(request_len);
+        reply[..n].copy_from_slice(&request[..n]);
+        stream.write_all(&reply).context("writing a reply")?;
+    }
+}
+
+/// Fill `buf` from `stream`; false on a clean end of stream (or a termination request).
+fn read_full(
+    stream: &mut UnixStream,
+    buf: &mut [u8],
+    node: &Node<ipc::Service>,
+) -> anyhow::Result<bool> {
+    let mut filled = 0;
+    while filled < buf.len() {
+        match stream.read(&mut buf[filled..]) {
+            Ok(0) => return Ok(false),
+            Ok(n) => filled += n,
+            // iceoryx2's handlers are installed without SA_RESTART: a SIGTERM lands here.
+            Err(e) if e.kind() == ErrorKind::Interrupted => {
+                if let Err(NodeWaitFailure::TerminationRequest) = node.wait(Duration::ZERO) {
+                    return Ok(false);
+                }
+            }
+            Err(e) => return Err(e).context("reading a request"),
+        }
+    }
+    Ok(true)
+}

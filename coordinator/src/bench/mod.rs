@@ -1,0 +1,309 @@
+//! `coordinator bench`: the end-to-end latency of a turn over real agent processes,
+//! against the floor of the mechanism it uses and against a Unix socket, in one run.
+//!
+//! For every formation size N:
+//! 1. a generated scenario ([`scenario`]) runs through the real [`run_scenario`]; every
+//!    answered turn gives its latency and the agent's compute time, hence the IPC
+//!    overhead `latency - compute` per turn. Before the first turn the agents are held
+//!    idle and their CPU time is measured ([`IdleCpu`]).
+//! 2. one `agent --pingpong` process answers an iceoryx2 event + publish-subscribe
+//!    ping-pong (the floor: the same wake-up as a turn) and a Unix socket ping-pong with
+//!    turn-sized payloads ([`floor`]), in alternating blocks, half of them before the
+//!    turns and half after, so the floor sees the same (shared, noisy) machine.
+//!
+//! The compute side alone is measured by the Criterion benchmarks in `shared/benches`.
+//! JSON goes to stdout (and `--out`), the table to stderr, the histogram to an SVG file.
+//! Speed is reported, never asserted.
+
+pub mod floor;
+pub mod plot;
+pub mod procfs;
+pub mod report;
+pub mod scenario;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context;
+use shared::scenario::MAX_AGENTS;
+
+use crate::agents::locate_agent_binary;
+use crate::cli::BenchArgs;
+use crate::error::CliError;
+use crate::output::write_atomically;
+use crate::runner::{RunOptions, run_scenario};
+use crate::stats::Distribution;
+
+pub use procfs::IdleCpu;
+pub use report::{Report, RunReport, Targets};
+
+/// Fixed part of a serialized world (seq, step, turn agent, centre pose), bytes.
+const WORLD_HEADER_BYTES: usize = 48;
+/// A serialized agent position, bytes.
+const BYTES_PER_AGENT: usize = 16;
+/// Fixed part of a serialized move (seq, step, compute time, ids, status, slot, best).
+const MOVE_HEADER_BYTES: usize = 72;
+/// A serialized waypoint, bytes.
+const BYTES_PER_WAYPOINT: usize = 16;
+/// Waypoints in the socket reply ("a few": a move on the straight path has two).
+const REPLY_WAYPOINTS: usize = 4;
+/// Blocks of each ping-pong (half before the turns, half after).
+const BLOCKS: usize = 8;
+/// Round trips dropped at the start of every block (the switch between mechanisms).
+const BLOCK_WARMUP: usize = 20;
+/// Most steps: the generated field must stay within the largest field accepted.
+pub const MAX_BENCH_STEPS: usize = 20_000;
+
+/// Run `bench`.
+pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+    if let Some(&n) = args.agents.iter().find(|&&n| n == 0 || n > MAX_AGENTS) {
+        return Err(CliError::Usage(format!(
+            "--agents {n}: a formation has 1 to {MAX_AGENTS} agents"
+        )));
+    }
+    if args
+        .steps
+        .is_some_and(|k| !(2..=MAX_BENCH_STEPS).contains(&k))
+    {
+        return Err(CliError::Usage(format!(
+            "--steps: 2 to {MAX_BENCH_STEPS} (the first step is a warm-up)"
+        )));
+    }
+    if args.round_trips == 0 {
+        return Err(CliError::Usage("--round-trips: at least 1".into()));
+    }
+    let bin = locate_agent_binary(args.agent_bin.as_deref())?;
+    let out = args.out.clone().unwrap_or_else(default_out);
+    let svg_path = out.with_extension("svg");
+    let mut report = Report {
+        runs: Vec::new(),
+        build: if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        },
+        cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        load_average_1m: load_average(),
+        round_trips: args.round_trips,
+        warmup_round_trips: BLOCKS.min(args.round_trips) * BLOCK_WARMUP,
+        histogram_svg: None,
+    };
+    let mut samples = Vec::new();
+    for &n in &args.agents {
+        let steps = args.steps.unwrap_or_else(|| scenario::default_steps(n));
+        if !args.json {
+            eprintln!("bench: {n} agents, {steps} steps ...");
+        }
+        let (run, s) = bench_one(&bin, n, steps, args)?;
+        samples.push(s);
+        report.runs.push(run);
+    }
+
+    let panels: Vec<plot::Panel<'_>> = report
+        .runs
+        .iter()
+        .zip(&samples)
+        .map(|(r, s)| s.panel(r))
+        .collect();
+    let svg = plot::histogram_svg(&panels).context("drawing the histogram")?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    write_atomically(&svg_path, svg.as_bytes())?;
+    report.histogram_svg = Some(svg_path.display().to_string());
+    let mut json = serde_json::to_string_pretty(&report).context("formatting the report")?;
+    json.push('\n');
+    write_atomically(&out, json.as_bytes())?;
+    if !args.json {
+        eprint!("{}", report::table(&report));
+        eprintln!("report: {}", out.display());
+    }
+    print!("{json}");
+    Ok(())
+}
+
+/// The samples behind one run's report (for the histogram).
+struct Samples {
+    turn_us: Vec<f64>,
+    overhead_us: Vec<f64>,
+    floor_us: Vec<f64>,
+    uds_us: Vec<f64>,
+}
+
+impl Samples {
+    fn panel(&self, r: &RunReport) -> plot::Panel<'_> {
+        plot::Panel {
+            title: format!(
+                "{} agents: turn latency vs. IPC overhead vs. iceoryx2 floor vs. Unix socket",
+                r.agents
+            ),
+            series: vec![
+                plot::Series {
+                    label: format!("turn latency (p50 {:.1} us)", r.turn_us.p50),
+                    values_us: &self.turn_us,
+                    color: plot::GREY,
+                },
+                plot::Series {
+                    label: format!("turn IPC overhead (p50 {:.1} us)", r.ipc_overhead_us.p50),
+                    values_us: &self.overhead_us,
+                    color: plot::BLUE,
+                },
+                plot::Series {
+                    label: format!("iceoryx2 floor (p50 {:.1} us)", r.floor_us.p50),
+                    values_us: &self.floor_us,
+                    color: plot::GREEN,
+                },
+                plot::Series {
+                    label: format!("Unix socket (p50 {:.1} us)", r.uds_us.p50),
+                    values_us: &self.uds_us,
+                    color: plot::VERMILLION,
+                },
+            ],
+        }
+    }
+}
+
+/// The floor and socket samples, gathered in blocks around `between` (the turns).
+struct Floors {
+    iceoryx2_us: Vec<f64>,
+    uds_us: Vec<f64>,
+    prefix: String,
+}
+
+fn around<T>(
+    bin: &std::path::Path,
+    round_trips: usize,
+    request_bytes: usize,
+    reply_bytes: usize,
+    between: impl FnOnce() -> anyhow::Result<T>,
+) -> anyhow::Result<(T, Floors)> {
+    let mut session = floor::PingPongSession::start(bin).context("starting the ping-pong")?;
+    let blocks = BLOCKS.min(round_trips);
+    let mut floors = Floors {
+        iceoryx2_us: Vec::with_capacity(round_trips),
+        uds_us: Vec::with_capacity(round_trips),
+        prefix: session.prefix().to_string(),
+    };
+    let mut block = |k: usize, f: &mut Floors| -> anyhow::Result<()> {
+        let count = round_trips * (k + 1) / blocks - round_trips * k / blocks;
+        f.iceoryx2_us.extend(session.iceoryx2(BLOCK_WARMUP, count)?);
+        f.uds_us
+            .extend(session.socket(BLOCK_WARMUP, count, request_bytes, reply_bytes)?);
+        Ok(())
+    };
+    for k in 0..blocks / 2 {
+        block(k, &mut floors)?;
+    }
+    let inner = between()?;
+    for k in blocks / 2..blocks {
+        block(k, &mut floors)?;
+    }
+    session.finish()?;
+    Ok((inner, floors))
+}
+
+/// Measure one formation size.
+fn bench_one(
+    bin: &std::path::Path,
+    agents: usize,
+    steps: usize,
+    args: &BenchArgs,
+) -> anyhow::Result<(RunReport, Samples)> {
+    let (_, scenario, path) = scenario::generate(agents, steps)?;
+    // Socket payloads the size a serialized turn would have.
+    let request_bytes = WORLD_HEADER_BYTES + BYTES_PER_AGENT * agents;
+    let reply_bytes = MOVE_HEADER_BYTES + BYTES_PER_WAYPOINT * REPLY_WAYPOINTS;
+    let options = RunOptions {
+        agent_bin: Some(bin.to_path_buf()),
+        // Generous: a noisy machine must not turn a slow turn into a fault.
+        turn_deadline: Duration::from_secs(2),
+        progress: false,
+        idle_probe: Some(Duration::from_millis(args.idle_ms)),
+        ..RunOptions::default()
+    };
+    let (outcome, pp) = around(bin, args.round_trips, request_bytes, reply_bytes, || {
+        run_scenario(&scenario, &path, &options)
+    })?;
+    if outcome.interrupted {
+        anyhow::bail!("interrupted");
+    }
+    // Every agent's first turn is a warm-up (planner construction, first page touches).
+    let measured: Vec<_> = outcome
+        .turn_samples
+        .iter()
+        .filter(|t| t.step > 1)
+        .copied()
+        .collect();
+    let warmup_turns = outcome.turn_samples.len() - measured.len();
+    let turn_us: Vec<f64> = measured.iter().map(|t| t.latency_us).collect();
+    let compute_us: Vec<f64> = measured.iter().map(|t| t.compute_us).collect();
+    let overhead_us: Vec<f64> = measured
+        .iter()
+        .map(|t| t.latency_us - t.compute_us)
+        .collect();
+
+    let turn = Distribution::of(&turn_us);
+    let overhead = Distribution::of(&overhead_us);
+    let floor_d = Distribution::of(&pp.iceoryx2_us);
+    let uds = Distribution::of(&pp.uds_us);
+    let idle = outcome.idle_cpu.unwrap_or_default();
+    let mut r = RunReport {
+        agents,
+        steps,
+        warmup_turns,
+        turn_us: turn,
+        compute_us: Distribution::of(&compute_us),
+        ipc_overhead_us: overhead,
+        floor_us: floor_d,
+        uds_us: uds,
+        uds_request_bytes: request_bytes,
+        uds_reply_bytes: reply_bytes,
+        overhead_vs_floor_p50: ratio(overhead.p50, floor_d.p50),
+        overhead_vs_floor_p99: ratio(overhead.p99, floor_d.p99),
+        overhead_vs_uds_p50: ratio(overhead.p50, uds.p50),
+        agent_idle_cpu_s: idle.cpu_s,
+        agent_idle: idle,
+        startup_s: outcome.timing.startup_s,
+        agent_rss_kib: outcome.timing.agent_rss_kib,
+        faults: outcome.run.faults.len(),
+        wall_s: outcome.timing.wall_s,
+        prefix: outcome.prefix.clone(),
+        floor_prefix: pp.prefix.clone(),
+        targets: Targets {
+            overhead_p50_within_1_5x_floor: false,
+            overhead_p99_within_3x_floor: false,
+            overhead_p50_below_uds_p50: false,
+            idle_cpu_zero: false,
+        },
+    };
+    r.targets = Targets::of(&r);
+    let samples = Samples {
+        turn_us,
+        overhead_us,
+        floor_us: pp.iceoryx2_us,
+        uds_us: pp.uds_us,
+    };
+    Ok((r, samples))
+}
+
+/// `a / b`, or 0 when `b` is not a positive number.
+fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 && a.is_finite() { a / b } else { 0.0 }
+}
+
+fn load_average() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// `runs/bench-<UTC timestamp>.json`.
+fn default_out() -> PathBuf {
+    let stamp = humantime::format_rfc3339_seconds(std::time::SystemTime::now())
+        .to_string()
+        .replace(':', "-");
+    PathBuf::from("runs").join(format!("bench-{stamp}.json"))
+}

@@ -1,0 +1,96 @@
+//! `coordinator render RUN_DIR`: the figures and the animation of a run, re-created from
+//! the files `coordinator run` wrote (nothing is re-planned), into `RUN_DIR/plots/`:
+//!
+//! - `field.png`/`.svg`: obstacles with their safety margins, start and goal poses, and
+//!   the centre's Hybrid A* path with heading arrows (the paper's Figs. 2, 3, 6);
+//! - `formation.png`/`.svg`: the formation at its start pose, each agent's safety circle
+//!   and its slot (Fig. 7);
+//! - `deviation.png`/`.svg`: each agent's deviation from its slot over the steps and the
+//!   formation's mean (Fig. 9), faults marked;
+//! - `clearance.png`/`.svg`: the smallest agent-agent and agent-obstacle clearance at
+//!   every step against the zero line, faults marked;
+//! - `animation.gif`: the whole run (the paper's video; Fig. 8 at every frame).
+//!
+//! Colours come from the Okabe-Ito palette ([`palette`]); text uses an embedded font
+//! ([`font`]), so no system font library is needed.
+
+pub mod animation;
+pub mod canvas;
+pub mod data;
+pub mod field;
+pub mod font;
+pub mod formation;
+pub mod geom;
+pub mod gif_writer;
+pub mod layout;
+pub mod metrics;
+pub mod palette;
+pub mod scene;
+pub mod series;
+pub mod text;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+
+use crate::cli::RenderArgs;
+use crate::error::CliError;
+use crate::output::write_atomically;
+
+pub use data::{RunData, RunDirError};
+
+/// The folder inside a run directory that receives the plots.
+pub const PLOTS_DIR: &str = "plots";
+
+/// Render every figure and the animation of the run in `dir` into `dir/plots/`; returns
+/// the files written.
+pub fn render_run_dir(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    let data = RunData::load(dir)?;
+    render_data(&data, &dir.join(PLOTS_DIR))
+}
+
+/// Render every figure and the animation of `data` into `out` (created if needed);
+/// returns the files written.
+pub fn render_data(data: &RunData, out: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    font::ensure_registered()?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let metrics = metrics::per_step(data);
+    let mut written = Vec::new();
+    written.extend(canvas::write_figure(
+        out,
+        "field",
+        &field::FieldFigure::new(data),
+    )?);
+    written.extend(canvas::write_figure(
+        out,
+        "formation",
+        &formation::FormationFigure::new(data),
+    )?);
+    written.extend(canvas::write_figure(
+        out,
+        "deviation",
+        &series::SeriesFigure::deviation(data, &metrics),
+    )?);
+    written.extend(canvas::write_figure(
+        out,
+        "clearance",
+        &series::SeriesFigure::clearance(data, &metrics),
+    )?);
+    let gif = animation::Animation::new(data, &metrics)
+        .write_gif(Vec::new())
+        .context("drawing animation.gif")?;
+    let gif_path = out.join("animation.gif");
+    write_atomically(&gif_path, &gif)?;
+    written.push(gif_path);
+    Ok(written)
+}
+
+/// `coordinator render`: a bad run directory is a usage error (exit code 2) naming the
+/// file; a failure to draw or write is exit code 1.
+pub fn run(args: &RenderArgs) -> Result<(), CliError> {
+    let data = RunData::load(&args.run_dir).map_err(|e| CliError::Usage(e.to_string()))?;
+    let out = args.run_dir.join(PLOTS_DIR);
+    let written = render_data(&data, &out)?;
+    eprintln!("rendered {} files -> {}", written.len(), out.display());
+    Ok(())
+}

@@ -1,0 +1,336 @@
+//! `coordinator render`: every file is written, decodes at its stated size, and agents are
+//! drawn where they are. The run directories are small synthetic ones written here (plus
+//! one real, in-process simulation of the paper's example).
+
+use std::fs::File;
+use std::io::BufReader;
+use std::path::{Path, PathBuf};
+
+use coordinator::CliError;
+use coordinator::cli::RenderArgs;
+use coordinator::render::animation::Animation;
+use coordinator::render::canvas::Figure;
+use coordinator::render::field::FieldFigure;
+use coordinator::render::formation::FormationFigure;
+use coordinator::render::layout::MapLayout;
+use coordinator::render::metrics;
+use coordinator::render::series::SeriesFigure;
+use coordinator::render::{RunData, render_run_dir};
+
+const SCENARIO: &str = r#"
+name = "tiny"
+seed = 1
+
+[field]
+width_m = 12.0
+height_m = 8.0
+
+[obstacles]
+radius_m = 0.5
+positions_m = [[9.0, 6.5]]
+
+[formation]
+agent_radius_m = 0.4
+slots = [ { r_m = 0.0, theta_deg = 0.0 }, { r_m = 1.2, theta_deg = 90.0 } ]
+
+[path]
+start = { x_m = 2.0, y_m = 3.0, heading_deg = 0.0 }
+goal = { x_m = 10.0, y_m = 3.0, heading_deg = 0.0 }
+turning_radius_m = 1.0
+step_m = 1.0
+center_clearance_m = 0.3
+allow_reverse = false
+"#;
+
+/// A fresh, empty directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("render-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("create scratch dir");
+    dir
+}
+
+/// A four-step run: the centre moves 1 m a step along +x; agent 0 sits on the centre,
+/// agent 1 1.2 m to its left until it dies in step 2 and stays frozen at (3, 4.2).
+fn write_tiny_run(dir: &Path) {
+    std::fs::write(dir.join("scenario.toml"), SCENARIO).expect("write scenario");
+    let mut path = String::from("step,x_m,y_m,heading_rad\n");
+    let mut trajectory = String::from(
+        "step,agent,x,y,slot_x,slot_y,best_x,best_y,deviation_m,clearance_m,status,alive\n",
+    );
+    let mut moves = String::from("step,agent,index,x,y\n");
+    for step in 0..4 {
+        let cx = 2.0 + step as f64;
+        path.push_str(&format!("{step},{cx},3,0\n"));
+        trajectory.push_str(&format!("{step},0,{cx},3,{cx},3,{cx},3,0,0.4,at_slot,1\n"));
+        let (x1, alive, status) = if step < 2 {
+            (cx, 1, "at_slot")
+        } else {
+            (3.0, 0, "dead")
+        };
+        let dev = cx - x1;
+        trajectory.push_str(&format!(
+            "{step},1,{x1},4.2,{cx},4.2,{x1},4.2,{dev},0.4,{status},{alive}\n"
+        ));
+        match step {
+            0 => moves.push_str("0,0,0,2,3\n0,1,0,2,4.2\n"),
+            1 => moves.push_str("1,0,0,2,3\n1,0,1,2.5,2.8\n1,0,2,3,3\n1,1,0,2,4.2\n1,1,1,3,4.2\n"),
+            _ => moves.push_str(&format!(
+                "{step},0,0,{},3\n{step},0,1,{cx},3\n{step},1,0,3,4.2\n",
+                cx - 1.0
+            )),
+        }
+    }
+    std::fs::write(dir.join("path.csv"), path).expect("write path");
+    std::fs::write(dir.join("trajectory.csv"), trajectory).expect("write trajectory");
+    std::fs::write(dir.join("moves.csv"), moves).expect("write moves");
+    std::fs::write(
+        dir.join("summary.json"),
+        r#"{"scenario": "tiny", "completed": true,
+            "faults": [{"agent": 1, "step": 2, "kind": "dead", "detail": "killed"}]}"#,
+    )
+    .expect("write summary");
+}
+
+/// An RGB image decoded from a PNG file.
+struct Rgb {
+    width: u32,
+    height: u32,
+    pixels: Vec<u8>,
+}
+
+impl Rgb {
+    fn at(&self, (x, y): (i32, i32)) -> [u8; 3] {
+        assert!(x >= 0 && y >= 0 && (x as u32) < self.width && (y as u32) < self.height);
+        let i = (y as usize * self.width as usize + x as usize) * 3;
+        [self.pixels[i], self.pixels[i + 1], self.pixels[i + 2]]
+    }
+}
+
+fn decode_png(path: &Path) -> Rgb {
+    let file = BufReader::new(File::open(path).expect("open png"));
+    let mut reader = png::Decoder::new(file).read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("png buffer size")];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    assert_eq!(info.color_type, png::ColorType::Rgb, "{}", path.display());
+    assert_eq!(info.bit_depth, png::BitDepth::Eight, "{}", path.display());
+    buf.truncate(info.buffer_size());
+    Rgb {
+        width: info.width,
+        height: info.height,
+        pixels: buf,
+    }
+}
+
+/// Every frame of a GIF composed onto the canvas, as RGB images.
+fn decode_gif(path: &Path) -> Vec<Rgb> {
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::RGBA);
+    let mut decoder = options
+        .read_info(BufReader::new(File::open(path).expect("open gif")))
+        .expect("gif header");
+    let (w, h) = (usize::from(decoder.width()), usize::from(decoder.height()));
+    let mut canvas = vec![0u8; w * h * 3];
+    let mut frames = Vec::new();
+    while let Some(frame) = decoder.read_next_frame().expect("gif frame") {
+        let (fw, fh) = (usize::from(frame.width), usize::from(frame.height));
+        for y in 0..fh {
+            for x in 0..fw {
+                let src = (y * fw + x) * 4;
+                if frame.buffer[src + 3] == 0 {
+                    continue; // transparent: the previous frame shows through
+                }
+                let dst = ((usize::from(frame.top) + y) * w + usize::from(frame.left) + x) * 3;
+                canvas[dst..dst + 3].copy_from_slice(&frame.buffer[src..src + 3]);
+            }
+        }
+        frames.push(Rgb {
+            width: w as u32,
+            height: h as u32,
+            pixels: canvas.clone(),
+        });
+    }
+    frames
+}
+
+fn assert_svg(path: &Path, (w, h): (u32, u32)) {
+    let text = std::fs::read_to_string(path).expect("read svg");
+    let doc = roxmltree::Document::parse(&text).expect("svg is XML");
+    let root = doc.root_element();
+    assert_eq!(root.tag_name().name(), "svg", "{}", path.display());
+    assert_eq!(root.attribute("width"), Some(w.to_string().as_str()));
+    assert_eq!(root.attribute("height"), Some(h.to_string().as_str()));
+}
+
+/// Orange of the agents' safety circles, translucent over white.
+fn is_agent(c: [u8; 3]) -> bool {
+    let [r, g, b] = c.map(i32::from);
+    r > 215 && (150..235).contains(&g) && b < 175 && r - b > 60
+}
+
+fn px(layout: &MapLayout, x: f64, y: f64) -> (i32, i32) {
+    layout.to_px(x, y)
+}
+
+#[test]
+fn every_file_is_written_and_decodes_at_its_stated_size() {
+    let dir = scratch("sizes");
+    write_tiny_run(&dir);
+    let written = render_run_dir(&dir).expect("render");
+    let plots = dir.join("plots");
+    let names: Vec<String> = written
+        .iter()
+        .map(|p| {
+            assert_eq!(p.parent(), Some(plots.as_path()));
+            assert!(p.is_file(), "{}", p.display());
+            p.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        })
+        .collect();
+    let mut expected: Vec<String> = ["field", "formation", "deviation", "clearance"]
+        .iter()
+        .flat_map(|s| [format!("{s}.png"), format!("{s}.svg")])
+        .collect();
+    expected.push("animation.gif".into());
+    assert_eq!(names, expected);
+
+    let data = RunData::load(&dir).expect("load");
+    let m = metrics::per_step(&data);
+    let sizes = [
+        ("field", FieldFigure::new(&data).size_px()),
+        ("formation", FormationFigure::new(&data).size_px()),
+        ("deviation", SeriesFigure::deviation(&data, &m).size_px()),
+        ("clearance", SeriesFigure::clearance(&data, &m).size_px()),
+    ];
+    for (stem, (w, h)) in sizes {
+        let png = decode_png(&plots.join(format!("{stem}.png")));
+        assert_eq!((png.width, png.height), (w, h), "{stem}.png");
+        assert_svg(&plots.join(format!("{stem}.svg")), (w, h));
+    }
+    let animation = Animation::new(&data, &m);
+    let frames = decode_gif(&plots.join("animation.gif"));
+    assert_eq!(frames.len(), animation.frames().len());
+    assert_eq!(frames.len(), 4);
+    let l = animation.layout();
+    assert_eq!(
+        (frames[0].width, frames[0].height),
+        (l.width_px, l.height_px)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn agents_are_drawn_where_they_are() {
+    let dir = scratch("pixels");
+    write_tiny_run(&dir);
+    render_run_dir(&dir).expect("render");
+    let data = RunData::load(&dir).expect("load");
+
+    // Formation at the start pose: agent 0 on the centre (2, 3), agent 1 at (2, 4.2).
+    let formation = FormationFigure::new(&data);
+    let l = formation.layout();
+    let png = decode_png(&dir.join("plots/formation.png"));
+    assert!(
+        is_agent(png.at(px(l, 1.8, 2.8))),
+        "{:?}",
+        png.at(px(l, 1.8, 2.8))
+    );
+    assert!(
+        is_agent(png.at(px(l, 2.2, 4.4))),
+        "{:?}",
+        png.at(px(l, 2.2, 4.4))
+    );
+    assert!(!is_agent(png.at(px(l, 1.3, 2.7))), "outside every agent");
+
+    // Animation: agent 0 starts at (2, 3) and ends at (5, 3); agent 1 dies at (3, 4.2).
+    let m = metrics::per_step(&data);
+    let animation = Animation::new(&data, &m);
+    let l = animation.layout();
+    let frames = decode_gif(&dir.join("plots/animation.gif"));
+    let (first, last) = (&frames[0], &frames[frames.len() - 1]);
+    assert!(
+        is_agent(first.at(px(l, 1.9, 3.2))),
+        "{:?}",
+        first.at(px(l, 1.9, 3.2))
+    );
+    assert!(
+        is_agent(last.at(px(l, 4.9, 3.2))),
+        "{:?}",
+        last.at(px(l, 4.9, 3.2))
+    );
+    assert!(
+        !is_agent(last.at(px(l, 1.9, 3.2))),
+        "agent 0 has left its start"
+    );
+    let dead = last.at(px(l, 3.1, 4.3));
+    assert!(
+        dead.iter().all(|&c| c < 110),
+        "dead agent drawn dark: {dead:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
+    let dir = scratch("bad");
+    write_tiny_run(&dir);
+    std::fs::remove_file(dir.join("trajectory.csv")).expect("remove");
+    let err = coordinator::render::run(&RenderArgs {
+        run_dir: dir.clone(),
+    })
+    .expect_err("missing file");
+    assert!(matches!(err, CliError::Usage(_)), "{err:?}");
+    assert_eq!(err.exit_code(), 2);
+    let msg = err.to_string();
+    assert!(
+        msg.contains("trajectory.csv") && !msg.contains('\n'),
+        "{msg}"
+    );
+
+    std::fs::write(
+        dir.join("trajectory.csv"),
+        "step,agent,x,y,slot_x,slot_y,best_x,best_y,deviation_m,clearance_m,status,alive\n\
+         0,0,2,3,2,3,2,3,0,0.4,at_slot,1\n0,1,oops,4.2,2,4.2,2,4.2,0,0.4,at_slot,1\n",
+    )
+    .expect("write");
+    let msg = coordinator::render::run(&RenderArgs {
+        run_dir: dir.clone(),
+    })
+    .expect_err("malformed file")
+    .to_string();
+    assert!(
+        msg.contains("trajectory.csv") && msg.contains("line 3"),
+        "{msg}"
+    );
+
+    let missing = dir.join("no-such-run");
+    let err = coordinator::render::run(&RenderArgs { run_dir: missing }).expect_err("no directory");
+    assert_eq!(err.exit_code(), 2);
+    assert!(
+        !dir.join("plots").exists(),
+        "nothing written for a bad run dir"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_simulated_paper_run_renders() {
+    let scenario = shared::scenario::Scenario::paper();
+    let run = shared::simulate::simulate(&scenario).expect("simulate the paper example");
+    let dir = scratch("paper");
+    coordinator::output::write_run(
+        &dir,
+        shared::scenario::PAPER_SCENARIO_TOML,
+        &run,
+        &coordinator::output::Timing::default(),
+    )
+    .expect("write run");
+    let written = render_run_dir(&dir).expect("render");
+    assert_eq!(written.len(), 9);
+    for p in &written {
+        let len = std::fs::metadata(p).map(|m| m.len()).unwrap_or(0);
+        assert!(len > 1000, "{} is {len} bytes", p.display());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
