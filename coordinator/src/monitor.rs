@@ -169,7 +169,7 @@ mod tests {
                 radius_m: 0.3,
             },
             Body {
-                position: Point::new(7.0, 5.8),
+                position: Point::new(5.0, 7.5),
                 radius_m: 0.3,
             },
         ]
@@ -186,9 +186,10 @@ mod tests {
             m.check(0, &from, &through, &through[1], &bodies(), 8),
             Err(Refusal::Obstacle { obstacle: 0, .. })
         ));
-        let around = [from, Point::new(5.0, 6.35), Point::new(9.0, 5.0)];
+        let around = [from, Point::new(3.0, 7.0), Point::new(7.0, 7.0), Point::new(9.0, 5.0)];
+        assert_eq!(m.check(0, &from, &around, &around[3], &bodies()[..1], 8), Ok(()));
         assert!(matches!(
-            m.check(0, &from, &around, &around[2], &bodies(), 8),
+            m.check(0, &from, &around, &around[3], &bodies(), 8),
             Err(Refusal::Agent { agent: 1, .. })
         ));
         let nan = [from, Point::new(f64::NAN, 0.0)];
@@ -211,7 +212,7 @@ mod tests {
             Err(Refusal::WrongEnd)
         ));
         // Touching is allowed: exactly the radii sum away.
-        let touch = [from, Point::new(5.0, 6.3)];
+        let touch = [from, Point::new(3.7, 5.0)];
         assert_eq!(
             m.check(0, &from, &touch, &touch[1], &bodies()[..1], 8),
             Ok(())

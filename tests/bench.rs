@@ -1,0 +1,131 @@
+//! `coordinator bench` for real, small: real agent processes, the iceoryx2 floor and the
+//! Unix socket ping-pong. The figures must be consistent and complete, and nothing may
+//! be left behind. Speed is never asserted here (the machine is shared and noisy).
+
+mod support;
+
+use std::process::Command;
+
+use serde_json::Value;
+
+const DISTRIBUTIONS: [&str; 6] = [
+    "turn_us",
+    "compute_us",
+    "ipc_overhead_us",
+    "floor_us",
+    "uds_us",
+    "agent_rss_kib",
+];
+
+fn number(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} is not a number in {v}"))
+}
+
+/// p50 <= p90 <= p99 <= p999 <= max, all finite and non-negative, count > 0.
+fn check_distribution(run: &Value, key: &str) -> [f64; 5] {
+    let d = &run[key];
+    let v = ["p50", "p90", "p99", "p999", "max"].map(|k| number(d, k));
+    assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0), "{key}: {d}");
+    assert!(v.windows(2).all(|w| w[0] <= w[1]), "{key} not ordered: {d}");
+    assert!(d["count"].as_u64().is_some_and(|c| c > 0), "{key}: {d}");
+    v
+}
+
+#[test]
+fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let out_file = dir.path().join("bench.json");
+    let output = Command::new(support::coordinator_bin())
+        .args(["bench", "--agents", "3", "--steps", "20", "--json", "--out"])
+        .arg(&out_file)
+        .arg("--agent-bin")
+        .arg(support::agent_bin())
+        .output()
+        .expect("running coordinator bench");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "bench failed: {stderr}");
+    let report: Value = serde_json::from_slice(&output.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    // --out holds the same report; the histogram is beside it.
+    let saved: Value =
+        serde_json::from_slice(&std::fs::read(&out_file).expect("--out file")).expect("JSON");
+    assert_eq!(saved, report);
+    let svg = std::fs::read_to_string(out_file.with_extension("svg")).expect("histogram");
+    assert!(svg.contains("<svg"), "not an SVG");
+
+    let runs = report["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), 1);
+    let run = &runs[0];
+    assert_eq!(run["agents"], 3);
+    for key in DISTRIBUTIONS {
+        check_distribution(run, key);
+    }
+    // 20 steps of 3 turns, the first step dropped as a warm-up.
+    assert_eq!(run["turn_us"]["count"], 57);
+    assert_eq!(run["ipc_overhead_us"]["count"], 57);
+    assert_eq!(run["floor_us"]["count"], 2000);
+    assert_eq!(run["uds_us"]["count"], 2000);
+    assert_eq!(run["agent_rss_kib"]["count"], 3);
+    // The overhead is the turn minus its compute, turn by turn: never above the turn.
+    let turn = check_distribution(run, "turn_us");
+    let overhead = check_distribution(run, "ipc_overhead_us");
+    assert!(overhead[0] <= turn[0], "overhead p50 above turn p50: {run}");
+    assert!(overhead[4] <= turn[4], "overhead max above turn max: {run}");
+    for key in [
+        "overhead_vs_floor_p50",
+        "overhead_vs_floor_p99",
+        "overhead_vs_uds_p50",
+    ] {
+        let r = number(run, key);
+        assert!(r.is_finite() && r > 0.0, "{key} = {r}");
+    }
+    let floor = check_distribution(run, "floor_us");
+    let ratio = number(run, "overhead_vs_floor_p50");
+    assert!((ratio - overhead[0] / floor[0]).abs() <= 1e-9 * ratio.max(1.0));
+    let idle = number(run, "agent_idle_cpu_s");
+    assert!(idle.is_finite() && idle >= 0.0, "idle CPU {idle}");
+    assert_eq!(run["agent_idle"]["processes"], 3);
+    assert!(number(&run["agent_idle"], "held_s") >= 0.9);
+    assert!(number(run, "startup_s") > 0.0);
+    assert_eq!(run["faults"], 0);
+    for key in ["overhead_p50_within_1_5x_floor", "idle_cpu_zero"] {
+        assert!(run["targets"][key].is_boolean(), "targets.{key}");
+    }
+
+    // Nothing left behind: no process and no iceoryx2 file of either prefix, no socket.
+    for key in ["prefix", "floor_prefix"] {
+        let prefix = run[key].as_str().expect("prefix");
+        assert!(!prefix.is_empty());
+        assert!(
+            support::leftovers(prefix).is_empty(),
+            "iceoryx2 files of {prefix} left: {:?}",
+            support::leftovers(prefix)
+        );
+        assert!(
+            support::processes_mentioning(prefix).is_empty(),
+            "processes of {prefix} left running"
+        );
+        let socket = std::env::temp_dir().join(format!("{prefix}pingpong.sock"));
+        assert!(!socket.exists(), "{} left", socket.display());
+    }
+}
+
+#[test]
+fn bench_refuses_bad_arguments_with_exit_code_2() {
+    for args in [
+        ["--agents", "0"],
+        ["--agents", "257"],
+        ["--steps", "1"],
+        ["--round-trips", "0"],
+    ] {
+        let output = Command::new(support::coordinator_bin())
+            .arg("bench")
+            .args(args)
+            .output()
+            .expect("running coordinator bench");
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+        assert!(output.stdout.is_empty(), "{args:?}");
+    }
+}
