@@ -24,7 +24,7 @@ fn coordinator(args: &[&str], out: &Path) -> Command {
         .args(args)
         .arg("--out")
         .arg(out)
-        .arg("--quiet")
+        .args(["--quiet", "--no-plots"])
         .env("FORMATION_AGENT_BIN", support::agent_bin())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())

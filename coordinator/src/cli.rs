@@ -66,6 +66,10 @@ pub struct RunArgs {
     /// through-obstacle, silent, garbage); repeatable, e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
     pub misbehave: Vec<(usize, String)>,
+    /// Do not draw the plots and the animation (`coordinator render DIR` draws them
+    /// later).
+    #[arg(long)]
+    pub no_plots: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,

@@ -186,8 +186,16 @@ mod tests {
             m.check(0, &from, &through, &through[1], &bodies(), 8),
             Err(Refusal::Obstacle { obstacle: 0, .. })
         ));
-        let around = [from, Point::new(3.0, 7.0), Point::new(7.0, 7.0), Point::new(9.0, 5.0)];
-        assert_eq!(m.check(0, &from, &around, &around[3], &bodies()[..1], 8), Ok(()));
+        let around = [
+            from,
+            Point::new(3.0, 7.0),
+            Point::new(7.0, 7.0),
+            Point::new(9.0, 5.0),
+        ];
+        assert_eq!(
+            m.check(0, &from, &around, &around[3], &bodies()[..1], 8),
+            Ok(())
+        );
         assert!(matches!(
             m.check(0, &from, &around, &around[3], &bodies(), 8),
             Err(Refusal::Agent { agent: 1, .. })

@@ -45,6 +45,17 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         .clone()
         .unwrap_or_else(|| output::default_run_dir(&scenario.name));
     output::write_run(&dir, &loaded.text, &outcome.run, &outcome.timing)?;
+    if !args.no_plots {
+        // The data files are complete already; a failed drawing costs only the pictures.
+        match crate::render::render_run_dir(&dir) {
+            Ok(files) => tracing::info!(
+                "{} plot files in {}",
+                files.len(),
+                dir.join("plots").display()
+            ),
+            Err(e) => tracing::warn!("plots not drawn: {e:#}"),
+        }
+    }
     let s = outcome.run.summary();
     eprintln!(
         "{}: {} agents, {} steps, {} collisions, min clearance {:.4} m, mean deviation {:.4} m, {} faults, turn latency p50 {:.0} us p99 {:.0} us, {:.2} s -> {}",

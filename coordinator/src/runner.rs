@@ -139,6 +139,17 @@ pub fn run_scenario(
     centre_path: &[Pose],
     options: &RunOptions,
 ) -> anyhow::Result<RunOutcome> {
+    run_scenario_with(scenario, centre_path, options, &mut |_| Ok(()))
+}
+
+/// [`run_scenario`] calling `between_steps(step)` after every step (benchmarks measure
+/// their reference there, in the same run; an error ends the run).
+pub fn run_scenario_with(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    options: &RunOptions,
+    between_steps: &mut dyn FnMut(usize) -> anyhow::Result<()>,
+) -> anyhow::Result<RunOutcome> {
     let started = Instant::now();
     let n = scenario.agents.len();
     let bin = agents::locate_agent_binary(options.agent_bin.as_deref())?;
@@ -155,6 +166,7 @@ pub fn run_scenario(
         ipc: &mut ipc,
         procs: &mut procs,
         missed: vec![0; n],
+        between_steps,
     }
     .drive(centre_path, started);
 
@@ -190,6 +202,8 @@ struct Driver<'a> {
     procs: &'a mut AgentProcesses,
     /// Consecutive missed turns per agent.
     missed: Vec<u32>,
+    /// Called after every step.
+    between_steps: &'a mut dyn FnMut(usize) -> anyhow::Result<()>,
 }
 
 impl Driver<'_> {
@@ -295,6 +309,7 @@ impl Driver<'_> {
             }
             recorder.end_step(step);
             bar.inc(1);
+            (self.between_steps)(step)?;
             if self.ipc.termination_requested() {
                 interrupted = true;
                 break;

@@ -212,10 +212,10 @@ fn every_file_is_written_and_decodes_at_its_stated_size() {
     let frames = decode_gif(&plots.join("animation.gif"));
     assert_eq!(frames.len(), animation.frames().len());
     assert_eq!(frames.len(), 4);
-    let l = animation.layout();
-    assert_eq!(
-        (frames[0].width, frames[0].height),
-        (l.width_px, l.height_px)
+    assert_eq!((frames[0].width, frames[0].height), animation.size_px());
+    assert!(
+        animation.size_px().0 > animation.layout().width_px,
+        "close-up panel"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

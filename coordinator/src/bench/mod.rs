@@ -8,8 +8,9 @@
 //!    idle and their CPU time is measured ([`IdleCpu`]).
 //! 2. one `agent --pingpong` process answers an iceoryx2 event + publish-subscribe
 //!    ping-pong (the floor: the same wake-up as a turn) and a Unix socket ping-pong with
-//!    turn-sized payloads ([`floor`]), in alternating blocks, half of them before the
-//!    turns and half after, so the floor sees the same (shared, noisy) machine.
+//!    turn-sized payloads ([`floor`]), in short alternating blocks spread between the
+//!    steps of that same run, so the floor sees the same (shared, noisy) machine as the
+//!    turns.
 //!
 //! The compute side alone is measured by the Criterion benchmarks in `shared/benches`.
 //! JSON goes to stdout (and `--out`), the table to stderr, the histogram to an SVG file.
@@ -31,7 +32,7 @@ use crate::agents::locate_agent_binary;
 use crate::cli::BenchArgs;
 use crate::error::CliError;
 use crate::output::write_atomically;
-use crate::runner::{RunOptions, run_scenario};
+use crate::runner::{RunOptions, run_scenario_with};
 use crate::stats::Distribution;
 
 pub use procfs::IdleCpu;
@@ -47,10 +48,10 @@ const MOVE_HEADER_BYTES: usize = 72;
 const BYTES_PER_WAYPOINT: usize = 16;
 /// Waypoints in the socket reply ("a few": a move on the straight path has two).
 const REPLY_WAYPOINTS: usize = 4;
-/// Blocks of each ping-pong (half before the turns, half after).
-const BLOCKS: usize = 8;
+/// Most blocks of each ping-pong, spread evenly between the steps.
+const BLOCKS: usize = 40;
 /// Round trips dropped at the start of every block (the switch between mechanisms).
-const BLOCK_WARMUP: usize = 20;
+const BLOCK_WARMUP: usize = 10;
 /// Most steps: the generated field must stay within the largest field accepted.
 pub const MAX_BENCH_STEPS: usize = 20_000;
 
@@ -85,7 +86,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
         cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
         load_average_1m: load_average(),
         round_trips: args.round_trips,
-        warmup_round_trips: BLOCKS.min(args.round_trips) * BLOCK_WARMUP,
+        warmup_round_trips: 0,
         histogram_svg: None,
     };
     let mut samples = Vec::new();
@@ -95,6 +96,9 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             eprintln!("bench: {n} agents, {steps} steps ...");
         }
         let (run, s) = bench_one(&bin, n, steps, args)?;
+        report.warmup_round_trips = report
+            .warmup_round_trips
+            .max(run.floor_blocks * BLOCK_WARMUP);
         samples.push(s);
         report.runs.push(run);
     }
@@ -163,43 +167,31 @@ impl Samples {
     }
 }
 
-/// The floor and socket samples, gathered in blocks around `between` (the turns).
+/// The floor and socket samples, gathered in blocks between the steps of a run.
 struct Floors {
     iceoryx2_us: Vec<f64>,
     uds_us: Vec<f64>,
-    prefix: String,
+    blocks: usize,
 }
 
-fn around<T>(
-    bin: &std::path::Path,
-    round_trips: usize,
-    request_bytes: usize,
-    reply_bytes: usize,
-    between: impl FnOnce() -> anyhow::Result<T>,
-) -> anyhow::Result<(T, Floors)> {
-    let mut session = floor::PingPongSession::start(bin).context("starting the ping-pong")?;
-    let blocks = BLOCKS.min(round_trips);
-    let mut floors = Floors {
-        iceoryx2_us: Vec::with_capacity(round_trips),
-        uds_us: Vec::with_capacity(round_trips),
-        prefix: session.prefix().to_string(),
-    };
-    let mut block = |k: usize, f: &mut Floors| -> anyhow::Result<()> {
+impl Floors {
+    /// Block `k` of `blocks`: an equal share of `round_trips` of either mechanism.
+    fn block(
+        &mut self,
+        session: &mut floor::PingPongSession,
+        k: usize,
+        blocks: usize,
+        round_trips: usize,
+        (request_bytes, reply_bytes): (usize, usize),
+    ) -> anyhow::Result<()> {
         let count = round_trips * (k + 1) / blocks - round_trips * k / blocks;
-        f.iceoryx2_us.extend(session.iceoryx2(BLOCK_WARMUP, count)?);
-        f.uds_us
+        self.iceoryx2_us
+            .extend(session.iceoryx2(BLOCK_WARMUP, count)?);
+        self.uds_us
             .extend(session.socket(BLOCK_WARMUP, count, request_bytes, reply_bytes)?);
+        self.blocks += 1;
         Ok(())
-    };
-    for k in 0..blocks / 2 {
-        block(k, &mut floors)?;
     }
-    let inner = between()?;
-    for k in blocks / 2..blocks {
-        block(k, &mut floors)?;
-    }
-    session.finish()?;
-    Ok((inner, floors))
 }
 
 /// Measure one formation size.
@@ -221,12 +213,30 @@ fn bench_one(
         idle_probe: Some(Duration::from_millis(args.idle_ms)),
         ..RunOptions::default()
     };
-    let (outcome, pp) = around(bin, args.round_trips, request_bytes, reply_bytes, || {
-        run_scenario(&scenario, &path, &options)
+    let mut session = floor::PingPongSession::start(bin).context("starting the ping-pong")?;
+    let floor_prefix = session.prefix().to_string();
+    let blocks = BLOCKS.min(args.round_trips).min(steps).max(1);
+    let stride = (steps / blocks).max(1);
+    let sizes = (request_bytes, reply_bytes);
+    let mut pp = Floors {
+        iceoryx2_us: Vec::with_capacity(args.round_trips),
+        uds_us: Vec::with_capacity(args.round_trips),
+        blocks: 0,
+    };
+    let outcome = run_scenario_with(&scenario, &path, &options, &mut |step| {
+        if step % stride == 0 && pp.blocks < blocks {
+            pp.block(&mut session, pp.blocks, blocks, args.round_trips, sizes)?;
+        }
+        Ok(())
     })?;
     if outcome.interrupted {
         anyhow::bail!("interrupted");
     }
+    // A run with fewer steps than planned (it cannot happen, but cheaply covered).
+    while pp.blocks < blocks {
+        pp.block(&mut session, pp.blocks, blocks, args.round_trips, sizes)?;
+    }
+    session.finish()?;
     // Every agent's first turn is a warm-up (planner construction, first page touches).
     let measured: Vec<_> = outcome
         .turn_samples
@@ -268,7 +278,8 @@ fn bench_one(
         faults: outcome.run.faults.len(),
         wall_s: outcome.timing.wall_s,
         prefix: outcome.prefix.clone(),
-        floor_prefix: pp.prefix.clone(),
+        floor_prefix,
+        floor_blocks: pp.blocks,
         targets: Targets {
             overhead_p50_within_1_5x_floor: false,
             overhead_p99_within_3x_floor: false,

@@ -20,7 +20,7 @@ pub struct Report {
     pub load_average_1m: Option<f64>,
     /// Recorded round trips per ping-pong (after the warm-up).
     pub round_trips: usize,
-    /// Round trips made and dropped first.
+    /// Round trips made and dropped (the first few of every block), per mechanism.
     pub warmup_round_trips: usize,
     /// The histogram, if written.
     pub histogram_svg: Option<String>,
@@ -72,6 +72,8 @@ pub struct RunReport {
     pub prefix: String,
     /// The floor measurement's iceoryx2 prefix.
     pub floor_prefix: String,
+    /// Blocks the ping-pongs were split into, spread between the steps.
+    pub floor_blocks: usize,
     /// The targets (reported, never asserted).
     pub targets: Targets,
 }

@@ -50,10 +50,21 @@ pub struct Animation<'a> {
     data: &'a RunData,
     metrics: &'a [StepMetrics],
     header: Header,
+    /// The whole field, at the left of the canvas.
     layout: MapLayout,
+    /// The close-up panel right of the field, centred on the formation centre (its
+    /// ranges are moved every frame; its pixel geometry stays).
+    close_up: MapLayout,
+    /// Half the side of the close-up window, in metres.
+    close_up_half_m: f64,
     margin_m: f64,
     frames: Vec<usize>,
 }
+
+/// Side of the close-up panel's plot, at most, in pixels.
+const CLOSE_UP_MAX_PX: u32 = 440;
+/// Room left of the close-up plot for its y labels, in pixels.
+const CLOSE_UP_LEFT_PX: u32 = 56;
 
 impl<'a> Animation<'a> {
     /// Lay out the animation of `data` (`metrics` from [`super::metrics::per_step`]).
@@ -126,17 +137,51 @@ impl<'a> Animation<'a> {
                 right: MAP_RIGHT_PX,
             },
         );
+        // The close-up shows the formation's whole extent around its centre.
+        let reach = s
+            .agents
+            .iter()
+            .map(|a| a.slot.r_m + a.radius_m)
+            .fold(0.0, f64::max);
+        let close_up_half_m = (reach * 1.15 + 0.75).max(2.0);
+        let side = layout.plot_height_px.clamp(200, CLOSE_UP_MAX_PX);
+        let top = layout.margins.top;
+        let close_up = MapLayout::fit(
+            -close_up_half_m..close_up_half_m,
+            -close_up_half_m..close_up_half_m,
+            (side, side),
+            0,
+            |_| Margins {
+                top,
+                left: CLOSE_UP_LEFT_PX,
+                bottom: MAP_BOTTOM_PX,
+                right: MAP_RIGHT_PX,
+            },
+        );
         Self {
             data,
             metrics,
             header,
             layout,
+            close_up,
+            close_up_half_m,
             margin_m,
             frames: frame_indices(data.steps.len(), MAX_FRAMES),
         }
     }
 
-    /// The frames' layout.
+    /// The close-up's layout around `centre` (metres).
+    fn close_up_at(&self, centre: Xy) -> MapLayout {
+        let h = self.close_up_half_m;
+        MapLayout {
+            x_m: centre.0 - h..centre.0 + h,
+            y_m: centre.1 - h..centre.1 + h,
+            ..self.close_up.clone()
+        }
+    }
+
+    /// The layout of the whole-field map at the left of every frame (the canvas is
+    /// wider: the close-up panel is on the right, see [`Animation::size_px`]).
     pub fn layout(&self) -> &MapLayout {
         &self.layout
     }
@@ -180,8 +225,12 @@ impl<'a> Animation<'a> {
         Ok(rgb)
     }
 
-    fn size_px(&self) -> (u32, u32) {
-        (self.layout.width_px, self.layout.height_px)
+    /// Size of every frame (the field map and the close-up side by side), in pixels.
+    pub fn size_px(&self) -> (u32, u32) {
+        (
+            self.layout.width_px + self.close_up.width_px,
+            self.layout.height_px.max(self.close_up.height_px),
+        )
     }
 
     /// What changes from frame to frame.
@@ -190,86 +239,48 @@ impl<'a> Animation<'a> {
         root: &DrawingArea<DB, Shift>,
         k: usize,
     ) -> anyhow::Result<()> {
-        let chart = scene::map_chart_bare(root, &self.layout)?;
-        let p = Painter::new(&chart, &self.layout);
-        let steps = &self.data.steps;
         let Some(&at) = self.frames.get(k) else {
             anyhow::bail!("no frame {k}");
         };
-        let step = &steps[at];
+        let step = &self.data.steps[at];
+        let (left, right) = root.split_horizontally(self.layout.width_px);
+        let centre = self
+            .data
+            .centre_at(step.step)
+            .map_or((0.0, 0.0), |c| (c.x_m, c.y_m));
 
-        // The centre so far.
-        let travelled: Vec<Xy> = self
+        let chart = scene::map_chart_bare(&left, &self.layout)?;
+        let p = Painter::new(&chart, &self.layout);
+        self.draw_world(&p, at, false)?;
+        // Where the close-up looks.
+        let h = self.close_up_half_m;
+        let (x0, x1, y0, y1) = (centre.0 - h, centre.0 + h, centre.1 - h, centre.1 + h);
+        p.dashed(
+            &[(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)],
+            4,
+            3,
+            line(solid(palette::BLACK), 1),
+        )?;
+
+        let close_up = self.close_up_at(centre);
+        // The panel is shorter than the canvas: keep its plot square.
+        let (panel, _) = right.split_vertically(close_up.height_px);
+        let chart = scene::map_chart(&panel, &close_up)?;
+        let p = Painter::new(&chart, &close_up);
+        p.obstacles(&self.data.scenario.obstacles, self.margin_m)?;
+        let path: Vec<Xy> = self
             .data
             .centre
             .iter()
-            .take_while(|c| c.step <= step.step)
             .map(|c| (c.pose.x_m, c.pose.y_m))
             .collect();
-        p.polyline(&travelled, line(solid(palette::CENTRE_PATH), 2))?;
-
-        let px = self.layout.px_per_m;
-        let radii: Vec<f64> = self
-            .data
-            .scenario
-            .agents
-            .iter()
-            .map(|a| a.radius_m)
-            .collect();
-        let small = radii.iter().fold(f64::INFINITY, |m, &r| m.min(r)) * px < 3.0;
-        // Each agent's path to its best point in this step.
-        let move_width = if small { 1 } else { 2 };
-        for a in &step.agents {
-            if a.path.len() > 1 {
-                let pts: Vec<Xy> = a.path.iter().map(|q| (q.x, q.y)).collect();
-                p.polyline(&pts, line(solid(palette::MOVE), move_width))?;
-            }
-        }
-        // Ideal slots.
-        for (a, &r) in step.agents.iter().zip(&radii) {
-            if !a.alive {
-                continue;
-            }
-            let c = (a.slot.x, a.slot.y);
-            if small {
-                p.marker(c, 1.0, fill(alpha(palette::SLOT, 0.8)))?;
-            } else {
-                p.disk(c, r, None, Some(line(solid(palette::SLOT), 1)))?;
-            }
-        }
-        // Agents with their safety circles.
-        for (a, &r) in step.agents.iter().zip(&radii) {
-            let c = (a.position.x, a.position.y);
-            let (body, edge) = if a.alive {
-                (alpha(palette::AGENT, 0.6), solid(palette::AGENT_EDGE))
-            } else {
-                (solid(palette::AGENT_DEAD), solid(palette::BLACK))
-            };
-            if small {
-                p.disk(
-                    c,
-                    r.max(p.m(1.5)),
-                    Some(fill(solid(if a.alive {
-                        palette::AGENT
-                    } else {
-                        palette::AGENT_DEAD
-                    }))),
-                    None,
-                )?;
-            } else {
-                p.disk(c, r, Some(fill(body)), Some(line(edge, 1)))?;
-            }
-        }
-        // The centre's pose now.
-        if let Some(pose) = self.data.centre_at(step.step) {
-            p.arrow(
-                (pose.x_m, pose.y_m),
-                pose.heading_rad,
-                22.0,
-                solid(palette::CENTRE_PATH),
-                2,
-            )?;
-        }
+        p.polyline(&path, line(alpha(palette::CENTRE_PATH, 0.3), 2))?;
+        self.draw_world(&p, at, true)?;
+        right.draw(&Text::new(
+            "close-up around the formation centre",
+            (CLOSE_UP_LEFT_PX as i32, close_up.margins.top as i32 - 24),
+            super::font::text(15.0),
+        ))?;
 
         let m = self.metrics.get(at).filter(|m| m.step == step.step);
         let mean = m
@@ -296,6 +307,81 @@ impl<'a> Animation<'a> {
         root.draw(&Text::new(text, origin, style))?;
         Ok(())
     }
+
+    /// The moving part of the world at step index `at`: the centre path travelled so
+    /// far, each agent's path to its best point, the slots, the agents and the centre.
+    fn draw_world<DB: Backend>(
+        &self,
+        p: &Painter<'_, '_, DB>,
+        at: usize,
+        close_up: bool,
+    ) -> anyhow::Result<()> {
+        let step = &self.data.steps[at];
+        let travelled: Vec<Xy> = self
+            .data
+            .centre
+            .iter()
+            .take_while(|c| c.step <= step.step)
+            .map(|c| (c.pose.x_m, c.pose.y_m))
+            .collect();
+        p.polyline(&travelled, line(solid(palette::CENTRE_PATH), 2))?;
+
+        let radii: Vec<f64> = self
+            .data
+            .scenario
+            .agents
+            .iter()
+            .map(|a| a.radius_m)
+            .collect();
+        let small = radii.iter().fold(f64::INFINITY, |m, &r| m.min(r)) < p.m(3.0);
+        let move_width = if small { 1 } else { 2 };
+        for a in &step.agents {
+            if a.path.len() > 1 {
+                let pts: Vec<Xy> = a.path.iter().map(|q| (q.x, q.y)).collect();
+                p.polyline(&pts, line(solid(palette::MOVE), move_width))?;
+            }
+        }
+        for (a, &r) in step.agents.iter().zip(&radii) {
+            if !a.alive {
+                continue;
+            }
+            let c = (a.slot.x, a.slot.y);
+            if small {
+                p.marker(c, 1.0, fill(alpha(palette::SLOT, 0.8)))?;
+            } else {
+                let width = if close_up { 2 } else { 1 };
+                p.disk(c, r, None, Some(line(solid(palette::SLOT), width)))?;
+            }
+        }
+        for (a, &r) in step.agents.iter().zip(&radii) {
+            let c = (a.position.x, a.position.y);
+            let (body, edge) = if a.alive {
+                (alpha(palette::AGENT, 0.6), solid(palette::AGENT_EDGE))
+            } else {
+                (solid(palette::AGENT_DEAD), solid(palette::BLACK))
+            };
+            if small {
+                let color = if a.alive {
+                    palette::AGENT
+                } else {
+                    palette::AGENT_DEAD
+                };
+                p.disk(c, r.max(p.m(1.5)), Some(fill(solid(color))), None)?;
+            } else {
+                p.disk(c, r, Some(fill(body)), Some(line(edge, 1)))?;
+            }
+        }
+        if let Some(pose) = self.data.centre_at(step.step) {
+            p.arrow(
+                (pose.x_m, pose.y_m),
+                pose.heading_rad,
+                22.0,
+                solid(palette::CENTRE_PATH),
+                2,
+            )?;
+        }
+        Ok(())
+    }
 }
 
 /// The static layer of every frame: header, axes, obstacles, the whole centre path, the
@@ -310,8 +396,9 @@ impl Figure for Background<'_, '_> {
     fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
         let a = self.0;
         root.fill(&palette::WHITE)?;
-        a.header.draw(root)?;
-        let chart = scene::map_chart(root, &a.layout)?;
+        let (left, _) = root.split_horizontally(a.layout.width_px);
+        a.header.draw(&left)?;
+        let chart = scene::map_chart(&left, &a.layout)?;
         let p = Painter::new(&chart, &a.layout);
         let s = &a.data.scenario;
         p.obstacles(&s.obstacles, a.margin_m)?;
