@@ -134,3 +134,125 @@ pub fn serve<T: Transport>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::VecDeque;
+
+    use shared::scenario::Scenario;
+    use shared::simulate::{agent_planners, plan_centre_path};
+    use shared::turn::Move;
+
+    use super::*;
+    use crate::transport::MissionView;
+
+    /// A scripted coordinator: hands out commands, keeps what the agent publishes.
+    struct Scripted {
+        mission: MissionView,
+        commands: VecDeque<Command>,
+        ready: bool,
+        published: Vec<(u64, Move, u32)>,
+    }
+
+    impl Transport for Scripted {
+        fn announce_ready(&mut self) -> anyhow::Result<()> {
+            self.ready = true;
+            Ok(())
+        }
+        fn next_command(&mut self) -> anyhow::Result<Command> {
+            Ok(self.commands.pop_front().unwrap_or(Command::Quit))
+        }
+        fn mission(&mut self) -> anyhow::Result<MissionView> {
+            Ok(self.mission.clone())
+        }
+        fn publish_move(
+            &mut self,
+            turn: &TurnInput,
+            mv: &Move,
+            status: u32,
+            _compute: Duration,
+        ) -> anyhow::Result<()> {
+            self.published.push((turn.seq, mv.clone(), status));
+            Ok(())
+        }
+    }
+
+    fn scripted(scenario: &Scenario, turns: Vec<TurnInput>) -> Scripted {
+        Scripted {
+            mission: MissionView {
+                field: scenario.field,
+                obstacles: scenario.obstacles.clone(),
+                agents: scenario.agents.clone(),
+                planner: scenario.planner,
+            },
+            commands: turns.into_iter().map(Command::Turn).collect(),
+            ready: false,
+            published: Vec::new(),
+        }
+    }
+
+    fn first_turns(scenario: &Scenario, agent: usize) -> Vec<TurnInput> {
+        let path = plan_centre_path(scenario).expect("path");
+        let positions: Vec<_> = scenario
+            .agents
+            .iter()
+            .map(|a| a.slot.ideal_position(&path[0]))
+            .collect();
+        (1..4)
+            .map(|step| TurnInput {
+                seq: step as u64 * 10 + agent as u64,
+                step: step as u64,
+                centre: path[step],
+                positions: positions.clone(),
+                radii_m: scenario.agents.iter().map(|a| a.radius_m).collect(),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_turn_loop_publishes_exactly_the_planners_move_for_every_turn() {
+        let scenario = Scenario::paper();
+        let agent = 2;
+        let turns = first_turns(&scenario, agent);
+        let mut t = scripted(&scenario, turns.clone());
+        serve(&mut t, agent, None).expect("serve");
+        assert!(t.ready);
+        assert_eq!(t.published.len(), turns.len());
+        let planner = &agent_planners(&scenario).expect("planners")[agent];
+        for ((seq, mv, status), turn) in t.published.iter().zip(&turns) {
+            let others: Vec<Body> = turn
+                .positions
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != agent)
+                .map(|(j, &position)| Body {
+                    position,
+                    radius_m: turn.radii_m[j],
+                })
+                .collect();
+            let want = planner.plan_move(&turn.centre, &turn.positions[agent], &others);
+            assert_eq!(*seq, turn.seq);
+            assert_eq!(*mv, want);
+            assert_eq!(*status, want.status as u32);
+        }
+    }
+
+    #[test]
+    fn a_silent_agent_publishes_nothing_and_a_nan_agent_publishes_nan() {
+        let scenario = Scenario::paper();
+        let turns = first_turns(&scenario, 0);
+        let mut silent = scripted(&scenario, turns.clone());
+        serve(&mut silent, 0, Some(Misbehave::Silent)).expect("serve");
+        assert!(silent.published.is_empty());
+        let mut nan = scripted(&scenario, turns);
+        serve(&mut nan, 0, Some(Misbehave::Nan)).expect("serve");
+        assert!(nan.published.iter().all(|(_, mv, _)| mv.best.x.is_nan()));
+    }
+
+    #[test]
+    fn an_agent_missing_from_the_mission_is_an_error_not_a_panic() {
+        let scenario = Scenario::paper();
+        let mut t = scripted(&scenario, first_turns(&scenario, 0));
+        assert!(serve(&mut t, 99, None).is_err());
+    }
+}
