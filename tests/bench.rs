@@ -67,6 +67,8 @@ fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
     assert_eq!(run["ipc_overhead_us"]["count"], 57);
     assert_eq!(run["floor_us"]["count"], 2000);
     assert_eq!(run["uds_us"]["count"], 2000);
+    // Spread between the 20 steps of the same run.
+    assert_eq!(run["floor_blocks"], 20);
     assert_eq!(run["agent_rss_kib"]["count"], 3);
     // The overhead is the turn minus its compute, turn by turn: never above the turn.
     let turn = check_distribution(run, "turn_us");

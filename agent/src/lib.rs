@@ -29,8 +29,9 @@ pub struct Args {
     /// This agent's index in the formation.
     #[arg(long)]
     pub agent: usize,
-    /// How often to check that the coordinator is still there while waiting, in ms.
-    #[arg(long, default_value_t = 200)]
+    /// How often to check that the coordinator is still there while waiting, in ms. This
+    /// is the fallback: the kernel already sends SIGTERM when the coordinator dies.
+    #[arg(long, default_value_t = 500)]
     pub liveness_ms: u64,
     /// Test mode: publish bad results on purpose (the safety monitor must refuse them).
     #[arg(long, value_enum)]
