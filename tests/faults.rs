@@ -111,20 +111,22 @@ fn a_killed_agent_is_frozen_as_an_obstacle_and_the_run_completes_safely() {
     assert_eq!(faults_of(&s, "killed").len(), 1);
     let dead = faults_of(&s, "dead");
     assert_eq!(dead.len(), 1);
-    assert_eq!(
-        (dead[0]["agent"].as_u64(), dead[0]["step"].as_u64()),
-        (Some(2), Some(40))
-    );
+    assert_eq!(dead[0]["agent"].as_u64(), Some(2));
+    // Killed during its turn at step 40; if its move got out first, the death is noticed
+    // by the liveness check at the start of step 41.
+    let noticed = dead[0]["step"].as_u64().expect("step") as usize;
+    assert!(noticed == 40 || noticed == 41, "noticed at step {noticed}");
     assert!(dead[0]["detection_ms"].as_f64().expect("detection_ms") < 250.0);
-    // Frozen where it stood, out of the formation from step 40 on.
+    // Frozen where it stood, out of the formation from then on.
     let rows = agent_rows(&out, 2);
-    let frozen: Vec<_> = rows.iter().filter(|r| r.0 >= 40).collect();
+    let frozen: Vec<_> = rows.iter().filter(|r| r.0 >= noticed).collect();
+    assert!(frozen.len() > 100);
     assert!(
         frozen
             .iter()
             .all(|r| !r.3 && r.1 == frozen[0].1 && r.2 == frozen[0].2)
     );
-    assert!(rows.iter().filter(|r| r.0 < 40).all(|r| r.3));
+    assert!(rows.iter().filter(|r| r.0 < noticed).all(|r| r.3));
     assert_nothing_left(pid);
 }
 
@@ -380,8 +382,14 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
 #[test]
 fn two_coordinators_at_once_do_not_interfere() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let a = coordinator(&[], &dir.path().join("a")).spawn().expect("a");
-    let b = coordinator(&[], &dir.path().join("b")).spawn().expect("b");
+    // A generous deadline: the comparison is about isolation, not about liveness.
+    let args = ["--turn-deadline-ms", "10000"];
+    let a = coordinator(&args, &dir.path().join("a"))
+        .spawn()
+        .expect("a");
+    let b = coordinator(&args, &dir.path().join("b"))
+        .spawn()
+        .expect("b");
     let (pa, pb) = (a.id(), b.id());
     let (oa, ob) = (
         a.wait_with_output().expect("a"),

@@ -9,9 +9,13 @@ use shared::run::Run;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
 
+/// These tests are about determinism, not liveness: a generous turn deadline keeps a
+/// healthy agent that the loaded test machine schedules late from counting as missed
+/// (dead agents are still noticed at once through their process).
 fn options() -> RunOptions {
     RunOptions {
         agent_bin: Some(support::agent_bin()),
+        turn_deadline: std::time::Duration::from_secs(10),
         progress: false,
         ..RunOptions::default()
     }

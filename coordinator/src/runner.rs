@@ -436,7 +436,7 @@ impl Driver<'_> {
             step,
             agent,
             slot,
-            "missed",
+            MoveStatus::Missed,
             format!(
                 "no move within the {:?} turn deadline",
                 self.options.turn_deadline
@@ -539,7 +539,7 @@ fn accept_or_reject(
         }
         Err(why) => {
             tracing::warn!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
-            recorder.reject(step, agent, slot, "rejected", why);
+            recorder.reject(step, agent, slot, MoveStatus::Rejected, why);
         }
     }
 }

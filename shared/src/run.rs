@@ -283,34 +283,31 @@ impl<'a> Recorder<'a> {
                 Ok(())
             }
             Err(v) => {
-                self.reject(step, agent, mv.slot, "rejected", v.to_string());
+                self.reject(step, agent, mv.slot, MoveStatus::Rejected, v.to_string());
                 Err(v)
             }
         }
     }
 
-    /// Record that `agent` did not move this step (its move was refused or never came):
-    /// it stays where it was with `status` `kind`, and a fault is recorded.
-    pub fn reject(&mut self, step: usize, agent: usize, slot: Point, kind: &str, detail: String) {
+    /// Record that `agent` did not move this step because its move was refused
+    /// ([`MoveStatus::Rejected`]) or never came ([`MoveStatus::Missed`]): it stays where
+    /// it was, and a fault named after the status is recorded.
+    pub fn reject(
+        &mut self,
+        step: usize,
+        agent: usize,
+        slot: Point,
+        status: MoveStatus,
+        detail: String,
+    ) {
         let here = self.bodies[agent].position;
-        let status = match kind {
-            "missed" => MoveStatus::Missed,
-            "dead" => MoveStatus::Dead,
-            _ => MoveStatus::Rejected,
-        };
         self.pending[agent] = Some(Move {
             slot,
             best: here,
             status,
             waypoints: vec![here],
         });
-        self.run.faults.push(Fault {
-            agent,
-            step,
-            kind: kind.to_string(),
-            detail,
-            detection_ms: None,
-        });
+        self.note_fault(step, agent, status.name(), detail, None);
     }
 
     /// Record a fault that does not change the agent's move (a kill, a respawn, a
