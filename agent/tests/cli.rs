@@ -1,0 +1,68 @@
+//! The agent executable on its own: its command line, and a clear failure when there is no
+//! run to join. (Having an integration test also makes `cargo test --workspace` build the
+//! `agent` executable, which the workspace's process tests start.)
+
+use std::process::Command;
+
+fn agent() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_agent"))
+}
+
+#[test]
+fn the_help_names_every_option() {
+    let out = agent().arg("--help").output().expect("agent --help");
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for option in ["--run", "--agent", "--liveness-ms", "--misbehave"] {
+        assert!(help.contains(option), "{option} missing from:\n{help}");
+    }
+}
+
+/// Remove the files iceoryx2 made for `prefix` (a node that found no run leaves its
+/// prefix's management segment; only a coordinator may remove it during a run).
+fn remove_files_of(prefix: &str) -> usize {
+    let mut removed = 0;
+    for dir in [
+        "/dev/shm",
+        "/tmp/iceoryx2",
+        "/tmp/iceoryx2/nodes",
+        "/tmp/iceoryx2/services",
+    ] {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            if e.file_name().to_string_lossy().starts_with(prefix)
+                && std::fs::remove_file(e.path()).is_ok()
+            {
+                removed += 1;
+            }
+        }
+    }
+    removed
+}
+
+#[test]
+fn joining_a_run_that_does_not_exist_fails_with_one_clear_error() {
+    let prefix = format!("nosuchrun{}_", std::process::id());
+    let out = agent()
+        .args(["--run", &prefix, "--agent", "0"])
+        .env("RUST_LOG", "error")
+        .output()
+        .expect("agent");
+    remove_files_of(&prefix);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("opening run {prefix}")), "{err}");
+    assert_eq!(remove_files_of(&prefix), 0, "nothing of the prefix is left");
+}
+
+#[test]
+fn an_invalid_run_prefix_is_refused() {
+    let out = agent()
+        .args(["--run", "../escape", "--agent", "0"])
+        .output()
+        .expect("agent");
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("run prefix"));
+}
