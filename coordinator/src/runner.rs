@@ -447,7 +447,6 @@ impl Driver<'_> {
                 "step {step}: agent {agent} missed {} turns in a row: killing it",
                 self.missed[agent]
             );
-            self.procs.kill_now(agent);
             recorder.note_fault(
                 step,
                 agent,

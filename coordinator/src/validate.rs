@@ -24,12 +24,8 @@ pub fn load_and_plan(file: Option<&std::path::Path>) -> Result<Loaded, ScenarioE
     let (scenario, text, name) = match file {
         Some(path) => {
             let name = path.display().to_string();
-            let scenario = Scenario::load(path)?;
-            let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
-                file: name.clone(),
-                reason: e.to_string(),
-            })?;
-            (scenario, text, name)
+            let text = Scenario::read(path)?;
+            (Scenario::parse(&text, &name)?, text, name)
         }
         None => (
             Scenario::paper(),

@@ -342,6 +342,12 @@ impl Scenario {
 
     /// Read and validate the scenario file at `path`.
     pub fn load(path: &Path) -> Result<Self, ScenarioError> {
+        Self::parse(&Self::read(path)?, &path.display().to_string())
+    }
+
+    /// The text of the scenario file at `path` (a directory, a missing file or a file
+    /// that is not UTF-8 is a [`ScenarioError::Read`]).
+    pub fn read(path: &Path) -> Result<String, ScenarioError> {
         let file = path.display().to_string();
         if path.is_dir() {
             return Err(ScenarioError::Read {
@@ -349,11 +355,10 @@ impl Scenario {
                 reason: "is a directory, not a scenario file".into(),
             });
         }
-        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
-            file: file.clone(),
+        std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
+            file,
             reason: e.to_string(),
-        })?;
-        Self::parse(&text, &file)
+        })
     }
 
     /// The paper's example, embedded in the library.

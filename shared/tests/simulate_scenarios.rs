@@ -64,6 +64,26 @@ fn recheck_every_move(scenario: &Scenario, run: &Run) {
     }
 }
 
+/// The run completed with no collision, no negative clearance, no fault (not one move
+/// refused), and every move holds up when re-checked from the record.
+fn assert_safe_without_faults(scenario: &Scenario, run: &Run) {
+    let summary = run.summary();
+    assert!(run.completed, "{}", scenario.name);
+    assert_eq!(summary.collisions, 0, "{}", scenario.name);
+    assert!(
+        summary.min_clearance_m >= -SAFETY_TOLERANCE_M,
+        "{}",
+        scenario.name
+    );
+    assert!(
+        summary.faults.is_empty(),
+        "{}: {:?}",
+        scenario.name,
+        summary.faults
+    );
+    recheck_every_move(scenario, run);
+}
+
 #[test]
 fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
     for file in scenario_files() {
@@ -80,20 +100,7 @@ fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
             summary.max_deviation_m,
             summary.final_mean_deviation_m
         );
-        assert!(run.completed);
-        assert_eq!(summary.collisions, 0, "{}", scenario.name);
-        assert!(
-            summary.min_clearance_m >= -SAFETY_TOLERANCE_M,
-            "{}",
-            scenario.name
-        );
-        assert!(
-            summary.faults.is_empty(),
-            "{}: {:?}",
-            scenario.name,
-            summary.faults
-        );
-        recheck_every_move(&scenario, &run);
+        assert_safe_without_faults(&scenario, &run);
         // Fig. 9: the formation deviates among the obstacles and recovers afterwards.
         assert!(
             summary.max_deviation_m > 0.0,
@@ -122,20 +129,7 @@ fn the_barrier_function_planner_never_breaks_clearance_on_any_shipped_scenario()
             .unwrap()
             .with_planner(PlannerKind::Cbf);
         let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
-        let summary = run.summary();
-        assert_eq!(summary.collisions, 0, "{}", scenario.name);
-        assert!(
-            summary.min_clearance_m >= -SAFETY_TOLERANCE_M,
-            "{}",
-            scenario.name
-        );
         // Safe by construction: not one move needed refusing.
-        assert!(
-            summary.faults.is_empty(),
-            "{}: {:?}",
-            scenario.name,
-            summary.faults
-        );
-        recheck_every_move(&scenario, &run);
+        assert_safe_without_faults(&scenario, &run);
     }
 }
