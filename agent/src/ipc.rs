@@ -14,7 +14,7 @@ use shared::geometry::Point;
 use shared::turn::Move;
 use shared::wire::{
     self, AgentState, DONE_SERVICE, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission, Role,
-    STATE_SERVICE, StateKind, WORLD_SERVICE, World,
+    StateKind, WORLD_SERVICE, World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
@@ -33,6 +33,8 @@ pub struct IpcTransport {
     /// Radii of every agent, from the mission (the world carries positions only).
     radii_m: Vec<f64>,
     mission: Option<MissionView>,
+    /// When the current turn's event woke the agent ([`wire::monotonic_ns`]).
+    woke_ns: u64,
 }
 
 impl IpcTransport {
@@ -66,10 +68,10 @@ impl IpcTransport {
             .open()
             .map_err(|e| anyhow!("opening {WORLD_SERVICE}: {e:?}"))?;
         let state = node
-            .service_builder(&name(STATE_SERVICE)?)
+            .service_builder(&name(&wire::state_service_name(agent))?)
             .publish_subscribe::<AgentState>()
             .open()
-            .map_err(|e| anyhow!("opening {STATE_SERVICE}: {e:?}"))?;
+            .map_err(|e| anyhow!("opening the state service of agent {agent}: {e:?}"))?;
         let turn = node
             .service_builder(&name(&wire::turn_service_name(agent))?)
             .event()
@@ -109,6 +111,7 @@ impl IpcTransport {
             node,
             radii_m: Vec::new(),
             mission: None,
+            woke_ns: 0,
         })
     }
 
@@ -131,6 +134,7 @@ impl IpcTransport {
         state.agent = self.agent as u32;
         state.pid = std::process::id();
         fill(state)?;
+        state.sent_ns = wire::monotonic_ns();
         sample
             .send()
             .map_err(|e| anyhow!("sending the state: {e:?}"))?;
@@ -204,6 +208,7 @@ impl Transport for IpcTransport {
             match woke {
                 Ok(_) if quit => return Ok(Command::Quit),
                 Ok(_) if turn => {
+                    self.woke_ns = wire::monotonic_ns();
                     if let Some(t) = self.read_world()? {
                         return Ok(Command::Turn(t));
                     }
@@ -261,6 +266,7 @@ impl Transport for IpcTransport {
             s.seq = turn.seq;
             s.step = turn.step;
             s.compute_ns = u64::try_from(compute.as_nanos()).unwrap_or(u64::MAX);
+            s.woke_ns = self.woke_ns;
             s.status = status;
             s.slot = mv.slot.into();
             s.best = mv.best.into();

@@ -18,7 +18,7 @@ use shared::scenario::Scenario;
 use shared::turn::Body;
 use shared::wire::{
     self, AgentState, DONE_SERVICE, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission, Role,
-    STATE_SERVICE, WORLD_SERVICE, World,
+    WORLD_SERVICE, World,
 };
 
 /// A state sample copied out of shared memory.
@@ -31,7 +31,8 @@ pub struct CoordinatorIpc {
     node: Node<ipc::Service>,
     mission_pub: Publisher<ipc::Service, Mission, ()>,
     world_pub: Publisher<ipc::Service, World, ()>,
-    state_sub: Subscriber<ipc::Service, AgentState, ()>,
+    /// One per agent: a turn reads only the connection of the agent it waits for.
+    state_subs: Vec<Subscriber<ipc::Service, AgentState, ()>>,
     done_listener: Listener<ipc::Service>,
     turn_notifiers: Vec<Notifier<ipc::Service>>,
     seq: u64,
@@ -77,18 +78,6 @@ impl CoordinatorIpc {
 
         let mission = broadcast_service::<Mission>(&node, MISSION_SERVICE, agents)?;
         let world = broadcast_service::<World>(&node, WORLD_SERVICE, agents)?;
-        // The buffer is per publisher-subscriber connection: the ready handshake and one
-        // move per agent fit in 2.
-        let state = node
-            .service_builder(&service_name(STATE_SERVICE)?)
-            .publish_subscribe::<AgentState>()
-            .max_publishers(agents.max(1))
-            .max_subscribers(1)
-            .max_nodes(nodes)
-            .subscriber_max_buffer_size(2)
-            .subscriber_max_borrowed_samples(2)
-            .create()
-            .map_err(|e| anyhow!("creating {STATE_SERVICE}: {e:?}"))?;
         let done = node
             .service_builder(&service_name(DONE_SERVICE)?)
             .event()
@@ -98,7 +87,27 @@ impl CoordinatorIpc {
             .create()
             .map_err(|e| anyhow!("creating {DONE_SERVICE}: {e:?}"))?;
         let mut turn_notifiers = Vec::with_capacity(agents);
+        let mut state_subs = Vec::with_capacity(agents);
         for i in 0..agents {
+            // The ready handshake and one move fit in 2. Two publishers and three nodes:
+            // a respawned agent may open the service before its dead predecessor's
+            // publisher is cleaned up.
+            let state = node
+                .service_builder(&service_name(&wire::state_service_name(i))?)
+                .publish_subscribe::<AgentState>()
+                .max_publishers(2)
+                .max_subscribers(1)
+                .max_nodes(3)
+                .subscriber_max_buffer_size(2)
+                .subscriber_max_borrowed_samples(2)
+                .create()
+                .map_err(|e| anyhow!("creating the state service of agent {i}: {e:?}"))?;
+            state_subs.push(
+                state
+                    .subscriber_builder()
+                    .create()
+                    .map_err(|e| anyhow!("state subscriber {i}: {e:?}"))?,
+            );
             let turn = node
                 .service_builder(&service_name(&wire::turn_service_name(i))?)
                 .event()
@@ -126,10 +135,7 @@ impl CoordinatorIpc {
                 .max_loaned_samples(1)
                 .create()
                 .map_err(|e| anyhow!("world publisher: {e:?}"))?,
-            state_sub: state
-                .subscriber_builder()
-                .create()
-                .map_err(|e| anyhow!("state subscriber: {e:?}"))?,
+            state_subs,
             done_listener: done
                 .listener_builder()
                 .create()
@@ -236,22 +242,28 @@ impl CoordinatorIpc {
         Ok(())
     }
 
-    /// Wait (blocking, no polling) until `want` accepts a state sample or `deadline`
-    /// passes. Every sample received is offered to `want` in order; the first it accepts
-    /// is returned as a copy. Returns `None` at the deadline.
+    /// Wait (blocking, no polling) until `want` accepts a state sample of one of
+    /// `agents` or `deadline` passes. Every sample received is offered to `want` in
+    /// order; the first it accepts is returned as a copy. Returns `None` at the deadline.
     pub fn wait_state(
         &self,
+        agents: &[usize],
         deadline: Instant,
         mut want: impl FnMut(&AgentState) -> bool,
     ) -> anyhow::Result<Option<StateCopy>> {
         loop {
-            while let Some(sample) = self
-                .state_sub
-                .receive()
-                .map_err(|e| anyhow!("receiving a state: {e:?}"))?
-            {
-                if want(&sample) {
-                    return Ok(Some(copy_state(&sample)));
+            for &agent in agents {
+                let sub = self
+                    .state_subs
+                    .get(agent)
+                    .with_context(|| format!("no agent {agent} in this run"))?;
+                while let Some(sample) = sub
+                    .receive()
+                    .map_err(|e| anyhow!("receiving agent {agent}'s state: {e:?}"))?
+                {
+                    if want(&sample) {
+                        return Ok(Some(copy_state(&sample)));
+                    }
                 }
             }
             let now = Instant::now();
@@ -407,6 +419,8 @@ fn copy_state(s: &AgentState) -> AgentState {
         seq: s.seq,
         step: s.step,
         compute_ns: s.compute_ns,
+        woke_ns: s.woke_ns,
+        sent_ns: s.sent_ns,
         agent: s.agent,
         kind: s.kind,
         status: s.status,

@@ -17,7 +17,7 @@ use shared::geometry::{Point, Pose};
 use shared::run::{Recorder, Run};
 use shared::scenario::Scenario;
 use shared::turn::{MAX_WAYPOINTS, Move, MoveStatus};
-use shared::wire::{AgentState, StateKind};
+use shared::wire::{AgentState, StateKind, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};
 use crate::ipc::CoordinatorIpc;
@@ -98,6 +98,33 @@ pub struct TurnSample {
     pub latency_us: f64,
     /// The agent's own compute time for the move, microseconds.
     pub compute_us: f64,
+    /// Where the latency went, if the agent stamped its state.
+    pub split: Option<TurnSplit>,
+}
+
+/// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
+/// [`shared::wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TurnSplit {
+    /// From ringing the turn to the agent awake: the wake-up of the agent's process.
+    pub to_agent_us: f64,
+    /// From awake to sending the move: reading the world, computing, writing the move.
+    pub in_agent_us: f64,
+    /// From the move sent to the coordinator holding it: the coordinator's wake-up.
+    pub to_coordinator_us: f64,
+}
+
+impl TurnSplit {
+    /// The split of a turn rung at `granted_ns` and held at `held_ns`, if the agent's
+    /// stamps are known and in order.
+    fn of(granted_ns: u64, state: &AgentState, held_ns: u64) -> Option<Self> {
+        let (woke, sent) = (state.woke_ns, state.sent_ns);
+        (granted_ns <= woke && woke <= sent && sent <= held_ns).then(|| Self {
+            to_agent_us: (woke - granted_ns) as f64 / 1e3,
+            in_agent_us: (sent - woke) as f64 / 1e3,
+            to_coordinator_us: (held_ns - sent) as f64 / 1e3,
+        })
+    }
 }
 
 /// Prefix of every run prefix: `fc<coordinator pid>x<counter>_`.
@@ -271,6 +298,7 @@ impl Driver<'_> {
                     recorder.alive(),
                 )?;
                 let granted = Instant::now();
+                let granted_ns = monotonic_ns();
                 self.ipc.notify_turn(agent)?;
                 if self.options.kills.contains(&(agent, step))
                     && let Some(pid) = self.procs.signal_kill(agent)
@@ -285,12 +313,14 @@ impl Driver<'_> {
                 }
                 match self.wait_answer(agent, seq, granted) {
                     Answer::Move(state) => {
+                        let held_ns = monotonic_ns();
                         self.missed[agent] = 0;
                         let sample = TurnSample {
                             step,
                             agent,
-                            latency_us: granted.elapsed().as_secs_f64() * 1e6,
+                            latency_us: held_ns.saturating_sub(granted_ns) as f64 / 1e3,
                             compute_us: state.compute_ns as f64 / 1e3,
+                            split: TurnSplit::of(granted_ns, &state, held_ns),
                         };
                         latency_us.push(sample.latency_us);
                         compute_us.push(sample.compute_us);
@@ -347,7 +377,7 @@ impl Driver<'_> {
         let deadline = granted + self.options.turn_deadline;
         loop {
             let until = (Instant::now() + LIVENESS_SLICE).min(deadline);
-            let got = self.ipc.wait_state(until, |s| {
+            let got = self.ipc.wait_state(&[agent], until, |s| {
                 s.state_kind() == Some(StateKind::Move) && s.agent as usize == agent && s.seq == seq
             });
             match got {
@@ -471,6 +501,7 @@ fn wait_ready(
     let mut pending: Vec<usize> = agents.to_vec();
     while !pending.is_empty() {
         let got = ipc.wait_state(
+            &pending,
             (Instant::now() + Duration::from_millis(50)).min(deadline),
             |s| s.state_kind() == Some(StateKind::Ready) && pending.contains(&(s.agent as usize)),
         )?;

@@ -7,7 +7,10 @@
 //! Services (names below a per-run prefix set in the iceoryx2 config):
 //! - [`MISSION_SERVICE`]: publish-subscribe, history 1: the static scenario;
 //! - [`WORLD_SERVICE`]: publish-subscribe, coordinator to agents: the world before a turn;
-//! - [`STATE_SERVICE`]: publish-subscribe, agents to coordinator: handshakes and moves;
+//! - [`state_service_name`]: one publish-subscribe service per agent, agent to
+//!   coordinator: its handshake and its moves. One per agent, not one shared by all:
+//!   an iceoryx2 subscriber's `receive` looks at every publisher connection, so a shared
+//!   service would make every turn read N connections instead of one;
 //! - [`turn_service_name`]: one event service per agent: "your turn" / "quit";
 //! - [`DONE_SERVICE`]: event, agents to coordinator: "my state is published".
 
@@ -24,14 +27,17 @@ use crate::turn::{Body, MAX_WAYPOINTS, MoveStatus};
 pub const MISSION_SERVICE: &str = "formation/mission";
 /// Name of the world service.
 pub const WORLD_SERVICE: &str = "formation/world";
-/// Name of the agents' state service.
-pub const STATE_SERVICE: &str = "formation/state";
 /// Name of the "state published" event service.
 pub const DONE_SERVICE: &str = "formation/done";
 
 /// Name of agent `agent`'s turn event service.
 pub fn turn_service_name(agent: usize) -> String {
     format!("formation/agent/{agent}/turn")
+}
+
+/// Name of agent `agent`'s state service (its handshake and moves).
+pub fn state_service_name(agent: usize) -> String {
+    format!("formation/agent/{agent}/state")
 }
 
 /// Event id on a turn service: take your turn (the world is published).
@@ -310,6 +316,11 @@ pub struct AgentState {
     pub step: u64,
     /// Time the agent spent computing the move, in nanoseconds.
     pub compute_ns: u64,
+    /// When the agent woke for this turn, on the machine's monotonic clock
+    /// ([`monotonic_ns`]); 0 if unknown.
+    pub woke_ns: u64,
+    /// When the agent sent this state, on the machine's monotonic clock; 0 if unknown.
+    pub sent_ns: u64,
     /// The agent's index.
     pub agent: u32,
     /// A [`StateKind`] code.
@@ -469,4 +480,22 @@ mod tests {
         st.set_waypoints(&many[..3]).unwrap();
         assert_eq!(st.waypoint_points(), many[..3].to_vec());
     }
+}
+
+/// The machine's monotonic clock (`CLOCK_MONOTONIC`, the clock of `std::time::Instant`
+/// on Linux) in nanoseconds: the same in every process, so the coordinator can place an
+/// agent's timestamps on its own time line. 0 if the clock cannot be read.
+pub fn monotonic_ns() -> u64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `t` is a valid, writable timespec; the call only writes it.
+    if unsafe { libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut t) } != 0 {
+        return 0;
+    }
+    let (Ok(s), Ok(ns)) = (u64::try_from(t.tv_sec), u64::try_from(t.tv_nsec)) else {
+        return 0;
+    };
+    s.saturating_mul(1_000_000_000).saturating_add(ns)
 }

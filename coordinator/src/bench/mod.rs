@@ -36,7 +36,7 @@ use crate::runner::{RunOptions, run_scenario_with};
 use crate::stats::Distribution;
 
 pub use procfs::IdleCpu;
-pub use report::{Report, RunReport, Targets};
+pub use report::{OverheadSplit, Report, RunReport, Targets};
 
 /// Fixed part of a serialized world (seq, step, turn agent, centre pose), bytes.
 const WORLD_HEADER_BYTES: usize = 48;
@@ -252,6 +252,18 @@ fn bench_one(
         .map(|t| t.latency_us - t.compute_us)
         .collect();
 
+    let splits: Vec<_> = measured
+        .iter()
+        .filter_map(|t| t.split.map(|s| (s, t.compute_us)))
+        .collect();
+    let split_of = |f: &dyn Fn(&(crate::runner::TurnSplit, f64)) -> f64| {
+        Distribution::of(&splits.iter().map(f).collect::<Vec<_>>())
+    };
+    let overhead_split = OverheadSplit {
+        to_agent_us: split_of(&|(s, _)| s.to_agent_us),
+        agent_io_us: split_of(&|(s, compute)| (s.in_agent_us - compute).max(0.0)),
+        to_coordinator_us: split_of(&|(s, _)| s.to_coordinator_us),
+    };
     let turn = Distribution::of(&turn_us);
     let overhead = Distribution::of(&overhead_us);
     let floor_d = Distribution::of(&pp.iceoryx2_us);
@@ -264,6 +276,7 @@ fn bench_one(
         turn_us: turn,
         compute_us: Distribution::of(&compute_us),
         ipc_overhead_us: overhead,
+        overhead_split,
         floor_us: floor_d,
         uds_us: uds,
         uds_request_bytes: request_bytes,

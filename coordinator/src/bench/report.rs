@@ -42,6 +42,8 @@ pub struct RunReport {
     pub compute_us: Distribution,
     /// Turn latency minus compute, per turn, microseconds.
     pub ipc_overhead_us: Distribution,
+    /// Where the overhead goes, cut at the agent's timestamps.
+    pub overhead_split: OverheadSplit,
     /// iceoryx2 event + publish-subscribe round trip between two processes, microseconds.
     pub floor_us: Distribution,
     /// Unix domain socket round trip with turn-sized payloads, microseconds.
@@ -76,6 +78,19 @@ pub struct RunReport {
     pub floor_blocks: usize,
     /// The targets (reported, never asserted).
     pub targets: Targets,
+}
+
+/// The IPC overhead of a turn in three parts, from the agent's timestamps on the
+/// machine's monotonic clock (turns whose stamps were missing are left out).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct OverheadSplit {
+    /// Turn rung to agent awake: waking the agent's process, microseconds.
+    pub to_agent_us: Distribution,
+    /// Agent awake to move sent, minus compute: reading the world and writing the
+    /// move in shared memory, microseconds.
+    pub agent_io_us: Distribution,
+    /// Move sent to the coordinator holding it: waking the coordinator, microseconds.
+    pub to_coordinator_us: Distribution,
 }
 
 /// The latency targets and whether this run met them.
@@ -143,6 +158,10 @@ pub fn table(report: &Report) -> String {
             "  IPC overhead (turn - compute)",
             &r.ipc_overhead_us,
         );
+        let split = &r.overhead_split;
+        row(&mut s, "    waking the agent", &split.to_agent_us);
+        row(&mut s, "    agent reads world, writes move", &split.agent_io_us);
+        row(&mut s, "    waking the coordinator", &split.to_coordinator_us);
         row(&mut s, "iceoryx2 floor (event + pub-sub)", &r.floor_us);
         row(
             &mut s,
