@@ -8,10 +8,11 @@ use std::process::Command;
 
 use serde_json::Value;
 
-const DISTRIBUTIONS: [&str; 6] = [
+const DISTRIBUTIONS: [&str; 7] = [
     "turn_us",
     "compute_us",
     "ipc_overhead_us",
+    "echo_us",
     "floor_us",
     "uds_us",
     "agent_rss_kib",
@@ -70,6 +71,27 @@ fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
     // Spread between the 20 steps of the same run.
     assert_eq!(run["floor_blocks"], 20);
     assert_eq!(run["agent_rss_kib"]["count"], 3);
+    // Every agent stamps its moves, so every measured turn is split in three parts.
+    for key in ["to_agent_us", "agent_io_us", "to_coordinator_us"] {
+        let part = check_distribution(&run["overhead_split"], key);
+        assert_eq!(run["overhead_split"][key]["count"], 57, "{key}");
+        let overhead = check_distribution(run, "ipc_overhead_us");
+        assert!(
+            part[0] <= overhead[4],
+            "{key} p50 above the overhead's max: {run}"
+        );
+    }
+    // Echoes: 3 agents in turn, ceil(2000 / (20 blocks * 3 agents)) = 34 rounds per
+    // block, all answered.
+    assert_eq!(run["echo_us"]["count"], 20 * 34 * 3);
+    let echo = check_distribution(run, "echo_us");
+    for key in ["to_agent_us", "to_coordinator_us"] {
+        let part = check_distribution(&run["echo_split"], key);
+        assert!(
+            part[4] <= echo[4],
+            "echo part {key} above the echo's max: {run}"
+        );
+    }
     // The overhead is the turn minus its compute, turn by turn: never above the turn.
     let turn = check_distribution(run, "turn_us");
     let overhead = check_distribution(run, "ipc_overhead_us");
@@ -79,6 +101,8 @@ fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
         "overhead_vs_floor_p50",
         "overhead_vs_floor_p99",
         "overhead_vs_uds_p50",
+        "overhead_vs_echo_p50",
+        "overhead_vs_echo_p99",
     ] {
         let r = number(run, key);
         assert!(r.is_finite() && r > 0.0, "{key} = {r}");
@@ -89,6 +113,13 @@ fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
     let idle = number(run, "agent_idle_cpu_s");
     assert!(idle.is_finite() && idle >= 0.0, "idle CPU {idle}");
     assert_eq!(run["agent_idle"]["processes"], 3);
+    // Blocked, not polling: any timer of a second or less would wake each of the 3
+    // agents at least once while they are held idle for a second.
+    assert!(
+        run["agent_idle"]["wakeups"].as_u64().is_some_and(|w| w < 3),
+        "idle agents woke up: {}",
+        run["agent_idle"]
+    );
     assert!(number(&run["agent_idle"], "held_s") >= 0.9);
     assert!(number(run, "startup_s") > 0.0);
     assert_eq!(run["faults"], 0);

@@ -9,12 +9,13 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
+use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::turn::Move;
 use shared::wire::{
-    self, AgentState, DONE_SERVICE, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission, Role,
-    StateKind, WORLD_SERVICE, World,
+    self, AgentState, DONE_SERVICE, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission,
+    Role, StateKind, WORLD_SERVICE, World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
@@ -194,17 +195,30 @@ impl Transport for IpcTransport {
 
     fn next_command(&mut self) -> anyhow::Result<Command> {
         loop {
+            // A SIGTERM that came while the agent was busy was only noted by iceoryx2's
+            // handler: look before blocking (an atomic read, no system call).
+            if SignalHandler::termination_requested() {
+                return Ok(Command::Quit);
+            }
             let waited = Instant::now();
-            let mut turn = false;
-            let mut quit = false;
+            let (mut turn, mut echo, mut quit) = (false, false, false);
             let woke = self.turn_listener.timed_wait(
                 |event| match event.id.as_value() {
                     EVENT_TURN => turn = true,
+                    EVENT_ECHO => echo = true,
                     EVENT_QUIT => quit = true,
                     _ => {}
                 },
                 self.liveness,
             );
+            if echo {
+                self.woke_ns = wire::monotonic_ns();
+                self.send_state(|s| {
+                    s.kind = StateKind::Echo as u32;
+                    s.woke_ns = self.woke_ns;
+                    Ok(())
+                })?;
+            }
             match woke {
                 Ok(_) if quit => return Ok(Command::Quit),
                 Ok(_) if turn => {

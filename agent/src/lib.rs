@@ -29,9 +29,10 @@ pub struct Args {
     /// This agent's index in the formation.
     #[arg(long)]
     pub agent: usize,
-    /// How often to check that the coordinator is still there while waiting, in ms. This
-    /// is the fallback: the kernel already sends SIGTERM when the coordinator dies.
-    #[arg(long, default_value_t = 500)]
+    /// How often to check that the coordinator is still there while waiting, in ms. Only
+    /// a backstop: on Linux the kernel sends SIGTERM the moment the coordinator dies, so
+    /// an idle agent sleeps without waking (zero CPU).
+    #[arg(long, default_value_t = 10_000)]
     pub liveness_ms: u64,
     /// Test mode: publish bad results on purpose (the safety monitor must refuse them).
     #[arg(long, value_enum)]

@@ -23,6 +23,7 @@ use anyhow::{Context, anyhow, bail};
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
+use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::getppid;
 use shared::wire::{
     self, BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
@@ -98,6 +99,9 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
     pong(0)?; // ready
 
     loop {
+        if SignalHandler::termination_requested() {
+            return Ok(());
+        }
         let waited = Instant::now();
         let (mut ping, mut socket, mut quit) = (false, false, false);
         let woke = ping_listener.timed_wait(

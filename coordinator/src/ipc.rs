@@ -17,12 +17,37 @@ use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::turn::Body;
 use shared::wire::{
-    self, AgentState, DONE_SERVICE, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission, Role,
-    WORLD_SERVICE, World,
+    self, AgentState, DONE_SERVICE, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission,
+    Role, StateKind, WORLD_SERVICE, World,
 };
 
 /// A state sample copied out of shared memory.
 pub type StateCopy = AgentState;
+
+/// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
+/// [`shared::wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TurnSplit {
+    /// From ringing the turn to the agent awake: the wake-up of the agent's process.
+    pub to_agent_us: f64,
+    /// From awake to sending the move: reading the world, computing, writing the move.
+    pub in_agent_us: f64,
+    /// From the move sent to the coordinator holding it: the coordinator's wake-up.
+    pub to_coordinator_us: f64,
+}
+
+impl TurnSplit {
+    /// The split of a turn rung at `granted_ns` and held at `held_ns`, if the agent's
+    /// stamps are known and in order.
+    pub fn of(granted_ns: u64, state: &AgentState, held_ns: u64) -> Option<Self> {
+        let (woke, sent) = (state.woke_ns, state.sent_ns);
+        (granted_ns <= woke && woke <= sent && sent <= held_ns).then(|| Self {
+            to_agent_us: (woke - granted_ns) as f64 / 1e3,
+            in_agent_us: (sent - woke) as f64 / 1e3,
+            to_coordinator_us: (held_ns - sent) as f64 / 1e3,
+        })
+    }
+}
 
 /// The coordinator's node and ports for one run.
 pub struct CoordinatorIpc {
@@ -232,6 +257,24 @@ impl CoordinatorIpc {
             .notify()
             .map_err(|e| anyhow!("ringing agent {agent}'s turn: {e:?}"))?;
         Ok(())
+    }
+
+    /// Ring `agent`'s echo and wait until `deadline` for its empty answer: the round
+    /// trip of a turn without world, planning or move (benchmarks). `None` if no answer
+    /// came in time or the agent did not stamp it.
+    pub fn echo(&self, agent: usize, deadline: Instant) -> anyhow::Result<Option<TurnSplit>> {
+        let rung_ns = wire::monotonic_ns();
+        self.turn_notifiers[agent]
+            .notify_with_custom_event_id(EventId::new(EVENT_ECHO))
+            .map_err(|e| anyhow!("ringing agent {agent}'s echo: {e:?}"))?;
+        // An answer sent before the ring is a late one from an earlier echo.
+        let answer = self.wait_state(&[agent], deadline, |s| {
+            s.state_kind() == Some(StateKind::Echo)
+                && s.agent as usize == agent
+                && s.sent_ns >= rung_ns
+        })?;
+        let held_ns = wire::monotonic_ns();
+        Ok(answer.and_then(|s| TurnSplit::of(rung_ns, &s, held_ns)))
     }
 
     /// Ask `agent` to leave cleanly.

@@ -20,7 +20,7 @@ use shared::turn::{MAX_WAYPOINTS, Move, MoveStatus};
 use shared::wire::{AgentState, StateKind, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};
-use crate::ipc::CoordinatorIpc;
+use crate::ipc::{CoordinatorIpc, TurnSplit};
 use crate::monitor::SafetyMonitor;
 use crate::output::Timing;
 use crate::stats::Distribution;
@@ -102,29 +102,14 @@ pub struct TurnSample {
     pub split: Option<TurnSplit>,
 }
 
-/// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
-/// [`shared::wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TurnSplit {
-    /// From ringing the turn to the agent awake: the wake-up of the agent's process.
-    pub to_agent_us: f64,
-    /// From awake to sending the move: reading the world, computing, writing the move.
-    pub in_agent_us: f64,
-    /// From the move sent to the coordinator holding it: the coordinator's wake-up.
-    pub to_coordinator_us: f64,
-}
-
-impl TurnSplit {
-    /// The split of a turn rung at `granted_ns` and held at `held_ns`, if the agent's
-    /// stamps are known and in order.
-    fn of(granted_ns: u64, state: &AgentState, held_ns: u64) -> Option<Self> {
-        let (woke, sent) = (state.woke_ns, state.sent_ns);
-        (granted_ns <= woke && woke <= sent && sent <= held_ns).then(|| Self {
-            to_agent_us: (woke - granted_ns) as f64 / 1e3,
-            in_agent_us: (sent - woke) as f64 / 1e3,
-            to_coordinator_us: (held_ns - sent) as f64 / 1e3,
-        })
-    }
+/// What the hook of [`run_scenario_with`] sees between two steps.
+pub struct BetweenSteps<'a> {
+    /// The step just finished.
+    pub step: usize,
+    /// The run's ports (benchmarks ring the agents' echo through them).
+    pub ipc: &'a CoordinatorIpc,
+    /// Which agents are alive.
+    pub alive: &'a [bool],
 }
 
 /// Prefix of every run prefix: `fc<coordinator pid>x<counter>_`.
@@ -169,13 +154,13 @@ pub fn run_scenario(
     run_scenario_with(scenario, centre_path, options, &mut |_| Ok(()))
 }
 
-/// [`run_scenario`] calling `between_steps(step)` after every step (benchmarks measure
-/// their reference there, in the same run; an error ends the run).
+/// [`run_scenario`] calling `between_steps` after every step (benchmarks measure their
+/// references there, in the same run; an error ends the run).
 pub fn run_scenario_with(
     scenario: &Scenario,
     centre_path: &[Pose],
     options: &RunOptions,
-    between_steps: &mut dyn FnMut(usize) -> anyhow::Result<()>,
+    between_steps: &mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
 ) -> anyhow::Result<RunOutcome> {
     let started = Instant::now();
     let n = scenario.agents.len();
@@ -230,7 +215,7 @@ struct Driver<'a> {
     /// Consecutive missed turns per agent.
     missed: Vec<u32>,
     /// Called after every step.
-    between_steps: &'a mut dyn FnMut(usize) -> anyhow::Result<()>,
+    between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
 }
 
 impl Driver<'_> {
@@ -339,7 +324,11 @@ impl Driver<'_> {
             }
             recorder.end_step(step);
             bar.inc(1);
-            (self.between_steps)(step)?;
+            (self.between_steps)(BetweenSteps {
+                step,
+                ipc: self.ipc,
+                alive: recorder.alive(),
+            })?;
             if self.ipc.termination_requested() {
                 interrupted = true;
                 break;

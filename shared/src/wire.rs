@@ -44,6 +44,9 @@ pub fn state_service_name(agent: usize) -> String {
 pub const EVENT_TURN: usize = 1;
 /// Event id on a turn service: leave cleanly now.
 pub const EVENT_QUIT: usize = 2;
+/// Event id on a turn service: answer at once with an empty [`StateKind::Echo`] state,
+/// without reading the world or planning (`coordinator bench`: the wake-up alone).
+pub const EVENT_ECHO: usize = 3;
 
 /// A point on the wire.
 #[repr(C)]
@@ -303,6 +306,8 @@ pub enum StateKind {
     Ready = 0,
     /// The agent's move for the turn with sequence number `seq`.
     Move = 1,
+    /// The answer to an [`EVENT_ECHO`]: timestamps only.
+    Echo = 2,
 }
 
 /// An agent's message to the coordinator: its ready handshake or its move.
@@ -343,6 +348,7 @@ impl AgentState {
         match self.kind {
             0 => Some(StateKind::Ready),
             1 => Some(StateKind::Move),
+            2 => Some(StateKind::Echo),
             _ => None,
         }
     }

@@ -6,7 +6,12 @@
 //!    answered turn gives its latency and the agent's compute time, hence the IPC
 //!    overhead `latency - compute` per turn. Before the first turn the agents are held
 //!    idle and their CPU time is measured ([`IdleCpu`]).
-//! 2. one `agent --pingpong` process answers an iceoryx2 event + publish-subscribe
+//! 2. between steps, every agent of that run answers empty turns in turn order (the
+//!    echo, [`shared::wire::EVENT_ECHO`]): the round trip of waking a process that last
+//!    ran N turns ago, with no world, planning or move. The two-process floor below
+//!    wakes the same warm process every time; the echo shows what waking N processes in
+//!    turn costs by itself, so the turn's overhead can be read against both.
+//! 3. one `agent --pingpong` process answers an iceoryx2 event + publish-subscribe
 //!    ping-pong (the floor: the same wake-up as a turn) and a Unix socket ping-pong with
 //!    turn-sized payloads ([`floor`]), in short alternating blocks spread between the
 //!    steps of that same run, so the floor sees the same (shared, noisy) machine as the
@@ -31,12 +36,13 @@ use shared::scenario::MAX_AGENTS;
 use crate::agents::locate_agent_binary;
 use crate::cli::BenchArgs;
 use crate::error::CliError;
+use crate::ipc::TurnSplit;
 use crate::output::write_atomically;
-use crate::runner::{RunOptions, run_scenario_with};
+use crate::runner::{BetweenSteps, RunOptions, run_scenario_with};
 use crate::stats::Distribution;
 
 pub use procfs::IdleCpu;
-pub use report::{OverheadSplit, Report, RunReport, Targets};
+pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
 
 /// Fixed part of a serialized world (seq, step, turn agent, centre pose), bytes.
 const WORLD_HEADER_BYTES: usize = 48;
@@ -52,6 +58,8 @@ const REPLY_WAYPOINTS: usize = 4;
 const BLOCKS: usize = 40;
 /// Round trips dropped at the start of every block (the switch between mechanisms).
 const BLOCK_WARMUP: usize = 10;
+/// How long an agent has to answer an echo.
+const ECHO_DEADLINE: Duration = Duration::from_secs(2);
 /// Most steps: the generated field must stay within the largest field accepted.
 pub const MAX_BENCH_STEPS: usize = 20_000;
 
@@ -130,6 +138,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
 struct Samples {
     turn_us: Vec<f64>,
     overhead_us: Vec<f64>,
+    echo_us: Vec<f64>,
     floor_us: Vec<f64>,
     uds_us: Vec<f64>,
 }
@@ -153,6 +162,11 @@ impl Samples {
                     color: plot::BLUE,
                 },
                 plot::Series {
+                    label: format!("echo, same agents in turn (p50 {:.1} us)", r.echo_us.p50),
+                    values_us: &self.echo_us,
+                    color: plot::ORANGE,
+                },
+                plot::Series {
                     label: format!("iceoryx2 floor (p50 {:.1} us)", r.floor_us.p50),
                     values_us: &self.floor_us,
                     color: plot::GREEN,
@@ -167,10 +181,11 @@ impl Samples {
     }
 }
 
-/// The floor and socket samples, gathered in blocks between the steps of a run.
+/// The floor, socket and echo samples, gathered in blocks between the steps of a run.
 struct Floors {
     iceoryx2_us: Vec<f64>,
     uds_us: Vec<f64>,
+    echoes: Vec<TurnSplit>,
     blocks: usize,
 }
 
@@ -190,6 +205,19 @@ impl Floors {
         self.uds_us
             .extend(session.socket(BLOCK_WARMUP, count, request_bytes, reply_bytes)?);
         self.blocks += 1;
+        Ok(())
+    }
+
+    /// `rounds` echo rounds: every live agent in turn order, one empty turn each.
+    fn echo_rounds(&mut self, ctx: &BetweenSteps<'_>, rounds: usize) -> anyhow::Result<()> {
+        for _ in 0..rounds {
+            for agent in (0..ctx.alive.len()).filter(|&a| ctx.alive[a]) {
+                let deadline = std::time::Instant::now() + ECHO_DEADLINE;
+                if let Some(split) = ctx.ipc.echo(agent, deadline)? {
+                    self.echoes.push(split);
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -221,11 +249,15 @@ fn bench_one(
     let mut pp = Floors {
         iceoryx2_us: Vec::with_capacity(args.round_trips),
         uds_us: Vec::with_capacity(args.round_trips),
+        echoes: Vec::with_capacity(args.round_trips.max(agents)),
         blocks: 0,
     };
-    let outcome = run_scenario_with(&scenario, &path, &options, &mut |step| {
-        if step % stride == 0 && pp.blocks < blocks {
+    // Enough echo rounds per block for about `round_trips` echoes in all.
+    let echo_rounds = args.round_trips.div_ceil(blocks * agents).max(1);
+    let outcome = run_scenario_with(&scenario, &path, &options, &mut |ctx| {
+        if ctx.step % stride == 0 && pp.blocks < blocks {
             pp.block(&mut session, pp.blocks, blocks, args.round_trips, sizes)?;
+            pp.echo_rounds(&ctx, echo_rounds)?;
         }
         Ok(())
     })?;
@@ -256,7 +288,7 @@ fn bench_one(
         .iter()
         .filter_map(|t| t.split.map(|s| (s, t.compute_us)))
         .collect();
-    let split_of = |f: &dyn Fn(&(crate::runner::TurnSplit, f64)) -> f64| {
+    let split_of = |f: &dyn Fn(&(TurnSplit, f64)) -> f64| {
         Distribution::of(&splits.iter().map(f).collect::<Vec<_>>())
     };
     let overhead_split = OverheadSplit {
@@ -267,6 +299,21 @@ fn bench_one(
     let turn = Distribution::of(&turn_us);
     let overhead = Distribution::of(&overhead_us);
     let floor_d = Distribution::of(&pp.iceoryx2_us);
+    let echo_us: Vec<f64> = pp
+        .echoes
+        .iter()
+        .map(|e| e.to_agent_us + e.in_agent_us + e.to_coordinator_us)
+        .collect();
+    let echo = Distribution::of(&echo_us);
+    let echo_split = EchoSplit {
+        to_agent_us: Distribution::of(&pp.echoes.iter().map(|e| e.to_agent_us).collect::<Vec<_>>()),
+        to_coordinator_us: Distribution::of(
+            &pp.echoes
+                .iter()
+                .map(|e| e.to_coordinator_us)
+                .collect::<Vec<_>>(),
+        ),
+    };
     let uds = Distribution::of(&pp.uds_us);
     let idle = outcome.idle_cpu.unwrap_or_default();
     let mut r = RunReport {
@@ -277,6 +324,8 @@ fn bench_one(
         compute_us: Distribution::of(&compute_us),
         ipc_overhead_us: overhead,
         overhead_split,
+        echo_us: echo,
+        echo_split,
         floor_us: floor_d,
         uds_us: uds,
         uds_request_bytes: request_bytes,
@@ -284,6 +333,8 @@ fn bench_one(
         overhead_vs_floor_p50: ratio(overhead.p50, floor_d.p50),
         overhead_vs_floor_p99: ratio(overhead.p99, floor_d.p99),
         overhead_vs_uds_p50: ratio(overhead.p50, uds.p50),
+        overhead_vs_echo_p50: ratio(overhead.p50, echo.p50),
+        overhead_vs_echo_p99: ratio(overhead.p99, echo.p99),
         agent_idle_cpu_s: idle.cpu_s,
         agent_idle: idle,
         startup_s: outcome.timing.startup_s,
@@ -304,6 +355,7 @@ fn bench_one(
     let samples = Samples {
         turn_us,
         overhead_us,
+        echo_us,
         floor_us: pp.iceoryx2_us,
         uds_us: pp.uds_us,
     };

@@ -38,6 +38,8 @@ pub const BLUE: RGBColor = RGBColor(0, 114, 178);
 pub const GREEN: RGBColor = RGBColor(0, 158, 115);
 /// Okabe-Ito vermillion.
 pub const VERMILLION: RGBColor = RGBColor(213, 94, 0);
+/// Okabe-Ito orange.
+pub const ORANGE: RGBColor = RGBColor(230, 159, 0);
 
 const BINS: usize = 60;
 const PANEL_W: u32 = 960;

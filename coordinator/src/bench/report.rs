@@ -44,6 +44,11 @@ pub struct RunReport {
     pub ipc_overhead_us: Distribution,
     /// Where the overhead goes, cut at the agent's timestamps.
     pub overhead_split: OverheadSplit,
+    /// The echo: the same agents answering empty turns in turn order (waking a process
+    /// that last ran N turns ago, nothing else), microseconds.
+    pub echo_us: Distribution,
+    /// The echo's two wake-ups.
+    pub echo_split: EchoSplit,
     /// iceoryx2 event + publish-subscribe round trip between two processes, microseconds.
     pub floor_us: Distribution,
     /// Unix domain socket round trip with turn-sized payloads, microseconds.
@@ -58,6 +63,11 @@ pub struct RunReport {
     pub overhead_vs_floor_p99: f64,
     /// `ipc_overhead_us.p50 / uds_us.p50`.
     pub overhead_vs_uds_p50: f64,
+    /// `ipc_overhead_us.p50 / echo_us.p50`: the share of the overhead that is not the
+    /// wake-up of N processes in turn.
+    pub overhead_vs_echo_p50: f64,
+    /// `ipc_overhead_us.p99 / echo_us.p99`.
+    pub overhead_vs_echo_p99: f64,
     /// CPU time of all agents together while held idle (utime + stime), seconds.
     pub agent_idle_cpu_s: f64,
     /// The idle probe in detail.
@@ -90,6 +100,16 @@ pub struct OverheadSplit {
     /// move in shared memory, microseconds.
     pub agent_io_us: Distribution,
     /// Move sent to the coordinator holding it: waking the coordinator, microseconds.
+    pub to_coordinator_us: Distribution,
+}
+
+/// The echo's round trip in its two wake-ups (what is left is the agent sending its
+/// empty answer).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct EchoSplit {
+    /// Echo rung to agent awake, microseconds.
+    pub to_agent_us: Distribution,
+    /// Answer sent to the coordinator holding it, microseconds.
     pub to_coordinator_us: Distribution,
 }
 
@@ -160,9 +180,24 @@ pub fn table(report: &Report) -> String {
         );
         let split = &r.overhead_split;
         row(&mut s, "    waking the agent", &split.to_agent_us);
-        row(&mut s, "    agent reads world, writes move", &split.agent_io_us);
-        row(&mut s, "    waking the coordinator", &split.to_coordinator_us);
-        row(&mut s, "iceoryx2 floor (event + pub-sub)", &r.floor_us);
+        row(
+            &mut s,
+            "    agent reads world, writes move",
+            &split.agent_io_us,
+        );
+        row(
+            &mut s,
+            "    waking the coordinator",
+            &split.to_coordinator_us,
+        );
+        row(&mut s, "echo: same agents, empty turns", &r.echo_us);
+        row(&mut s, "    waking the agent", &r.echo_split.to_agent_us);
+        row(
+            &mut s,
+            "    waking the coordinator",
+            &r.echo_split.to_coordinator_us,
+        );
+        row(&mut s, "iceoryx2 floor (2 processes)", &r.floor_us);
         row(
             &mut s,
             &format!(
@@ -185,6 +220,11 @@ pub fn table(report: &Report) -> String {
             "  overhead / Unix socket p50: {:.2}x (target < 1: {})",
             r.overhead_vs_uds_p50,
             yes(t.overhead_p50_below_uds_p50)
+        );
+        let _ = writeln!(
+            s,
+            "  overhead / echo: p50 {:.2}x, p99 {:.2}x (1x: the overhead is the wake-up of {} processes in turn)",
+            r.overhead_vs_echo_p50, r.overhead_vs_echo_p99, r.agents
         );
         let i = &r.agent_idle;
         let _ = writeln!(
