@@ -31,8 +31,6 @@ pub struct IpcTransport {
     state_pub: Publisher<ipc::Service, AgentState, ()>,
     turn_listener: Listener<ipc::Service>,
     done_notifier: Notifier<ipc::Service>,
-    /// Radii of every agent, from the mission (the world carries positions only).
-    radii_m: Vec<f64>,
     mission: Option<MissionView>,
     /// When the current turn's event woke the agent ([`wire::monotonic_ns`]).
     woke_ns: u64,
@@ -110,7 +108,6 @@ impl IpcTransport {
                 .create()
                 .map_err(|e| anyhow!("done notifier: {e:?}"))?,
             node,
-            radii_m: Vec::new(),
             mission: None,
             woke_ns: 0,
         })
@@ -165,21 +162,7 @@ impl IpcTransport {
                 step: w.step,
                 centre: w.centre.into(),
                 positions: w.bodies.iter().map(|b| Point::from(b.position)).collect(),
-                radii_m: Vec::new(),
             });
-        }
-        if let Some(t) = turn.as_mut() {
-            if self.radii_m.is_empty() {
-                self.radii_m = self.mission()?.agents.iter().map(|a| a.radius_m).collect();
-            }
-            if self.radii_m.len() != t.positions.len() {
-                bail!(
-                    "the world has {} agents but the mission {}",
-                    t.positions.len(),
-                    self.radii_m.len()
-                );
-            }
-            t.radii_m = self.radii_m.clone();
         }
         Ok(turn)
     }

@@ -11,7 +11,7 @@ pub mod transport;
 
 use std::time::{Duration, Instant};
 
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::Parser;
 use shared::turn::{Body, TurnPlanner};
 
@@ -85,6 +85,10 @@ pub fn serve<T: Transport>(
     transport.announce_ready()?;
     let mut planner: Option<TurnPlanner> = None;
     let mut obstacles = Vec::new();
+    // Every agent's radius, from the mission (the world carries positions only).
+    let mut radii_m: Vec<f64> = Vec::new();
+    // The other agents as bodies; the buffer is kept from turn to turn.
+    let mut others: Vec<Body> = Vec::new();
     loop {
         let turn = match transport.next_command()? {
             Command::Quit => return Ok(()),
@@ -103,10 +107,18 @@ pub fn serve<T: Transport>(
                     .context("the mission's planner settings")?,
             );
             obstacles = mission.obstacles.clone();
+            radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
         }
         let Some(planner) = planner.as_ref() else {
             continue;
         };
+        if turn.positions.len() != radii_m.len() {
+            bail!(
+                "the world has {} agents but the mission {}",
+                turn.positions.len(),
+                radii_m.len()
+            );
+        }
         let started = Instant::now();
         let me = turn.positions.get(agent).copied().with_context(|| {
             format!(
@@ -114,14 +126,15 @@ pub fn serve<T: Transport>(
                 turn.positions.len()
             )
         })?;
-        let others: Vec<Body> = turn
-            .positions
-            .iter()
-            .zip(&turn.radii_m)
-            .enumerate()
-            .filter(|(j, _)| *j != agent)
-            .map(|(_, (&position, &radius_m))| Body { position, radius_m })
-            .collect();
+        others.clear();
+        others.extend(
+            turn.positions
+                .iter()
+                .zip(&radii_m)
+                .enumerate()
+                .filter(|(j, _)| *j != agent)
+                .map(|(_, (&position, &radius_m))| Body { position, radius_m }),
+        );
         let mv = planner.plan_move(&turn.centre, &me, &others);
         let compute = started.elapsed();
         match misbehave {
@@ -206,7 +219,6 @@ mod tests {
                 step: step as u64,
                 centre: path[step],
                 positions: positions.clone(),
-                radii_m: scenario.agents.iter().map(|a| a.radius_m).collect(),
             })
             .collect()
     }
@@ -229,7 +241,7 @@ mod tests {
                 .filter(|(j, _)| *j != agent)
                 .map(|(j, &position)| Body {
                     position,
-                    radius_m: turn.radii_m[j],
+                    radius_m: scenario.agents[j].radius_m,
                 })
                 .collect();
             let want = planner.plan_move(&turn.centre, &turn.positions[agent], &others);
@@ -249,6 +261,17 @@ mod tests {
         let mut nan = scripted(&scenario, turns);
         serve(&mut nan, 0, Some(Misbehave::Nan)).expect("serve");
         assert!(nan.published.iter().all(|(_, mv, _)| mv.best.x.is_nan()));
+    }
+
+    #[test]
+    fn a_world_that_disagrees_with_the_mission_is_an_error_not_a_panic() {
+        let scenario = Scenario::paper();
+        let mut turns = first_turns(&scenario, 0);
+        turns[0].positions.pop();
+        let mut t = scripted(&scenario, turns);
+        let err = serve(&mut t, 0, None).expect_err("a world one agent short");
+        assert!(format!("{err:#}").contains("the world has 5 agents but the mission 6"));
+        assert!(t.published.is_empty());
     }
 
     #[test]

@@ -28,10 +28,9 @@ pub struct TurnInput {
     pub step: u64,
     /// The formation centre.
     pub centre: Pose,
-    /// Every agent's position, in agent order (this agent's included).
+    /// Every agent's position, in agent order (this agent's included); their radii are
+    /// in the mission.
     pub positions: Vec<Point>,
-    /// Every agent's radius, in agent order.
-    pub radii_m: Vec<f64>,
 }
 
 /// What the coordinator asks.
