@@ -351,6 +351,7 @@ impl CoordinatorIpc {
     /// Call only once every agent process has exited.
     pub fn shut_down(self) -> anyhow::Result<()> {
         let config = self.config.clone();
+        let self_prefix = self.prefix.clone();
         let _ = self.node.try_cleanup_dead_nodes();
         drop(self);
         // SAFETY: every process of this run has exited (the caller's contract), so no one
@@ -358,6 +359,12 @@ impl CoordinatorIpc {
         unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&config) }
             .map_err(|e| anyhow!("removing the run's management segment: {e:?}"))
             .context("cleaning up shared memory")?;
+        wire::remove_run_root(&self_prefix).with_context(|| {
+            format!(
+                "removing the run's folder {:?}",
+                wire::run_root(&self_prefix)
+            )
+        })?;
         Ok(())
     }
 }

@@ -286,6 +286,12 @@ impl PingPongSession {
         // the coordinator's node is dropped.
         unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&self.config) }
             .map_err(|e| anyhow!("removing the floor's management segment: {e:?}"))?;
+        wire::remove_run_root(&self.prefix).with_context(|| {
+            format!(
+                "removing the floor's folder {:?}",
+                wire::run_root(&self.prefix)
+            )
+        })?;
         Ok(())
     }
 }
