@@ -55,6 +55,13 @@ fn joining_a_run_that_does_not_exist_fails_with_one_clear_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains(&format!("opening run {prefix}")), "{err}");
     assert_eq!(remove_files_of(&prefix), 0, "nothing of the prefix is left");
+    let dirs: Vec<_> = std::fs::read_dir("/dev/shm")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
+        .collect();
+    assert!(dirs.is_empty(), "left in /dev/shm: {dirs:?}");
 }
 
 #[test]

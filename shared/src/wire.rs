@@ -401,12 +401,7 @@ pub const MAX_PREFIX_LEN: usize = 24;
 /// The iceoryx2 configuration of one run: every resource name starts with `prefix`, so
 /// runs never see each other, and listing or cleaning nodes only touches this run.
 pub fn ipc_config(prefix: &str, role: Role) -> Result<Config, PrefixError> {
-    let valid = !prefix.is_empty()
-        && prefix.len() <= MAX_PREFIX_LEN
-        && prefix
-            .bytes()
-            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-');
-    if !valid {
+    if !is_valid_prefix(prefix) {
         return Err(PrefixError::Invalid(prefix.to_string()));
     }
     let mut config = Config::default();
@@ -432,9 +427,20 @@ pub fn ipc_config(prefix: &str, role: Role) -> Result<Config, PrefixError> {
 /// to disk as it creates it, about 5 N of them per run: on a disk that makes start-up
 /// several times slower (6 s instead of 1.8 s for 200 agents here). A folder per run
 /// also means that removing the run removes the folder ([`remove_run_root`]).
+/// An invalid prefix ([`ipc_config`] refuses it) has no folder.
 pub fn run_root(prefix: &str) -> Option<std::path::PathBuf> {
     let shm = std::path::Path::new("/dev/shm");
-    shm.is_dir().then(|| shm.join(format!("{prefix}iox2")))
+    (is_valid_prefix(prefix) && shm.is_dir()).then(|| shm.join(format!("{prefix}iox2")))
+}
+
+/// A prefix is 1 to [`MAX_PREFIX_LEN`] ASCII letters, digits, `_` or `-` (a file name
+/// that cannot leave its folder).
+fn is_valid_prefix(prefix: &str) -> bool {
+    !prefix.is_empty()
+        && prefix.len() <= MAX_PREFIX_LEN
+        && prefix
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b == b'_' || b == b'-')
 }
 
 /// Remove run `prefix`'s folder ([`run_root`]) once nothing of the run is left in it but
@@ -505,6 +511,12 @@ mod tests {
             &"x".repeat(MAX_PREFIX_LEN + 1),
         ] {
             assert!(ipc_config(bad, Role::Agent).is_err(), "{bad:?}");
+            assert_eq!(run_root(bad), None, "{bad:?}");
+            // Nothing outside /dev/shm can be removed through a prefix.
+            assert!(remove_run_root(bad).is_ok());
+        }
+        if let Some(root) = run_root("fc123_4_") {
+            assert_eq!(root, std::path::Path::new("/dev/shm/fc123_4_iox2"));
         }
     }
 
