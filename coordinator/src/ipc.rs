@@ -37,6 +37,11 @@ pub struct TurnSplit {
 }
 
 impl TurnSplit {
+    /// The whole round trip, microseconds.
+    pub fn total_us(&self) -> f64 {
+        self.to_agent_us + self.in_agent_us + self.to_coordinator_us
+    }
+
     /// The split of a turn rung at `granted_ns` and held at `held_ns`, if the agent's
     /// stamps are known and in order.
     pub fn of(granted_ns: u64, state: &AgentState, held_ns: u64) -> Option<Self> {

@@ -22,7 +22,12 @@ pub struct Distribution {
 impl Distribution {
     /// Percentiles of `values` (nearest rank); all zero when empty.
     pub fn of(values: &[f64]) -> Self {
-        let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+        Self::of_iter(values.iter().copied())
+    }
+
+    /// [`Distribution::of`] for values computed on the fly.
+    pub fn of_iter(values: impl IntoIterator<Item = f64>) -> Self {
+        let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
         if v.is_empty() {
             return Self::default();
         }

@@ -288,31 +288,23 @@ fn bench_one(
         .iter()
         .filter_map(|t| t.split.map(|s| (s, t.compute_us)))
         .collect();
-    let split_of = |f: &dyn Fn(&(TurnSplit, f64)) -> f64| {
-        Distribution::of(&splits.iter().map(f).collect::<Vec<_>>())
-    };
     let overhead_split = OverheadSplit {
-        to_agent_us: split_of(&|(s, _)| s.to_agent_us),
-        agent_io_us: split_of(&|(s, compute)| (s.in_agent_us - compute).max(0.0)),
-        to_coordinator_us: split_of(&|(s, _)| s.to_coordinator_us),
+        to_agent_us: Distribution::of_iter(splits.iter().map(|(s, _)| s.to_agent_us)),
+        agent_io_us: Distribution::of_iter(
+            splits
+                .iter()
+                .map(|(s, compute)| (s.in_agent_us - compute).max(0.0)),
+        ),
+        to_coordinator_us: Distribution::of_iter(splits.iter().map(|(s, _)| s.to_coordinator_us)),
     };
     let turn = Distribution::of(&turn_us);
     let overhead = Distribution::of(&overhead_us);
     let floor_d = Distribution::of(&pp.iceoryx2_us);
-    let echo_us: Vec<f64> = pp
-        .echoes
-        .iter()
-        .map(|e| e.to_agent_us + e.in_agent_us + e.to_coordinator_us)
-        .collect();
+    let echo_us: Vec<f64> = pp.echoes.iter().map(TurnSplit::total_us).collect();
     let echo = Distribution::of(&echo_us);
     let echo_split = EchoSplit {
-        to_agent_us: Distribution::of(&pp.echoes.iter().map(|e| e.to_agent_us).collect::<Vec<_>>()),
-        to_coordinator_us: Distribution::of(
-            &pp.echoes
-                .iter()
-                .map(|e| e.to_coordinator_us)
-                .collect::<Vec<_>>(),
-        ),
+        to_agent_us: Distribution::of_iter(pp.echoes.iter().map(|e| e.to_agent_us)),
+        to_coordinator_us: Distribution::of_iter(pp.echoes.iter().map(|e| e.to_coordinator_us)),
     };
     let uds = Distribution::of(&pp.uds_us);
     let idle = outcome.idle_cpu.unwrap_or_default();
