@@ -14,13 +14,41 @@ use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::turn::Move;
 use shared::wire::{
-    self, AgentState, DONE_SERVICE, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission,
-    Role, StateKind, WORLD_SERVICE, World,
+    self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role,
+    StateKind, World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
 
-/// The agent's iceoryx2 ports.
+/// What a hostile agent writes into its own samples (test modes only; an honest agent
+/// uses [`Tamper::default`], which changes nothing).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Tamper {
+    /// Write the waypoint count of every move raw, beyond the capacity.
+    pub raw_count_on_moves: bool,
+    /// Write the waypoint count of the ready handshake raw, beyond the capacity.
+    pub raw_count_on_ready: bool,
+    /// Name this agent in the handshake instead of the agent itself.
+    pub ready_as: Option<u32>,
+}
+
+/// The raw waypoint counts a tampering agent writes, in turn.
+const RAW_COUNTS: [u64; 3] = [wire_capacity_plus_one(), 1 << 40, u64::MAX];
+
+const fn wire_capacity_plus_one() -> u64 {
+    shared::turn::MAX_WAYPOINTS as u64 + 1
+}
+
+/// Write `state`'s waypoint count field raw, as a hostile process can (test modes).
+fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
+    let vec = std::ptr::addr_of_mut!(state.waypoints).cast::<u8>();
+    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::turn::MAX_WAYPOINTS]>();
+    // SAFETY: `StaticVec` is `repr(C)` { data: [_; CAPACITY], len: u64 }: the count lies
+    // right after the array, inside the sample.
+    unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };
+}
+
+/// The agent's iceoryx2 ports: its own channel ([`AgentServiceNames`]).
 pub struct IpcTransport {
     agent: usize,
     liveness: Duration,
@@ -34,12 +62,22 @@ pub struct IpcTransport {
     mission: Option<MissionView>,
     /// When the current turn's event woke the agent ([`wire::monotonic_ns`]).
     woke_ns: u64,
+    tamper: Tamper,
+    /// States sent so far (picks the tampering agent's raw count).
+    sent: usize,
 }
 
 impl IpcTransport {
-    /// Open the services of run `prefix` as agent `agent`. `liveness` is how often the
-    /// agent checks, while it waits, that its coordinator is still there.
-    pub fn open(prefix: &str, agent: usize, liveness: Duration) -> anyhow::Result<Self> {
+    /// Open the channel of agent `agent`, process generation `generation`, in run
+    /// `prefix`. `liveness` is how often the agent checks, while it waits, that its
+    /// coordinator is still there; `tamper` is a test mode (default: none).
+    pub fn open(
+        prefix: &str,
+        agent: usize,
+        generation: u32,
+        liveness: Duration,
+        tamper: Tamper,
+    ) -> anyhow::Result<Self> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
         #[cfg(target_os = "linux")]
@@ -55,32 +93,33 @@ impl IpcTransport {
         // SIGINT interrupt a blocking wait instead of killing the process mid-write.
         let _ = node.wait(Duration::ZERO);
 
+        let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"));
         let mission = node
-            .service_builder(&name(MISSION_SERVICE)?)
+            .service_builder(&name(&names.mission)?)
             .publish_subscribe::<Mission>()
             .open()
-            .map_err(|e| anyhow!("opening {MISSION_SERVICE}: {e:?}"))?;
+            .map_err(|e| anyhow!("opening {}: {e:?}", names.mission))?;
         let world = node
-            .service_builder(&name(WORLD_SERVICE)?)
+            .service_builder(&name(&names.world)?)
             .publish_subscribe::<World>()
             .open()
-            .map_err(|e| anyhow!("opening {WORLD_SERVICE}: {e:?}"))?;
+            .map_err(|e| anyhow!("opening {}: {e:?}", names.world))?;
         let state = node
-            .service_builder(&name(&wire::state_service_name(agent))?)
+            .service_builder(&name(&names.state)?)
             .publish_subscribe::<AgentState>()
             .open()
-            .map_err(|e| anyhow!("opening the state service of agent {agent}: {e:?}"))?;
+            .map_err(|e| anyhow!("opening {}: {e:?}", names.state))?;
         let turn = node
-            .service_builder(&name(&wire::turn_service_name(agent))?)
+            .service_builder(&name(&names.turn)?)
             .event()
             .open()
-            .map_err(|e| anyhow!("opening the turn service of agent {agent}: {e:?}"))?;
+            .map_err(|e| anyhow!("opening {}: {e:?}", names.turn))?;
         let done = node
-            .service_builder(&name(DONE_SERVICE)?)
+            .service_builder(&name(&names.done)?)
             .event()
             .open()
-            .map_err(|e| anyhow!("opening {DONE_SERVICE}: {e:?}"))?;
+            .map_err(|e| anyhow!("opening {}: {e:?}", names.done))?;
 
         Ok(Self {
             agent,
@@ -94,9 +133,12 @@ impl IpcTransport {
                 .subscriber_builder()
                 .create()
                 .map_err(|e| anyhow!("world subscriber: {e:?}"))?,
+            // The coordinator's buffer refuses samples once full (no overflow), so the
+            // first answer to a turn is the one it reads; an honest agent never fills it.
             state_pub: state
                 .publisher_builder()
                 .max_loaned_samples(1)
+                .backpressure_strategy(BackpressureStrategy::DiscardData)
                 .create()
                 .map_err(|e| anyhow!("state publisher: {e:?}"))?,
             turn_listener: turn
@@ -110,32 +152,35 @@ impl IpcTransport {
             node,
             mission: None,
             woke_ns: 0,
+            tamper,
+            sent: 0,
         })
     }
 
     /// Loan a state sample, let `fill` write it in place, send it and ring `done`.
     fn send_state(
-        &self,
+        &mut self,
         fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>,
     ) -> anyhow::Result<()> {
-        let mut sample = self
-            .state_pub
-            .loan_uninit()
+        // The ~8 kB state is initialised in place in shared memory (the waypoint array
+        // stays uninitialised behind its length), not on the stack and then copied.
+        let mut sample = wire::loan_default(&self.state_pub)
             .map_err(|e| anyhow!("loaning a state sample: {e:?}"))?;
-        // Initialise the ~8 kB state in place in shared memory (the waypoint array stays
-        // uninitialised behind its length), not on the stack and then copied.
-        // SAFETY: the pointer is the sample's own payload slot, valid and exclusive.
-        unsafe { AgentState::placement_default(sample.payload_mut().as_mut_ptr()) };
-        // SAFETY: placement_default initialised the payload.
-        let mut sample = unsafe { sample.assume_init() };
         let state = sample.payload_mut();
         state.agent = self.agent as u32;
         state.pid = std::process::id();
         fill(state)?;
         state.sent_ns = wire::monotonic_ns();
+        let kind = state.kind;
+        let tampered = (self.tamper.raw_count_on_moves && kind == StateKind::Move as u32)
+            || (self.tamper.raw_count_on_ready && kind == StateKind::Ready as u32);
+        if tampered {
+            write_raw_waypoint_count(state, RAW_COUNTS[self.sent % RAW_COUNTS.len()]);
+        }
         sample
             .send()
             .map_err(|e| anyhow!("sending the state: {e:?}"))?;
+        self.sent += 1;
         self.done_notifier
             .notify()
             .map_err(|e| anyhow!("notifying done: {e:?}"))?;
@@ -160,6 +205,7 @@ impl IpcTransport {
             turn = Some(TurnInput {
                 seq: w.seq,
                 step: w.step,
+                token: w.token,
                 centre: w.centre.into(),
                 positions: w.bodies.iter().map(|b| Point::from(b.position)).collect(),
             });
@@ -170,8 +216,12 @@ impl IpcTransport {
 
 impl Transport for IpcTransport {
     fn announce_ready(&mut self) -> anyhow::Result<()> {
+        let ready_as = self.tamper.ready_as;
         self.send_state(|s| {
             s.kind = StateKind::Ready as u32;
+            if let Some(other) = ready_as {
+                s.agent = other;
+            }
             Ok(())
         })
     }
@@ -196,9 +246,10 @@ impl Transport for IpcTransport {
             );
             if echo {
                 self.woke_ns = wire::monotonic_ns();
+                let woke_ns = self.woke_ns;
                 self.send_state(|s| {
                     s.kind = StateKind::Echo as u32;
-                    s.woke_ns = self.woke_ns;
+                    s.woke_ns = woke_ns;
                     Ok(())
                 })?;
             }
@@ -258,12 +309,14 @@ impl Transport for IpcTransport {
         status: u32,
         compute: Duration,
     ) -> anyhow::Result<()> {
+        let woke_ns = self.woke_ns;
         self.send_state(|s| {
             s.kind = StateKind::Move as u32;
             s.seq = turn.seq;
             s.step = turn.step;
+            s.token = turn.token;
             s.compute_ns = u64::try_from(compute.as_nanos()).unwrap_or(u64::MAX);
-            s.woke_ns = self.woke_ns;
+            s.woke_ns = woke_ns;
             s.status = status;
             s.slot = mv.slot.into();
             s.best = mv.best.into();

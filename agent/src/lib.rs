@@ -7,15 +7,17 @@
 pub mod ipc;
 pub mod misbehave;
 pub mod pingpong;
+pub mod rogue;
 pub mod transport;
 
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::Parser;
-use shared::turn::{Body, TurnPlanner};
+use shared::turn::{Body, Move, TurnPlanner};
 
-use crate::misbehave::Misbehave;
+use crate::ipc::Tamper;
+pub use crate::misbehave::Misbehave;
 
 pub use transport::{Command, Transport, TurnInput};
 
@@ -29,13 +31,20 @@ pub struct Args {
     /// This agent's index in the formation.
     #[arg(long)]
     pub agent: usize,
+    /// Which process of this agent this is: 0 for the first, one more for every
+    /// replacement; each generation has services of its own (given by the coordinator).
+    #[arg(long, default_value_t = 0)]
+    pub generation: u32,
     /// How often to check that the coordinator is still there while waiting, in ms. Only
     /// a backstop: on Linux the kernel sends SIGTERM the moment the coordinator dies, so
     /// an idle agent sleeps without waking (zero CPU).
     #[arg(long, default_value_t = 10_000)]
     pub liveness_ms: u64,
-    /// Test mode: publish bad results on purpose (the safety monitor must refuse them).
-    #[arg(long, value_enum)]
+    /// Test mode: misbehave or attack on purpose (the coordinator must survive it):
+    /// nan, teleport, through-obstacle, silent, garbage, raw-length, raw-length-ready,
+    /// replay, early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork,
+    /// exit-before-ready.
+    #[arg(long)]
     pub misbehave: Option<Misbehave>,
     /// Benchmark mode (`coordinator bench`): answer the latency floor's iceoryx2
     /// ping-pong, then the Unix-socket one on `--uds`, instead of taking turns.
@@ -72,21 +81,33 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             root.display()
         );
     }
+    let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.pingpong {
-        let liveness = Duration::from_millis(args.liveness_ms.max(1));
         return pingpong::run(&args.run, args.uds.as_deref(), liveness);
     }
-    let mut transport = ipc::IpcTransport::open(
-        &args.run,
-        args.agent,
-        Duration::from_millis(args.liveness_ms.max(1)),
-    )
-    .with_context(|| format!("opening run {}", args.run))?;
+    // Attacks on other agents' channels come first, to race their owners.
+    let _held = rogue::before_opening(&args.run, args.agent, args.misbehave);
+    let tamper = Tamper {
+        raw_count_on_moves: args.misbehave == Some(Misbehave::RawLength),
+        raw_count_on_ready: args.misbehave == Some(Misbehave::RawLengthReady),
+        ready_as: match args.misbehave {
+            Some(Misbehave::SpoofReady { victim }) => u32::try_from(victim).ok(),
+            _ => None,
+        },
+    };
+    let mut transport =
+        ipc::IpcTransport::open(&args.run, args.agent, args.generation, liveness, tamper)
+            .with_context(|| format!("opening run {}", args.run))?;
+    if args.misbehave == Some(Misbehave::ExitBeforeReady) {
+        // Leave at once, without closing anything: the coordinator must cope.
+        std::process::exit(3);
+    }
     serve(&mut transport, args.agent, args.misbehave)
 }
 
 /// The agent's turn loop: announce readiness, then for every turn plan and publish a
-/// move, until [`Command::Quit`]. `misbehave` is a test mode that publishes bad moves.
+/// move, until [`Command::Quit`]. `misbehave` is a test mode that publishes bad moves
+/// (modes that act outside the turn loop change nothing here).
 pub fn serve<T: Transport>(
     transport: &mut T,
     agent: usize,
@@ -99,6 +120,8 @@ pub fn serve<T: Transport>(
     let mut radii_m: Vec<f64> = Vec::new();
     // The other agents as bodies; the buffer is kept from turn to turn.
     let mut others: Vec<Body> = Vec::new();
+    // The last move published (the replay mode sends it again).
+    let mut previous: Option<(TurnInput, Move)> = None;
     loop {
         let turn = match transport.next_command()? {
             Command::Quit => return Ok(()),
@@ -147,16 +170,41 @@ pub fn serve<T: Transport>(
         );
         let mv = planner.plan_move(&turn.centre, &me, &others);
         let compute = started.elapsed();
-        match misbehave {
-            None => transport.publish_move(&turn, &mv, mv.status as u32, compute)?,
-            Some(mode) => {
+        let Some(mode) = misbehave else {
+            transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
+            continue;
+        };
+        match mode {
+            Misbehave::Replay => {
+                if let Some((old_turn, old_move)) = &previous {
+                    transport.publish_move(old_turn, old_move, old_move.status as u32, compute)?;
+                }
+                transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
+            }
+            Misbehave::Early => {
+                transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
+                let guess = TurnInput {
+                    seq: turn.seq + 1,
+                    step: turn.step + 1,
+                    token: turn.token.wrapping_add(1),
+                    ..turn.clone()
+                };
+                transport.publish_move(&guess, &mv, mv.status as u32, compute)?;
+            }
+            Misbehave::Flood => {
+                for _ in 0..4 {
+                    transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
+                }
+            }
+            _ => {
                 if let Some((bad, status)) =
-                    misbehave::corrupt(mode, mv, &me, &obstacles, turn.step)
+                    misbehave::corrupt(mode, mv.clone(), &me, &obstacles, turn.step)
                 {
                     transport.publish_move(&turn, &bad, status, compute)?;
                 }
             }
         }
+        previous = Some((turn, mv));
     }
 }
 
@@ -227,6 +275,7 @@ mod tests {
             .map(|step| TurnInput {
                 seq: step as u64 * 10 + agent as u64,
                 step: step as u64,
+                token: 1000 + step as u64,
                 centre: path[step],
                 positions: positions.clone(),
             })

@@ -1,26 +1,12 @@
 //! Test modes in which an agent publishes bad results on purpose, so users can check that
 //! the coordinator's safety monitor refuses every one of them.
 
-use clap::ValueEnum;
 use shared::geometry::{Disk, Point, Vector};
+pub use shared::misbehave::Misbehave;
 use shared::turn::{Move, MoveStatus};
 
-/// How an agent misbehaves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Misbehave {
-    /// Waypoints full of NaN.
-    Nan,
-    /// Jump: the move starts far from where the agent stands.
-    Teleport,
-    /// A straight line through the nearest obstacle.
-    ThroughObstacle,
-    /// Never answer a turn (alive but silent).
-    Silent,
-    /// Nonsense: an unknown status code and random-looking waypoints.
-    Garbage,
-}
-
-/// Turn an honest move into this mode's bad one (`None`: publish nothing).
+/// Turn an honest move into this mode's bad one (`None`: publish nothing). Modes that do
+/// not corrupt moves return the honest move unchanged.
 pub fn corrupt(
     mode: Misbehave,
     honest: Move,
@@ -67,6 +53,16 @@ pub fn corrupt(
                 status,
             ))
         }
+        Misbehave::RawLength
+        | Misbehave::RawLengthReady
+        | Misbehave::Replay
+        | Misbehave::Early
+        | Misbehave::Flood
+        | Misbehave::Impersonate { .. }
+        | Misbehave::SpoofReady { .. }
+        | Misbehave::Hoard
+        | Misbehave::Fork
+        | Misbehave::ExitBeforeReady => Some((honest, status)),
         Misbehave::Garbage => {
             // Deterministic nonsense, different at every step.
             let s = (step as f64 * 12.9898).sin() * 43_758.545;

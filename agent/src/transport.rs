@@ -26,6 +26,8 @@ pub struct TurnInput {
     pub seq: u64,
     /// The step.
     pub step: u64,
+    /// The turn's token (echoed in the answer: it binds the move to this turn).
+    pub token: u64,
     /// The formation centre.
     pub centre: Pose,
     /// Every agent's position, in agent order (this agent's included); their radii are

@@ -112,6 +112,13 @@ impl AgentProcesses {
         self.children[agent].as_ref().map(Child::id)
     }
 
+    /// The agent whose process is `pid`, if any.
+    pub fn agent_of_pid(&self, pid: u32) -> Option<usize> {
+        self.children
+            .iter()
+            .position(|c| c.as_ref().is_some_and(|c| c.id() == pid))
+    }
+
     /// Whether agent `agent`'s process still runs (reaping it if it exited).
     pub fn poll(&mut self, agent: usize) -> Exit {
         match self.children[agent].as_mut().map(Child::try_wait) {

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
+use shared::misbehave::Misbehave;
 use shared::scenario::PlannerKind;
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
@@ -62,10 +63,12 @@ pub struct RunArgs {
     /// (repeatable), e.g. `--kill-agent 2@40`.
     #[arg(long = "kill-agent", value_name = "AGENT@STEP", value_parser = parse_kill)]
     pub kill_agent: Vec<(usize, usize)>,
-    /// Test mode: agent AGENT publishes bad moves of kind MODE (nan, teleport,
-    /// through-obstacle, silent, garbage); repeatable, e.g. `--misbehave 3=nan`.
+    /// Test mode: agent AGENT misbehaves or attacks on purpose: nan, teleport,
+    /// through-obstacle, silent, garbage (unsafe moves); raw-length, raw-length-ready,
+    /// replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
+    /// exit-before-ready (attacks on the protocol); repeatable, e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
-    pub misbehave: Vec<(usize, String)>,
+    pub misbehave: Vec<(usize, Misbehave)>,
     /// Do not draw the plots and the animation (`coordinator render DIR` draws them
     /// later).
     #[arg(long)]
@@ -113,21 +116,16 @@ fn parse_kill(s: &str) -> Result<(usize, usize), String> {
     Ok((agent, step))
 }
 
-/// The modes of `agent --misbehave`.
-pub const MISBEHAVE_MODES: [&str; 5] = ["nan", "teleport", "through-obstacle", "silent", "garbage"];
-
-/// `AGENT=MODE`.
-fn parse_misbehave(s: &str) -> Result<(usize, String), String> {
+/// `AGENT=MODE`, the mode one of [`shared::misbehave::MISBEHAVE_NAMES`].
+fn parse_misbehave(s: &str) -> Result<(usize, Misbehave), String> {
     let (a, m) = s
         .split_once('=')
         .ok_or_else(|| format!("{s:?}: expected AGENT=MODE, e.g. 3=nan"))?;
     let agent = a
         .parse()
         .map_err(|_| format!("{a:?} is not an agent index"))?;
-    if !MISBEHAVE_MODES.contains(&m) {
-        return Err(format!("{m:?}: one of {}", MISBEHAVE_MODES.join(", ")));
-    }
-    Ok((agent, m.to_string()))
+    let mode = m.parse::<Misbehave>().map_err(|e| e.to_string())?;
+    Ok((agent, mode))
 }
 
 /// Arguments of `validate`.

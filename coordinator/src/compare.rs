@@ -131,7 +131,8 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
         for &planner in &planners {
             let scenario = l.scenario.with_planner(planner);
             eprintln!("{} with {} ...", scenario.name, planner.name());
-            let outcome = run_scenario(&scenario, &l.centre_path, &options)?;
+            let outcome = run_scenario(&scenario, &l.centre_path, &options)
+                .map_err(|failure| CliError::Other(failure.error))?;
             if outcome.interrupted {
                 return Err(CliError::Other(anyhow::anyhow!("interrupted")));
             }

@@ -1,6 +1,7 @@
 //! The coordinator's side of the iceoryx2 protocol (see [`shared::wire`]): it creates
-//! every service with limits sized for the run, publishes the mission and the world,
-//! rings turns, and collects the agents' states.
+//! every agent's channel with one port on each side, publishes the mission and the
+//! worlds, rings turns, and takes the agents' states in, each checked and tagged with the
+//! process that published it.
 
 use std::time::{Duration, Instant};
 
@@ -12,17 +13,18 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
+use iceoryx2_bb_posix::unique_system_id::UniqueSystemId;
+use rand::{RngCore, SeedableRng};
+use rand_chacha::ChaCha20Rng;
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::turn::Body;
 use shared::wire::{
-    self, AgentState, DONE_SERVICE, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MISSION_SERVICE, Mission,
-    Role, StateKind, WORLD_SERVICE, World,
+    self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState,
+    Mission, Role, StateKind, StateMsg, World,
 };
-
-/// A state sample copied out of shared memory.
-pub type StateCopy = AgentState;
 
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
 /// [`shared::wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
@@ -44,7 +46,7 @@ impl TurnSplit {
 
     /// The split of a turn rung at `granted_ns` and held at `held_ns`, if the agent's
     /// stamps are known and in order.
-    pub fn of(granted_ns: u64, state: &AgentState, held_ns: u64) -> Option<Self> {
+    pub fn of(granted_ns: u64, state: &StateMsg, held_ns: u64) -> Option<Self> {
         let (woke, sent) = (state.woke_ns, state.sent_ns);
         (granted_ns <= woke && woke <= sent && sent <= held_ns).then(|| Self {
             to_agent_us: (woke - granted_ns) as f64 / 1e3,
@@ -54,17 +56,62 @@ impl TurnSplit {
     }
 }
 
-/// The coordinator's node and ports for one run.
+/// One state sample as it arrived on an agent's channel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Incoming {
+    /// The process that published it, from iceoryx2's connection (the publisher's
+    /// unique id embeds its process id), not from anything the sample says.
+    pub publisher_pid: u32,
+    /// The checked message, or why it was refused.
+    pub msg: Result<StateMsg, MalformedState>,
+}
+
+/// The turn a world was published for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grant {
+    /// The world's sequence number.
+    pub seq: u64,
+    /// The turn's unpredictable token.
+    pub token: u64,
+}
+
+/// Every port of one agent's channel, and the services (kept to see who else opened
+/// them).
+struct Channel {
+    generation: u32,
+    mission_service: PubSubFactory<ipc::Service, Mission, ()>,
+    world_service: PubSubFactory<ipc::Service, World, ()>,
+    state_service: PubSubFactory<ipc::Service, AgentState, ()>,
+    turn_service: EventFactory<ipc::Service>,
+    done_service: EventFactory<ipc::Service>,
+    mission_pub: Publisher<ipc::Service, Mission, ()>,
+    world_pub: Publisher<ipc::Service, World, ()>,
+    state_sub: Subscriber<ipc::Service, AgentState, ()>,
+    turn_notifier: Notifier<ipc::Service>,
+    done_listener: Listener<ipc::Service>,
+}
+
+/// Nodes a channel's service admits: the coordinator, the agent, and one more, so that
+/// a process opening another agent's service is seen ([`CoordinatorIpc::intruders`])
+/// rather than silently refused. Ports are one per side whatever the node count.
+const CHANNEL_MAX_NODES: usize = 3;
+
+/// Samples an agent's state buffer holds: the handshake and one move. The buffer does
+/// not overflow: once full, further samples are refused at the publisher, so the
+/// first answer to a turn is the one read.
+const STATE_BUFFER: usize = 2;
+
+/// The coordinator's node and every agent's channel for one run.
 pub struct CoordinatorIpc {
     prefix: String,
     config: Config,
     node: Node<ipc::Service>,
-    mission_pub: Publisher<ipc::Service, Mission, ()>,
-    world_pub: Publisher<ipc::Service, World, ()>,
-    /// One per agent: a turn reads only the connection of the agent it waits for.
-    state_subs: Vec<Subscriber<ipc::Service, AgentState, ()>>,
-    done_listener: Listener<ipc::Service>,
-    turn_notifiers: Vec<Notifier<ipc::Service>>,
+    /// By agent; `None` once an agent's channel is closed.
+    channels: Vec<Option<Channel>>,
+    /// Generations used so far, by agent (a new channel takes the next one).
+    next_generation: Vec<u32>,
+    /// Draws the turns' tokens; seeded from the OS random source.
+    tokens: ChaCha20Rng,
     seq: u64,
 }
 
@@ -72,19 +119,17 @@ fn service_name(s: &str) -> anyhow::Result<ServiceName> {
     ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
 }
 
-/// A coordinator-to-agents publish-subscribe service: one publisher, one subscriber per
-/// agent, and only the newest sample kept (history 1: an agent that connects late gets
-/// the last one).
-fn broadcast_service<T: std::fmt::Debug + ZeroCopySend>(
+/// A coordinator-to-agent publish-subscribe service: one publisher, one subscriber,
+/// only the newest sample kept (history 1: the agent connecting late gets the last one).
+fn downlink<T: std::fmt::Debug + ZeroCopySend>(
     node: &Node<ipc::Service>,
     name: &str,
-    agents: usize,
 ) -> anyhow::Result<PubSubFactory<ipc::Service, T, ()>> {
     node.service_builder(&service_name(name)?)
         .publish_subscribe::<T>()
         .max_publishers(1)
-        .max_subscribers(agents.max(1))
-        .max_nodes(agents + 1)
+        .max_subscribers(1)
+        .max_nodes(CHANNEL_MAX_NODES)
         .history_size(1)
         .subscriber_max_buffer_size(1)
         .subscriber_max_borrowed_samples(1)
@@ -92,9 +137,108 @@ fn broadcast_service<T: std::fmt::Debug + ZeroCopySend>(
         .map_err(|e| anyhow!("creating {name}: {e:?}"))
 }
 
+/// An event service with one notifier and one listener.
+fn event_service(
+    node: &Node<ipc::Service>,
+    name: &str,
+) -> anyhow::Result<EventFactory<ipc::Service>> {
+    node.service_builder(&service_name(name)?)
+        .event()
+        .max_notifiers(1)
+        .max_listeners(1)
+        .max_nodes(CHANNEL_MAX_NODES)
+        .create()
+        .map_err(|e| anyhow!("creating {name}: {e:?}"))
+}
+
+/// The process id embedded in an iceoryx2 unique id.
+fn pid_of_id(id: u128) -> u32 {
+    u32::try_from(UniqueSystemId::from(id).pid().value()).unwrap_or(0)
+}
+
+/// A seed from the OS random source.
+fn os_seed() -> anyhow::Result<[u8; 32]> {
+    let mut seed = [0u8; 32];
+    getrandom::fill(&mut seed).map_err(|e| anyhow!("reading the OS random source: {e}"))?;
+    Ok(seed)
+}
+
+impl Channel {
+    fn open(node: &Node<ipc::Service>, agent: usize, generation: u32) -> anyhow::Result<Self> {
+        let names = AgentServiceNames::new(agent, generation);
+        let mission_service = downlink::<Mission>(node, &names.mission)?;
+        let world_service = downlink::<World>(node, &names.world)?;
+        let state_service = node
+            .service_builder(&service_name(&names.state)?)
+            .publish_subscribe::<AgentState>()
+            .max_publishers(1)
+            .max_subscribers(1)
+            .max_nodes(CHANNEL_MAX_NODES)
+            .enable_safe_overflow(false)
+            .subscriber_max_buffer_size(STATE_BUFFER)
+            .subscriber_max_borrowed_samples(1)
+            .create()
+            .map_err(|e| anyhow!("creating {}: {e:?}", names.state))?;
+        let turn_service = event_service(node, &names.turn)?;
+        let done_service = event_service(node, &names.done)?;
+        Ok(Self {
+            generation,
+            mission_pub: mission_service
+                .publisher_builder()
+                .max_loaned_samples(1)
+                .create()
+                .map_err(|e| anyhow!("mission publisher of agent {agent}: {e:?}"))?,
+            world_pub: world_service
+                .publisher_builder()
+                .max_loaned_samples(1)
+                .create()
+                .map_err(|e| anyhow!("world publisher of agent {agent}: {e:?}"))?,
+            state_sub: state_service
+                .subscriber_builder()
+                .create()
+                .map_err(|e| anyhow!("state subscriber of agent {agent}: {e:?}"))?,
+            turn_notifier: turn_service
+                .notifier_builder()
+                .default_event_id(EventId::new(EVENT_TURN))
+                .create()
+                .map_err(|e| anyhow!("turn notifier of agent {agent}: {e:?}"))?,
+            done_listener: done_service
+                .listener_builder()
+                .create()
+                .map_err(|e| anyhow!("done listener of agent {agent}: {e:?}"))?,
+            mission_service,
+            world_service,
+            state_service,
+            turn_service,
+            done_service,
+        })
+    }
+
+    /// Process ids of the live nodes attached to this channel's services.
+    fn node_pids(&self) -> Vec<u32> {
+        let mut pids = Vec::new();
+        let mut add = |state: NodeState<ipc::Service>| {
+            if let NodeState::Alive(view) = state {
+                pids.push(pid_of_id(view.id().value()));
+            }
+            CallbackProgression::Continue
+        };
+        let _ = self.mission_service.nodes(&mut add);
+        let _ = self.world_service.nodes(&mut add);
+        let _ = self.state_service.nodes(&mut add);
+        let _ = self.turn_service.nodes(&mut add);
+        let _ = self.done_service.nodes(&mut add);
+        pids.sort_unstable();
+        pids.dedup();
+        pids
+    }
+}
+
 impl CoordinatorIpc {
-    /// Create the node and every service of run `prefix` for `agents` agents.
-    pub fn create(prefix: &str, agents: usize) -> anyhow::Result<Self> {
+    /// Create the node and a channel for each of `agents` agents in run `prefix`, and
+    /// publish `scenario` as every agent's mission.
+    pub fn create(prefix: &str, scenario: &Scenario) -> anyhow::Result<Self> {
+        let agents = scenario.agents.len();
         let config = wire::ipc_config(prefix, Role::Coordinator)?;
         let node = NodeBuilder::new()
             .name(&NodeName::new("coordinator").map_err(|e| anyhow!("{e:?}"))?)
@@ -104,87 +248,59 @@ impl CoordinatorIpc {
         // Install iceoryx2's signal handlers now: Ctrl-C and SIGTERM then interrupt waits
         // and are polled with `termination_requested`, so outputs are flushed.
         let _ = node.wait(Duration::ZERO);
-        let nodes = agents + 1;
-
-        let mission = broadcast_service::<Mission>(&node, MISSION_SERVICE, agents)?;
-        let world = broadcast_service::<World>(&node, WORLD_SERVICE, agents)?;
-        let done = node
-            .service_builder(&service_name(DONE_SERVICE)?)
-            .event()
-            .max_notifiers(agents.max(1))
-            .max_listeners(1)
-            .max_nodes(nodes)
-            .create()
-            .map_err(|e| anyhow!("creating {DONE_SERVICE}: {e:?}"))?;
-        let mut turn_notifiers = Vec::with_capacity(agents);
-        let mut state_subs = Vec::with_capacity(agents);
-        for i in 0..agents {
-            // The ready handshake and one move fit in 2. Two publishers and three nodes:
-            // a respawned agent may open the service before its dead predecessor's
-            // publisher is cleaned up.
-            let state = node
-                .service_builder(&service_name(&wire::state_service_name(i))?)
-                .publish_subscribe::<AgentState>()
-                .max_publishers(2)
-                .max_subscribers(1)
-                .max_nodes(3)
-                .subscriber_max_buffer_size(2)
-                .subscriber_max_borrowed_samples(2)
-                .create()
-                .map_err(|e| anyhow!("creating the state service of agent {i}: {e:?}"))?;
-            state_subs.push(
-                state
-                    .subscriber_builder()
-                    .create()
-                    .map_err(|e| anyhow!("state subscriber {i}: {e:?}"))?,
-            );
-            let turn = node
-                .service_builder(&service_name(&wire::turn_service_name(i))?)
-                .event()
-                .max_notifiers(1)
-                .max_listeners(1)
-                .max_nodes(2)
-                .create()
-                .map_err(|e| anyhow!("creating the turn service of agent {i}: {e:?}"))?;
-            turn_notifiers.push(
-                turn.notifier_builder()
-                    .default_event_id(EventId::new(EVENT_TURN))
-                    .create()
-                    .map_err(|e| anyhow!("turn notifier {i}: {e:?}"))?,
-            );
-        }
-        Ok(Self {
+        let mut ipc = Self {
             prefix: prefix.to_string(),
-            mission_pub: mission
-                .publisher_builder()
-                .max_loaned_samples(1)
-                .create()
-                .map_err(|e| anyhow!("mission publisher: {e:?}"))?,
-            world_pub: world
-                .publisher_builder()
-                .max_loaned_samples(1)
-                .create()
-                .map_err(|e| anyhow!("world publisher: {e:?}"))?,
-            state_subs,
-            done_listener: done
-                .listener_builder()
-                .create()
-                .map_err(|e| anyhow!("done listener: {e:?}"))?,
-            turn_notifiers,
             config,
             node,
+            channels: (0..agents).map(|_| None).collect(),
+            next_generation: vec![0; agents],
+            tokens: ChaCha20Rng::from_seed(os_seed()?),
             seq: 0,
-        })
+        };
+        for agent in 0..agents {
+            ipc.open_channel(agent, scenario)?;
+        }
+        Ok(ipc)
+    }
+
+    /// Open a new channel for `agent` (closing its old one) and publish its mission;
+    /// returns the channel's generation, which the agent's process must be given.
+    pub fn open_channel(&mut self, agent: usize, scenario: &Scenario) -> anyhow::Result<u32> {
+        let slot = self
+            .next_generation
+            .get_mut(agent)
+            .with_context(|| format!("no agent {agent} in this run"))?;
+        let generation = *slot;
+        *slot += 1;
+        self.channels[agent] = None;
+        let channel = Channel::open(&self.node, agent, generation)?;
+        let mut sample = wire::loan_default(&channel.mission_pub)
+            .map_err(|e| anyhow!("loaning the mission: {e:?}"))?;
+        sample.payload_mut().fill(scenario)?;
+        sample
+            .send()
+            .map_err(|e| anyhow!("sending the mission to agent {agent}: {e:?}"))?;
+        self.channels[agent] = Some(channel);
+        Ok(generation)
+    }
+
+    /// Close `agent`'s channel (its process is gone for good).
+    pub fn close_channel(&mut self, agent: usize) {
+        if let Some(c) = self.channels.get_mut(agent) {
+            *c = None;
+        }
+    }
+
+    fn channel(&self, agent: usize) -> anyhow::Result<&Channel> {
+        self.channels
+            .get(agent)
+            .and_then(Option::as_ref)
+            .with_context(|| format!("agent {agent} has no open channel"))
     }
 
     /// The run's prefix.
     pub fn prefix(&self) -> &str {
         &self.prefix
-    }
-
-    /// The run's iceoryx2 configuration.
-    pub fn config(&self) -> &Config {
-        &self.config
     }
 
     /// Whether SIGINT or SIGTERM reached the coordinator (consumes the request).
@@ -194,38 +310,20 @@ impl CoordinatorIpc {
             .is_err_and(|e| matches!(e, iceoryx2::node::NodeWaitFailure::TerminationRequest))
     }
 
-    /// Publish the static scenario (kept as history for agents that connect later).
-    pub fn publish_mission(&self, scenario: &Scenario) -> anyhow::Result<()> {
-        let sample = self
-            .mission_pub
-            .loan_uninit()
-            .map_err(|e| anyhow!("loaning the mission: {e:?}"))?;
-        // Build the 400 kB mission in place, never on the stack.
-        let mut sample = sample;
-        // SAFETY: the pointer is the sample's own payload slot, valid and exclusive.
-        unsafe { Mission::placement_default(sample.payload_mut().as_mut_ptr()) };
-        // SAFETY: placement_default initialised every byte of the payload.
-        let mut sample = unsafe { sample.assume_init() };
-        sample.payload_mut().fill(scenario)?;
-        sample
-            .send()
-            .map_err(|e| anyhow!("sending the mission: {e:?}"))?;
+    /// Connect to `agent`'s subscribers that appeared since the last send and hand them
+    /// history (the mission); call after its ready handshake.
+    pub fn update_connections(&self, agent: usize) -> anyhow::Result<()> {
+        let c = self.channel(agent)?;
+        c.mission_pub
+            .update_connections()
+            .map_err(|e| anyhow!("mission connections of agent {agent}: {e:?}"))?;
+        c.world_pub
+            .update_connections()
+            .map_err(|e| anyhow!("world connections of agent {agent}: {e:?}"))?;
         Ok(())
     }
 
-    /// Connect to subscribers that appeared since the last send and hand them history
-    /// (the mission); call after the agents' ready handshake.
-    pub fn update_connections(&self) -> anyhow::Result<()> {
-        self.mission_pub
-            .update_connections()
-            .map_err(|e| anyhow!("mission connections: {e:?}"))?;
-        self.world_pub
-            .update_connections()
-            .map_err(|e| anyhow!("world connections: {e:?}"))?;
-        Ok(())
-    }
-
-    /// Publish the world for `agent`'s turn at `step`; returns its sequence number.
+    /// Publish the world for `agent`'s turn at `step`, with a fresh token.
     pub fn publish_world(
         &mut self,
         step: usize,
@@ -233,123 +331,137 @@ impl CoordinatorIpc {
         centre: &Pose,
         bodies: &[Body],
         alive: &[bool],
-    ) -> anyhow::Result<u64> {
+    ) -> anyhow::Result<Grant> {
         self.seq += 1;
-        let sample = self
-            .world_pub
-            .loan_uninit()
+        let grant = Grant {
+            seq: self.seq,
+            token: self.tokens.next_u64(),
+        };
+        let c = self.channel(agent)?;
+        let mut sample = wire::loan_default(&c.world_pub)
             .map_err(|e| anyhow!("loaning a world sample: {e:?}"))?;
-        let mut sample = sample;
-        // SAFETY: as in `publish_mission`.
-        unsafe { World::placement_default(sample.payload_mut().as_mut_ptr()) };
-        // SAFETY: placement_default initialised the payload.
-        let mut sample = unsafe { sample.assume_init() };
         let w = sample.payload_mut();
-        w.seq = self.seq;
+        w.seq = grant.seq;
         w.step = step as u64;
+        w.token = grant.token;
         w.turn_agent = agent as u32;
         w.centre = (*centre).into();
         w.set_bodies(bodies, alive)?;
         sample
             .send()
             .map_err(|e| anyhow!("sending the world: {e:?}"))?;
-        Ok(self.seq)
+        Ok(grant)
     }
 
     /// Ring `agent`'s turn event.
     pub fn notify_turn(&self, agent: usize) -> anyhow::Result<()> {
-        self.turn_notifiers[agent]
+        self.channel(agent)?
+            .turn_notifier
             .notify()
             .map_err(|e| anyhow!("ringing agent {agent}'s turn: {e:?}"))?;
         Ok(())
     }
 
-    /// Ring `agent`'s echo and wait until `deadline` for its empty answer: the round
-    /// trip of a turn without world, planning or move (benchmarks). `None` if no answer
-    /// came in time or the agent did not stamp it.
-    pub fn echo(&self, agent: usize, deadline: Instant) -> anyhow::Result<Option<TurnSplit>> {
+    /// Ring `agent`'s echo and wait until `deadline` for its empty answer from process
+    /// `pid`: the round trip of a turn without world, planning or move (benchmarks).
+    /// `None` if no answer came in time or the agent did not stamp it.
+    pub fn echo(
+        &self,
+        agent: usize,
+        pid: u32,
+        deadline: Instant,
+    ) -> anyhow::Result<Option<TurnSplit>> {
         let rung_ns = wire::monotonic_ns();
-        self.turn_notifiers[agent]
+        self.channel(agent)?
+            .turn_notifier
             .notify_with_custom_event_id(EventId::new(EVENT_ECHO))
             .map_err(|e| anyhow!("ringing agent {agent}'s echo: {e:?}"))?;
-        // An answer sent before the ring is a late one from an earlier echo.
-        let answer = self.wait_state(&[agent], deadline, |s| {
-            s.state_kind() == Some(StateKind::Echo)
-                && s.agent as usize == agent
-                && s.sent_ns >= rung_ns
-        })?;
-        let held_ns = wire::monotonic_ns();
-        Ok(answer.and_then(|s| TurnSplit::of(rung_ns, &s, held_ns)))
+        loop {
+            while let Some(incoming) = self.receive(agent)? {
+                // An answer sent before the ring is a late one from an earlier echo.
+                if let Ok(msg) = &incoming.msg
+                    && incoming.publisher_pid == pid
+                    && msg.kind == StateKind::Echo
+                    && msg.sent_ns >= rung_ns
+                {
+                    let held_ns = wire::monotonic_ns();
+                    return Ok(TurnSplit::of(rung_ns, msg, held_ns));
+                }
+            }
+            if !self.wait_done(agent, deadline)? {
+                return Ok(None);
+            }
+        }
     }
 
     /// Ask `agent` to leave cleanly.
     pub fn notify_quit(&self, agent: usize) -> anyhow::Result<()> {
-        self.turn_notifiers[agent]
+        self.channel(agent)?
+            .turn_notifier
             .notify_with_custom_event_id(EventId::new(EVENT_QUIT))
             .map_err(|e| anyhow!("asking agent {agent} to quit: {e:?}"))?;
         Ok(())
     }
 
-    /// Wait (blocking, no polling) until `want` accepts a state sample of one of
-    /// `agents` or `deadline` passes. Every sample received is offered to `want` in
-    /// order; the first it accepts is returned as a copy. Returns `None` at the deadline.
-    pub fn wait_state(
-        &self,
-        agents: &[usize],
-        deadline: Instant,
-        mut want: impl FnMut(&AgentState) -> bool,
-    ) -> anyhow::Result<Option<StateCopy>> {
-        loop {
-            for &agent in agents {
-                let sub = self
-                    .state_subs
-                    .get(agent)
-                    .with_context(|| format!("no agent {agent} in this run"))?;
-                while let Some(sample) = sub
-                    .receive()
-                    .map_err(|e| anyhow!("receiving agent {agent}'s state: {e:?}"))?
-                {
-                    if want(&sample) {
-                        return Ok(Some(copy_state(&sample)));
-                    }
-                }
-            }
-            let now = Instant::now();
-            if now >= deadline {
-                return Ok(None);
-            }
-            match self.done_listener.timed_wait(|_| {}, deadline - now) {
-                Ok(_) => {}
-                // A signal: let the caller look at it through `termination_requested`.
-                Err(ListenerWaitError::InterruptSignal) => return Ok(None),
-                Err(e) => return Err(anyhow!("waiting for agents: {e:?}")),
-            }
+    /// Take the next state sample from `agent`'s channel, copied out of shared memory and
+    /// checked ([`AgentState::read_checked`]); `None` when there is none.
+    pub fn receive(&self, agent: usize) -> anyhow::Result<Option<Incoming>> {
+        let c = self.channel(agent)?;
+        let Some(sample) = c
+            .state_sub
+            .receive()
+            .map_err(|e| anyhow!("receiving agent {agent}'s state: {e:?}"))?
+        else {
+            return Ok(None);
+        };
+        Ok(Some(Incoming {
+            publisher_pid: pid_of_id(sample.origin().value()),
+            msg: sample.payload().read_checked(agent),
+        }))
+    }
+
+    /// Block (no polling) until `agent` signals a published state or `until` passes;
+    /// false at the deadline or when a signal interrupted the wait (look at
+    /// [`Self::termination_requested`]).
+    pub fn wait_done(&self, agent: usize, until: Instant) -> anyhow::Result<bool> {
+        let now = Instant::now();
+        if now >= until {
+            return Ok(false);
         }
+        match self
+            .channel(agent)?
+            .done_listener
+            .timed_wait(|_| {}, until - now)
+        {
+            Ok(events) => Ok(events > 0 || Instant::now() < until),
+            Err(ListenerWaitError::InterruptSignal) => Ok(false),
+            Err(e) => Err(anyhow!("waiting for agent {agent}: {e:?}")),
+        }
+    }
+
+    /// Processes other than the coordinator and `owner_pid` attached to `agent`'s
+    /// channel: an agent has no business opening another agent's services.
+    pub fn intruders(&self, agent: usize, owner_pid: u32) -> Vec<u32> {
+        let own = std::process::id();
+        self.channel(agent)
+            .map(|c| {
+                c.node_pids()
+                    .into_iter()
+                    .filter(|&p| p != own && p != owner_pid)
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// The generation of `agent`'s open channel.
+    pub fn generation(&self, agent: usize) -> Option<u32> {
+        self.channel(agent).ok().map(|c| c.generation)
     }
 
     /// Remove the resources of this run's dead nodes (killed agents); returns how many
     /// nodes were cleaned.
     pub fn cleanup_dead_nodes(&self) -> usize {
         self.node.try_cleanup_dead_nodes().cleanups as usize
-    }
-
-    /// Whether a node named `agent-{agent}` of this run is alive.
-    pub fn agent_node_alive(&self, agent: usize) -> bool {
-        let want = format!("agent-{agent}");
-        let mut alive = false;
-        let _ = Node::<ipc::Service>::list(&self.config, |state| {
-            if let NodeState::Alive(view) = state
-                && view
-                    .details()
-                    .as_ref()
-                    .is_some_and(|d| d.name().to_string() == want)
-            {
-                alive = true;
-                return CallbackProgression::Stop;
-            }
-            CallbackProgression::Continue
-        });
-        alive
     }
 
     /// Drop every port and the node, then remove the run's last shared-memory file.
@@ -372,6 +484,16 @@ impl CoordinatorIpc {
         })?;
         Ok(())
     }
+}
+
+/// Remove the files of run `prefix` after its coordinator node could not be set up (no
+/// agent was started).
+pub fn remove_run_files(prefix: &str) {
+    if let Ok(config) = wire::ipc_config(prefix, Role::Coordinator) {
+        // SAFETY: no agent of this run was started, and its coordinator node is gone.
+        let _ = unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&config) };
+    }
+    let _ = wire::remove_run_root(prefix);
 }
 
 /// Remove what crashed runs left behind: every run prefix `<stem><pid>x<n>_` found in
@@ -467,24 +589,4 @@ fn processes_serving(prefix: &str) -> bool {
             .map(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
             .unwrap_or(false)
     })
-}
-
-fn copy_state(s: &AgentState) -> AgentState {
-    let mut c = AgentState {
-        seq: s.seq,
-        step: s.step,
-        compute_ns: s.compute_ns,
-        woke_ns: s.woke_ns,
-        sent_ns: s.sent_ns,
-        agent: s.agent,
-        kind: s.kind,
-        status: s.status,
-        pid: s.pid,
-        slot: s.slot,
-        best: s.best,
-        ..AgentState::default()
-    };
-    // Same capacity on both sides: this cannot fail.
-    let _ = c.set_waypoints(&s.waypoint_points());
-    c
 }

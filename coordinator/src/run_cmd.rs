@@ -20,7 +20,10 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let centre_path = &loaded.centre_path;
     let n = scenario.agents.len();
     let mut named = args.kill_agent.iter().map(|(a, _)| *a);
-    let mut misbehaving = args.misbehave.iter().map(|(a, _)| *a);
+    let mut misbehaving = args
+        .misbehave
+        .iter()
+        .flat_map(|(a, mode)| std::iter::once(*a).chain(mode.victim()));
     if let Some(a) = named
         .find(|&a| a >= n)
         .or_else(|| misbehaving.find(|&a| a >= n))
@@ -39,7 +42,11 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         progress: !args.quiet,
         ..RunOptions::default()
     };
-    let outcome = run_scenario(scenario, centre_path, &options)?;
+    // A failed run still writes what it recorded, marked not completed.
+    let (outcome, failure) = match run_scenario(scenario, centre_path, &options) {
+        Ok(outcome) => (outcome, None),
+        Err(failure) => (*failure.partial, Some(failure.error)),
+    };
     let dir = args
         .out
         .clone()
@@ -71,6 +78,12 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         outcome.timing.wall_s,
         dir.display()
     );
+    if let Some(error) = failure {
+        return Err(CliError::Other(error.context(format!(
+            "the run failed; outputs written up to step {}, marked not completed",
+            outcome.run.steps.last().map_or(0, |st| st.step)
+        ))));
+    }
     if outcome.interrupted {
         return Err(CliError::Other(anyhow::anyhow!(
             "interrupted: outputs written up to step {}, marked not completed",

@@ -23,6 +23,7 @@ pub mod dubins;
 pub mod formation;
 pub mod geometry;
 pub mod hybrid_astar;
+pub mod misbehave;
 pub mod reeds_shepp;
 pub mod run;
 pub mod safety;

@@ -333,6 +333,19 @@ impl<'a> Recorder<'a> {
     /// obstacle where it stands, and the death is recorded with how long it took to
     /// notice.
     pub fn freeze_dead(&mut self, step: usize, agent: usize, detail: String, detection_ms: f64) {
+        self.freeze(step, agent, "dead", detail, Some(detection_ms));
+    }
+
+    /// Take `agent` out of the formation: it stays as a static obstacle where it stands,
+    /// and a fault of `kind` is recorded (`dead`, `failed-to-start`, ...).
+    pub fn freeze(
+        &mut self,
+        step: usize,
+        agent: usize,
+        kind: &str,
+        detail: String,
+        detection_ms: Option<f64>,
+    ) {
         let here = self.bodies[agent].position;
         let centre = self
             .run
@@ -347,7 +360,7 @@ impl<'a> Recorder<'a> {
             waypoints: vec![here],
         });
         self.alive[agent] = false;
-        self.note_fault(step, agent, "dead", detail, Some(detection_ms));
+        self.note_fault(step, agent, kind, detail, detection_ms);
     }
 
     /// Put `agent` back into the formation (a replacement process took its place).

@@ -44,12 +44,14 @@ use crate::stats::Distribution;
 pub use procfs::IdleCpu;
 pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
 
-/// Fixed part of a serialized world (seq, step, turn agent, centre pose), bytes.
-const WORLD_HEADER_BYTES: usize = 48;
+/// Fixed part of a serialized world (seq, step, token, turn agent, centre pose), bytes:
+/// the wire header, so the socket carries what a turn carries.
+const WORLD_HEADER_BYTES: usize = std::mem::offset_of!(shared::wire::World, bodies);
 /// A serialized agent position, bytes.
 const BYTES_PER_AGENT: usize = 16;
-/// Fixed part of a serialized move (seq, step, compute time, ids, status, slot, best).
-const MOVE_HEADER_BYTES: usize = 72;
+/// Fixed part of a serialized move (seq, step, token, times, ids, status, slot, best):
+/// the wire header.
+const MOVE_HEADER_BYTES: usize = std::mem::offset_of!(shared::wire::AgentState, waypoints);
 /// A serialized waypoint, bytes.
 const BYTES_PER_WAYPOINT: usize = 16;
 /// Waypoints in the socket reply ("a few": a move on the straight path has two).
@@ -212,8 +214,11 @@ impl Floors {
     fn echo_rounds(&mut self, ctx: &BetweenSteps<'_>, rounds: usize) -> anyhow::Result<()> {
         for _ in 0..rounds {
             for agent in (0..ctx.alive.len()).filter(|&a| ctx.alive[a]) {
+                let Some(pid) = ctx.pids.get(agent).copied().flatten() else {
+                    continue;
+                };
                 let deadline = std::time::Instant::now() + ECHO_DEADLINE;
-                if let Some(split) = ctx.ipc.echo(agent, deadline)? {
+                if let Some(split) = ctx.ipc.echo(agent, pid, deadline)? {
                     self.echoes.push(split);
                 }
             }

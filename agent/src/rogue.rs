@@ -1,0 +1,180 @@
+//! Test modes that attack other agents' channels, as a compromised agent process could:
+//! [`Misbehave::Impersonate`] publishes in another agent's name on its channel,
+//! [`Misbehave::Hoard`] grabs every port it can on every other agent's services. Both act
+//! before the agent opens its own channel, to race their victims; whatever they manage to
+//! open is held for the life of the process.
+
+use std::any::Any;
+
+use anyhow::anyhow;
+use iceoryx2::prelude::*;
+use shared::wire::{self, AgentServiceNames, AgentState, Mission, Role, StateKind, World};
+
+use crate::misbehave::Misbehave;
+
+/// Most ports of one kind a hoarding agent opens on one service.
+const HOARD_PER_SERVICE: usize = 4;
+
+/// Carry out the attacks of `mode` that come before this agent opens its own channel;
+/// returns what must stay open (ports, services, the node) for the life of the process.
+pub fn before_opening(prefix: &str, me: usize, mode: Option<Misbehave>) -> Vec<Box<dyn Any>> {
+    let mut held: Vec<Box<dyn Any>> = Vec::new();
+    let result = match mode {
+        Some(Misbehave::Impersonate { victim }) => impersonate(prefix, victim, &mut held),
+        Some(Misbehave::Hoard) => hoard(prefix, me, &mut held),
+        _ => Ok(()),
+    };
+    if let Err(e) = result {
+        tracing::warn!("agent {me}: attack ({mode:?}) stopped: {e:#}");
+    }
+    held
+}
+
+fn rogue_node(prefix: &str, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<Node<ipc::Service>> {
+    let config = wire::ipc_config(prefix, Role::Agent)?;
+    let node = NodeBuilder::new()
+        .name(&NodeName::new("intruder").map_err(|e| anyhow!("{e:?}"))?)
+        .config(&config)
+        .create::<ipc::Service>()
+        .map_err(|e| anyhow!("creating the intruder node: {e:?}"))?;
+    held.push(Box::new(config));
+    Ok(node)
+}
+
+fn service_name(s: &str) -> anyhow::Result<ServiceName> {
+    ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
+}
+
+/// The process id of agent `victim` of run `prefix`, found the way any local process
+/// can: its command line.
+fn victim_pid(prefix: &str, victim: usize) -> Option<u32> {
+    let needle = format!("--run\0{prefix}\0--agent\0{victim}\0");
+    std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
+        let pid: u32 = e.file_name().to_str()?.parse().ok()?;
+        let cmdline = std::fs::read(e.path().join("cmdline")).ok()?;
+        String::from_utf8_lossy(&cmdline)
+            .contains(&needle)
+            .then_some(pid)
+    })
+}
+
+/// Open agent `victim`'s state service and publish a forged handshake and a forged move
+/// in its name, claiming its process id.
+fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
+    let node = rogue_node(prefix, held)?;
+    let names = AgentServiceNames::new(victim, 0);
+    let state = node
+        .service_builder(&service_name(&names.state)?)
+        .publish_subscribe::<AgentState>()
+        .open()
+        .map_err(|e| anyhow!("opening {}: {e:?}", names.state))?;
+    let done = node
+        .service_builder(&service_name(&names.done)?)
+        .event()
+        .open()
+        .map_err(|e| anyhow!("opening {}: {e:?}", names.done))?;
+    let publisher = state.publisher_builder().create();
+    let notifier = done.notifier_builder().create();
+    // Keep the services open even if no port could be had: the victim got there first.
+    held.push(Box::new(state));
+    held.push(Box::new(done));
+    let publisher = publisher.map_err(|e| anyhow!("publisher on {}: {e:?}", names.state))?;
+    let claimed_pid = victim_pid(prefix, victim).unwrap_or(0);
+    for kind in [StateKind::Ready, StateKind::Move] {
+        let mut sample = publisher
+            .loan()
+            .map_err(|e| anyhow!("loaning a forged state: {e:?}"))?;
+        let s = sample.payload_mut();
+        s.kind = kind as u32;
+        s.agent = victim as u32;
+        s.pid = claimed_pid;
+        sample
+            .send()
+            .map_err(|e| anyhow!("sending a forged state: {e:?}"))?;
+    }
+    if let Ok(n) = &notifier {
+        let _ = n.notify();
+    }
+    held.push(Box::new(publisher));
+    if let Ok(n) = notifier {
+        held.push(Box::new(n));
+    }
+    held.push(Box::new(node));
+    Ok(())
+}
+
+/// Open every other agent's five services and as many ports on each as the run allows.
+fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
+    let node = rogue_node(prefix, held)?;
+    let mut ports = 0usize;
+    for victim in (0..shared::scenario::MAX_AGENTS).filter(|&v| v != me) {
+        let names = AgentServiceNames::new(victim, 0);
+        let Ok(mission) = node
+            .service_builder(&service_name(&names.mission)?)
+            .publish_subscribe::<Mission>()
+            .open()
+        else {
+            // The first agent without a channel: past the last agent.
+            break;
+        };
+        for _ in 0..HOARD_PER_SERVICE {
+            let Ok(p) = mission.subscriber_builder().create() else {
+                break;
+            };
+            held.push(Box::new(p));
+            ports += 1;
+        }
+        held.push(Box::new(mission));
+        if let Ok(world) = node
+            .service_builder(&service_name(&names.world)?)
+            .publish_subscribe::<World>()
+            .open()
+        {
+            for _ in 0..HOARD_PER_SERVICE {
+                let Ok(p) = world.subscriber_builder().create() else {
+                    break;
+                };
+                held.push(Box::new(p));
+                ports += 1;
+            }
+            held.push(Box::new(world));
+        }
+        if let Ok(state) = node
+            .service_builder(&service_name(&names.state)?)
+            .publish_subscribe::<AgentState>()
+            .open()
+        {
+            for _ in 0..HOARD_PER_SERVICE {
+                let Ok(p) = state.publisher_builder().create() else {
+                    break;
+                };
+                held.push(Box::new(p));
+                ports += 1;
+            }
+            held.push(Box::new(state));
+        }
+        for name in [&names.turn, &names.done] {
+            let Ok(event) = node.service_builder(&service_name(name)?).event().open() else {
+                continue;
+            };
+            for _ in 0..HOARD_PER_SERVICE {
+                let Ok(p) = event.notifier_builder().create() else {
+                    break;
+                };
+                held.push(Box::new(p));
+                ports += 1;
+            }
+            for _ in 0..HOARD_PER_SERVICE {
+                let Ok(p) = event.listener_builder().create() else {
+                    break;
+                };
+                held.push(Box::new(p));
+                ports += 1;
+            }
+            held.push(Box::new(event));
+        }
+    }
+    tracing::warn!("agent {me}: hoarding {ports} ports on other agents' services");
+    held.push(Box::new(node));
+    Ok(())
+}

@@ -1,0 +1,179 @@
+//! The test modes in which an agent process misbehaves or attacks on purpose
+//! (`agent --misbehave MODE`, `coordinator run --misbehave AGENT=MODE`), so users and the
+//! integration tests can check that the coordinator survives every one of them.
+//!
+//! The first five publish unsafe or nonsensical moves through the normal protocol (the
+//! safety monitor must refuse them); the others attack the protocol itself, as a
+//! compromised or buggy agent process could.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// How an agent misbehaves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Misbehave {
+    /// Waypoints full of NaN.
+    Nan,
+    /// Jump: the move starts far from where the agent stands.
+    Teleport,
+    /// A straight line through the nearest obstacle.
+    ThroughObstacle,
+    /// Never answer a turn (alive but silent).
+    Silent,
+    /// Nonsense: an unknown status code and random-looking waypoints.
+    Garbage,
+    /// Write the waypoint count of every move raw, beyond the capacity (513, 2^40,
+    /// `u64::MAX` in turn).
+    RawLength,
+    /// The same raw count in the ready handshake.
+    RawLengthReady,
+    /// Publish the previous turn's move again (its old token) before the honest move.
+    Replay,
+    /// After each move, publish a guessed answer to the next turn before it is granted.
+    Early,
+    /// Publish every move four times.
+    Flood,
+    /// Open agent `victim`'s channel and publish as that agent.
+    Impersonate {
+        /// The agent whose channel is attacked.
+        victim: usize,
+    },
+    /// Send a ready handshake in agent `victim`'s name on its own channel.
+    SpoofReady {
+        /// The agent named in the forged handshake.
+        victim: usize,
+    },
+    /// Open as many ports as the run allows on every other agent's services.
+    Hoard,
+    /// Start children that ignore SIGTERM, one of which leaves the process group.
+    Fork,
+    /// Open its services, then exit before the ready handshake.
+    ExitBeforeReady,
+}
+
+/// The mode names, as written on the command line (`impersonate` and `spoof-ready`
+/// take `=AGENT`).
+pub const MISBEHAVE_NAMES: [&str; 15] = [
+    "nan",
+    "teleport",
+    "through-obstacle",
+    "silent",
+    "garbage",
+    "raw-length",
+    "raw-length-ready",
+    "replay",
+    "early",
+    "flood",
+    "impersonate=AGENT",
+    "spoof-ready=AGENT",
+    "hoard",
+    "fork",
+    "exit-before-ready",
+];
+
+/// A mode name that is none of [`MISBEHAVE_NAMES`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{given:?} is not a misbehave mode: one of {}", MISBEHAVE_NAMES.join(", "))]
+pub struct UnknownMisbehave {
+    /// What was given.
+    pub given: String,
+}
+
+impl Misbehave {
+    /// The agent this mode attacks, if it names one.
+    pub fn victim(&self) -> Option<usize> {
+        match self {
+            Self::Impersonate { victim } | Self::SpoofReady { victim } => Some(*victim),
+            _ => None,
+        }
+    }
+}
+
+impl FromStr for Misbehave {
+    type Err = UnknownMisbehave;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let unknown = || UnknownMisbehave {
+            given: s.to_string(),
+        };
+        if let Some((mode, victim)) = s.split_once('=') {
+            let victim = victim.parse().map_err(|_| unknown())?;
+            return match mode {
+                "impersonate" => Ok(Self::Impersonate { victim }),
+                "spoof-ready" => Ok(Self::SpoofReady { victim }),
+                _ => Err(unknown()),
+            };
+        }
+        Ok(match s {
+            "nan" => Self::Nan,
+            "teleport" => Self::Teleport,
+            "through-obstacle" => Self::ThroughObstacle,
+            "silent" => Self::Silent,
+            "garbage" => Self::Garbage,
+            "raw-length" => Self::RawLength,
+            "raw-length-ready" => Self::RawLengthReady,
+            "replay" => Self::Replay,
+            "early" => Self::Early,
+            "flood" => Self::Flood,
+            "hoard" => Self::Hoard,
+            "fork" => Self::Fork,
+            "exit-before-ready" => Self::ExitBeforeReady,
+            _ => return Err(unknown()),
+        })
+    }
+}
+
+impl fmt::Display for Misbehave {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let name = match self {
+            Self::Nan => "nan",
+            Self::Teleport => "teleport",
+            Self::ThroughObstacle => "through-obstacle",
+            Self::Silent => "silent",
+            Self::Garbage => "garbage",
+            Self::RawLength => "raw-length",
+            Self::RawLengthReady => "raw-length-ready",
+            Self::Replay => "replay",
+            Self::Early => "early",
+            Self::Flood => "flood",
+            Self::Impersonate { victim } => return write!(f, "impersonate={victim}"),
+            Self::SpoofReady { victim } => return write!(f, "spoof-ready={victim}"),
+            Self::Hoard => "hoard",
+            Self::Fork => "fork",
+            Self::ExitBeforeReady => "exit-before-ready",
+        };
+        f.write_str(name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_named_mode_parses_and_prints_back() {
+        for name in MISBEHAVE_NAMES {
+            let name = name.replace("AGENT", "4");
+            let mode: Misbehave = name.parse().expect(&name);
+            assert_eq!(mode.to_string(), name);
+        }
+        assert_eq!(
+            "impersonate=2".parse::<Misbehave>().unwrap().victim(),
+            Some(2)
+        );
+    }
+
+    #[test]
+    fn unknown_modes_and_bad_victims_are_refused() {
+        for bad in [
+            "",
+            "NaN",
+            "impersonate",
+            "impersonate=x",
+            "hoard=1",
+            "nan=1",
+        ] {
+            assert!(bad.parse::<Misbehave>().is_err(), "{bad:?}");
+        }
+    }
+}
