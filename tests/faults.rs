@@ -5,95 +5,16 @@
 
 mod support;
 
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::path::PathBuf;
+use std::process::Child;
 use std::time::{Duration, Instant};
 
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
-use serde_json::Value;
-
-/// The run prefixes a coordinator process uses start with this.
-fn prefix_stem(coordinator_pid: u32) -> String {
-    format!("fc{coordinator_pid}x")
-}
-
-fn coordinator(args: &[&str], out: &Path) -> Command {
-    let mut c = Command::new(support::coordinator_bin());
-    c.arg("run")
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .args(["--quiet", "--no-plots"])
-        .env("FORMATION_AGENT_BIN", support::agent_bin())
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped());
-    c
-}
-
-fn summary(out: &Path) -> Value {
-    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
-    serde_json::from_str(&text).expect("summary.json parses")
-}
-
-/// Nothing of the coordinator process `pid` is left: no agent process, no iceoryx2 file.
-fn assert_nothing_left(pid: u32) {
-    let stem = prefix_stem(pid);
-    let deadline = Instant::now() + Duration::from_secs(2);
-    while !support::processes_mentioning(&format!("--run {stem}")).is_empty() {
-        assert!(
-            Instant::now() < deadline,
-            "agent processes of {stem} left running"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let left = support::leftovers(&stem);
-    assert!(left.is_empty(), "iceoryx2 files left: {left:?}");
-}
-
-fn run_to_end(args: &[&str], out: &Path) -> (Output, u32) {
-    let child = coordinator(args, out).spawn().expect("start coordinator");
-    let pid = child.id();
-    let output = child.wait_with_output().expect("coordinator output");
-    (output, pid)
-}
-
-fn faults_of(s: &Value, kind: &str) -> Vec<Value> {
-    s["faults"]
-        .as_array()
-        .expect("faults")
-        .iter()
-        .filter(|f| f["kind"] == kind)
-        .cloned()
-        .collect()
-}
-
-fn assert_safe(s: &Value) {
-    assert_eq!(s["collisions"], 0, "{s:#}");
-    assert!(
-        s["min_clearance_m"].as_f64().expect("min_clearance_m") >= -1e-9,
-        "{s:#}"
-    );
-}
-
-/// Rows of trajectory.csv for one agent: (step, x, y, alive).
-fn agent_rows(out: &Path, agent: usize) -> Vec<(usize, f64, f64, bool)> {
-    let mut reader = csv::Reader::from_path(out.join("trajectory.csv")).expect("trajectory.csv");
-    reader
-        .records()
-        .map(|r| r.expect("row"))
-        .filter(|r| r[1].parse::<usize>().ok() == Some(agent))
-        .map(|r| {
-            (
-                r[0].parse().expect("step"),
-                r[2].parse().expect("x"),
-                r[3].parse().expect("y"),
-                &r[11] == "1",
-            )
-        })
-        .collect()
-}
+use support::{
+    agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, prefix_stem, run_to_end,
+    summary,
+};
 
 #[test]
 fn a_killed_agent_is_frozen_as_an_obstacle_and_the_run_completes_safely() {

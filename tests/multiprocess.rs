@@ -96,3 +96,41 @@ fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
     });
     assert!(runs.windows(2).all(|w| w[0] == w[1]));
 }
+
+#[test]
+fn a_failing_coordinator_stops_its_agents_cleans_up_and_keeps_the_steps_done() {
+    use coordinator::runner::run_scenario_with;
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference simulation");
+    for panics in [false, true] {
+        let failure = run_scenario_with(&scenario, &path, &options(), &mut |ctx| {
+            if ctx.step == 20 {
+                if panics {
+                    panic!("injected panic at step 20");
+                }
+                anyhow::bail!("injected error at step 20");
+            }
+            Ok(())
+        })
+        .expect_err("the hook fails the run");
+        assert!(
+            format!("{:#}", failure.error).contains("injected"),
+            "{:#}",
+            failure.error
+        );
+        let partial = failure.partial;
+        // Nothing of the run is left: processes and shared memory.
+        assert!(!partial.prefix.is_empty());
+        assert!(
+            support::leftovers(&partial.prefix).is_empty(),
+            "{:?}",
+            support::leftovers(&partial.prefix)
+        );
+        assert!(support::processes_mentioning(&partial.prefix).is_empty());
+        // The steps completed before the failure are kept, exactly as the reference.
+        assert!(!partial.run.completed);
+        assert_eq!(partial.run.steps.len(), 21);
+        assert_eq!(partial.run.steps[..], reference.steps[..21]);
+    }
+}

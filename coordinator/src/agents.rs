@@ -79,6 +79,8 @@ pub struct AgentProcesses {
     bin: PathBuf,
     prefix: String,
     children: Vec<Option<Child>>,
+    /// Every process started in this run, with its agent.
+    spawned: Vec<(u32, usize)>,
 }
 
 impl AgentProcesses {
@@ -88,6 +90,7 @@ impl AgentProcesses {
             bin,
             prefix: prefix.to_string(),
             children: (0..agents).map(|_| None).collect(),
+            spawned: Vec::new(),
         }
     }
 
@@ -104,6 +107,7 @@ impl AgentProcesses {
             .with_context(|| format!("starting {} for agent {agent}", self.bin.display()))?;
         let pid = child.id();
         self.children[agent] = Some(child);
+        self.spawned.push((pid, agent));
         Ok(pid)
     }
 
@@ -112,11 +116,12 @@ impl AgentProcesses {
         self.children[agent].as_ref().map(Child::id)
     }
 
-    /// The agent whose process is `pid`, if any.
+    /// The agent whose process is or was `pid` in this run, if any.
     pub fn agent_of_pid(&self, pid: u32) -> Option<usize> {
-        self.children
+        self.spawned
             .iter()
-            .position(|c| c.as_ref().is_some_and(|c| c.id() == pid))
+            .find(|&&(p, _)| p == pid)
+            .map(|&(_, agent)| agent)
     }
 
     /// Whether agent `agent`'s process still runs (reaping it if it exited).

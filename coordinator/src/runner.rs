@@ -486,9 +486,7 @@ impl Driver<'_, '_> {
                 self.missed[agent] = 0;
                 tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
                 self.recorder
-                    .reject(step, agent, slot, MoveStatus::Rejected, why.clone());
-                self.recorder
-                    .note_fault(step, agent, "malformed", why, None);
+                    .reject_as(step, agent, slot, MoveStatus::Rejected, "malformed", why);
             }
             Answer::Dead(after) => {
                 self.on_death(step, agent, after, "died during its turn")?;
@@ -627,7 +625,7 @@ impl Driver<'_, '_> {
             "step {step}: process {pid} (agent {culprit:?}) {how} agent {channel_agent}'s channel"
         );
         match culprit {
-            Some(c) if self.recorder.alive()[c] => {
+            Some(c) if self.recorder.alive()[c] && self.procs.pid(c) == Some(pid) => {
                 self.recorder.note_fault(
                     step,
                     c,
@@ -637,6 +635,7 @@ impl Driver<'_, '_> {
                 );
                 self.on_death(step, c, Duration::ZERO, "was killed for impersonation")?;
             }
+            // An earlier process of an agent, already killed and recorded.
             Some(_) => {}
             None => self.recorder.note_fault(
                 step,
@@ -677,6 +676,11 @@ impl Driver<'_, '_> {
         while !pending.is_empty() {
             for agent in pending.clone() {
                 let pid = self.procs.pid(agent);
+                if pid.is_none() || self.ipc.generation(agent).is_none() {
+                    // Quarantined while the others started.
+                    pending.retain(|&a| a != agent);
+                    continue;
+                }
                 while let Some(incoming) = self.ipc.receive(agent)? {
                     if Some(incoming.publisher_pid) != pid {
                         self.on_impersonation(step, agent, incoming.publisher_pid)?;

@@ -300,6 +300,20 @@ impl<'a> Recorder<'a> {
         status: MoveStatus,
         detail: String,
     ) {
+        self.reject_as(step, agent, slot, status, status.name(), detail);
+    }
+
+    /// [`Self::reject`] recording a fault of `kind` (e.g. `malformed` for an answer that
+    /// failed the checks before any geometry was looked at).
+    pub fn reject_as(
+        &mut self,
+        step: usize,
+        agent: usize,
+        slot: Point,
+        status: MoveStatus,
+        kind: &str,
+        detail: String,
+    ) {
         let here = self.bodies[agent].position;
         self.pending[agent] = Some(Move {
             slot,
@@ -307,7 +321,7 @@ impl<'a> Recorder<'a> {
             status,
             waypoints: vec![here],
         });
-        self.note_fault(step, agent, status.name(), detail, None);
+        self.note_fault(step, agent, kind, detail, None);
     }
 
     /// Record a fault that does not change the agent's move (a kill, a respawn, a

@@ -3,6 +3,10 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
 
 /// `target/<profile>/` of this test build.
 pub fn target_dir() -> PathBuf {
@@ -129,4 +133,88 @@ pub fn processes_mentioning(needle: &str) -> Vec<u32> {
         }
     }
     out
+}
+
+// ---- `coordinator run` as a user runs it: a real process, its files, what it left
+
+/// The run prefixes a coordinator process uses start with this.
+pub fn prefix_stem(coordinator_pid: u32) -> String {
+    format!("fc{coordinator_pid}x")
+}
+
+pub fn coordinator(args: &[&str], out: &Path) -> Command {
+    let mut c = Command::new(coordinator_bin());
+    c.arg("run")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .args(["--quiet", "--no-plots"])
+        .env("FORMATION_AGENT_BIN", agent_bin())
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    c
+}
+
+pub fn summary(out: &Path) -> Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary.json parses")
+}
+
+/// Nothing of the coordinator process `pid` is left: no agent process, no iceoryx2 file.
+pub fn assert_nothing_left(pid: u32) {
+    let stem = prefix_stem(pid);
+    let deadline = Instant::now() + Duration::from_secs(2);
+    while !processes_mentioning(&format!("--run {stem}")).is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "agent processes of {stem} left running"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let left = leftovers(&stem);
+    assert!(left.is_empty(), "iceoryx2 files left: {left:?}");
+}
+
+pub fn run_to_end(args: &[&str], out: &Path) -> (Output, u32) {
+    let child = coordinator(args, out).spawn().expect("start coordinator");
+    let pid = child.id();
+    let output = child.wait_with_output().expect("coordinator output");
+    (output, pid)
+}
+
+pub fn faults_of(s: &Value, kind: &str) -> Vec<Value> {
+    s["faults"]
+        .as_array()
+        .expect("faults")
+        .iter()
+        .filter(|f| f["kind"] == kind)
+        .cloned()
+        .collect()
+}
+
+pub fn assert_safe(s: &Value) {
+    assert_eq!(s["collisions"], 0, "{s:#}");
+    assert!(
+        s["min_clearance_m"].as_f64().expect("min_clearance_m") >= -1e-9,
+        "{s:#}"
+    );
+}
+
+/// Rows of trajectory.csv for one agent: (step, x, y, alive).
+pub fn agent_rows(out: &Path, agent: usize) -> Vec<(usize, f64, f64, bool)> {
+    let mut reader = csv::Reader::from_path(out.join("trajectory.csv")).expect("trajectory.csv");
+    reader
+        .records()
+        .map(|r| r.expect("row"))
+        .filter(|r| r[1].parse::<usize>().ok() == Some(agent))
+        .map(|r| {
+            (
+                r[0].parse().expect("step"),
+                r[2].parse().expect("x"),
+                r[3].parse().expect("y"),
+                &r[11] == "1",
+            )
+        })
+        .collect()
 }
