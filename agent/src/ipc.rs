@@ -202,6 +202,11 @@ impl IpcTransport {
             if w.turn_agent as usize != self.agent {
                 continue;
             }
+            // Only the coordinator publishes here, but a count beyond the capacity would
+            // make the slice below panic: refuse it instead.
+            if w.bodies.len() > shared::scenario::MAX_AGENTS {
+                bail!("a world with {} bodies, beyond the capacity", w.bodies.len());
+            }
             turn = Some(TurnInput {
                 seq: w.seq,
                 step: w.step,
@@ -287,6 +292,15 @@ impl Transport for IpcTransport {
             .receive()
             .map_err(|e| anyhow!("receiving the mission: {e:?}"))?
         {
+            if m.obstacles.len() > shared::scenario::MAX_OBSTACLES
+                || m.agents.len() > shared::scenario::MAX_AGENTS
+            {
+                bail!(
+                    "a mission with {} obstacles and {} agents, beyond the capacity",
+                    m.obstacles.len(),
+                    m.agents.len()
+                );
+            }
             let planner = m
                 .planner()
                 .with_context(|| format!("unknown planner code {} in the mission", m.planner))?;
