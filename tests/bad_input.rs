@@ -1,4 +1,5 @@
-//! The malformed-input corpus (`tests/bad_scenarios/`, DESIGN.md sections 5 and 6).
+//! The malformed-input corpus (`tests/bad_scenarios/`; the rules are in
+//! `docs/scenario-format.md` and `docs/outputs.md`).
 //!
 //! Every file there is one malformed scenario whose first line, `# expect: FIELD`, names
 //! the field the error must name. Each is refused

@@ -1,4 +1,4 @@
-//! The coordinator's errors and their exit codes (DESIGN.md section 6): 2 for bad input,
+//! The coordinator's errors and their exit codes (`docs/outputs.md`): 2 for bad input,
 //! 1 for anything else.
 
 use shared::scenario::ScenarioError;

@@ -1,4 +1,4 @@
-//! Output files (DESIGN.md section 6): `summary.json`, `trajectory.csv`, `path.csv`.
+//! Output files (`docs/outputs.md`): `summary.json`, `trajectory.csv`, `path.csv`.
 //! Every file is written whole or not at all (a temporary file, then a rename).
 
 use std::path::{Path, PathBuf};
@@ -41,7 +41,7 @@ pub fn path_csv(path: &[Pose]) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
-/// The trajectory as CSV, one row per agent per step (DESIGN.md section 6), full
+/// The trajectory as CSV, one row per agent per step (`docs/outputs.md`), full
 /// precision.
 pub fn trajectory_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());

@@ -4,7 +4,7 @@
 //! searches, not straight shots), plus one forward-only (Dubins) case on a 100 m map.
 //!
 //! Target: under 50 ms median on the 100 m maps. The data is read from
-//! `FORMATION_CLCBS_DIR` or the repository's sibling folder `shared/data/clcbs`.
+//! `FORMATION_CLCBS_DIR` or, by default, the copy in `shared/tests/data/clcbs`.
 
 use std::hint::black_box;
 

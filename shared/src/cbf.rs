@@ -1,6 +1,7 @@
 //! CBF-QP mode: a control barrier function planner for single-integrator agents
 //! (`x' = u`), and, for comparison only, a reproduction of the paper's failed zeroing
-//! barrier with a LogSumExp-smoothed max (PAPER.md, section IV.C).
+//! barrier with a LogSumExp-smoothed max (section IV.C of the paper "Collision Avoidance
+//! and Formation Control").
 //!
 //! # The safe planner ([`CbfPlanner`])
 //!
@@ -496,7 +497,7 @@ impl CbfPlanner {
     }
 }
 
-/// The paper's failed zeroing barrier (PAPER.md IV.C), reproduced for comparison only.
+/// The paper's failed zeroing barrier (its section IV.C), reproduced for comparison only.
 /// **Unsafe by design**: its moves can overlap obstacles; the coordinator's safety monitor
 /// rejects them, and the comparison counts how often.
 ///

@@ -18,8 +18,9 @@
 //! `#` comments are allowed. Anything else (unknown or repeated keys, tabs, missing keys,
 //! numbers that are not finite, a non-positive map size) is an error naming the line.
 //!
-//! The data stays in the sibling folder `shared/data/clcbs` of the repository and is never
-//! copied into it: see [`default_clcbs_dir`].
+//! The six instances the tests and benchmarks use are copied into this repository, with
+//! CL-CBS's MIT licence beside them, in `shared/tests/data/clcbs`: see
+//! [`default_clcbs_dir`].
 
 use std::path::{Path, PathBuf};
 
@@ -43,14 +44,11 @@ pub const CLCBS_INSTANCE_FILES: [&str; 6] = [
 pub const CLCBS_DIR_ENV: &str = "FORMATION_CLCBS_DIR";
 
 /// Folder holding the CL-CBS instances: the environment variable `FORMATION_CLCBS_DIR`
-/// when set and not empty, else the repository's sibling folder `../shared/data/clcbs`.
+/// when set and not empty, else the copy in this crate, `shared/tests/data/clcbs`.
 pub fn default_clcbs_dir() -> PathBuf {
     match std::env::var_os(CLCBS_DIR_ENV) {
         Some(dir) if !dir.is_empty() => PathBuf::from(dir),
-        _ => PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../shared/data/clcbs"
-        )),
+        _ => PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/clcbs")),
     }
 }
 

@@ -1,7 +1,8 @@
 //! The scenario: field, obstacles, formation and path settings, read from TOML and
 //! validated into a [`Scenario`] every other part can trust.
 //!
-//! Every error names the file and the field: `FILE: FIELD: REASON` (DESIGN.md section 5).
+//! Every error names the file and the field: `FILE: FIELD: REASON`. The format is
+//! documented in `docs/scenario-format.md`.
 
 use std::path::Path;
 
@@ -39,8 +40,8 @@ pub enum PlannerKind {
     /// The paper's method: exact best point, then a shortest collision-free path to it.
     #[default]
     BestPoint,
-    /// A control-barrier-function QP with one constraint per neighbour (DESIGN.md
-    /// section 4): safe by construction, may deadlock.
+    /// A control-barrier-function QP with one constraint per neighbour
+    /// ([`crate::cbf`]): safe by construction, may deadlock.
     Cbf,
     /// The paper's failed zeroing barrier with a LogSumExp-smoothed max: kept to show its
     /// violations (the safety monitor refuses them).

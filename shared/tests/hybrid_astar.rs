@@ -18,7 +18,7 @@ fn load(name: &str) -> ClcbsInstance {
     ClcbsInstance::load(&path).unwrap_or_else(|e| {
         panic!(
             "cannot read CL-CBS instance {} ({e}); set {CLCBS_DIR_ENV} to the folder holding \
-             the CL-CBS files (default: the sibling folder shared/data/clcbs)",
+             the CL-CBS files (default: shared/tests/data/clcbs in this repository)",
             path.display()
         )
     })
