@@ -59,3 +59,121 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
     };
     assert!(final_dev("best-point") < 0.05);
 }
+
+/// The lines `compare` may print for `runs` runs: one per run, the table (header, rule,
+/// one row per run), the output folder, and a few to spare.
+fn line_budget(runs: usize) -> usize {
+    runs + (2 + runs) + 1 + 3
+}
+
+#[test]
+fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cmp");
+    let paper = support::repo_root().join("scenarios").join("paper.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("compare")
+        .arg(&paper)
+        .args(["--planners", "zcbf-logsumexp,best-point", "--out"])
+        .arg(&out)
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        // Warnings on, as a user has them by default: still no line per refused move.
+        .env("RUST_LOG", "warn")
+        .output()
+        .expect("coordinator compare");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert!(
+        lines.len() <= line_budget(2),
+        "{} lines on stderr, at most {} expected; first ones:\n{}",
+        lines.len(),
+        line_budget(2),
+        lines[..lines.len().min(20)].join("\n")
+    );
+    for planner in ["zcbf-logsumexp", "best-point"] {
+        let line = format!("paper-example with {planner}: completed, 0 collisions, ");
+        assert_eq!(
+            lines.iter().filter(|l| l.starts_with(&line)).count(),
+            1,
+            "one result line for {planner}:\n{stderr}"
+        );
+    }
+
+    // The refusals are in the run's own summary, as many as the table counts.
+    let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
+    let headers = reader.headers().expect("headers").clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
+    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
+    let zcbf = rows
+        .iter()
+        .find(|r| &r[col("planner")] == "zcbf-logsumexp")
+        .expect("zcbf row");
+    let refused: usize = zcbf[col("unsafe_moves")].parse().expect("count");
+    assert!(refused > 0, "the smoothed max overshoots");
+    let run_dir = out.join("paper-example-zcbf-logsumexp");
+    let summary: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(run_dir.join("summary.json")).expect("the run's summary.json"),
+    )
+    .expect("summary.json parses");
+    let rejected = summary["faults"]
+        .as_array()
+        .expect("faults")
+        .iter()
+        .filter(|f| f["kind"] == "rejected")
+        .count();
+    assert_eq!(rejected, refused);
+    // The run's folder holds the resolved scenario, with the planner as run.
+    let text = std::fs::read_to_string(run_dir.join("scenario.toml")).expect("scenario.toml");
+    let resolved =
+        shared::scenario::Scenario::parse(&text, "scenario.toml").expect("resolved loads");
+    let original = shared::scenario::Scenario::load(&paper).expect("paper.toml");
+    assert_eq!(
+        resolved,
+        original.with_planner(shared::scenario::PlannerKind::ZcbfLogsumexp)
+    );
+    assert!(!text.contains("random"));
+}
+
+#[test]
+fn compare_refuses_a_folder_holding_something_unless_forced() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cmp");
+    std::fs::create_dir(&out).expect("mkdir");
+    std::fs::write(out.join("old.md"), b"old").expect("write");
+    let compare = |force: bool| {
+        let mut c = Command::new(support::coordinator_bin());
+        c.args(["compare", "--planners", "best-point", "--out"])
+            .arg(&out)
+            .env("FORMATION_AGENT_BIN", support::agent_bin());
+        if force {
+            c.arg("--force");
+        }
+        c.output().expect("coordinator compare")
+    };
+    let refused = compare(false);
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains(&out.display().to_string()), "{stderr}");
+    assert_eq!(
+        std::fs::read(out.join("old.md")).expect("untouched"),
+        b"old"
+    );
+
+    let forced = compare(true);
+    let stderr = String::from_utf8_lossy(&forced.stderr);
+    assert!(forced.status.success(), "{stderr}");
+    assert!(!out.join("old.md").exists(), "replaced whole");
+    assert!(out.join("compare.csv").is_file());
+    assert!(
+        out.join("paper-example-best-point")
+            .join("summary.json")
+            .is_file()
+    );
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .expect("read_dir")
+        .map(|e| e.expect("entry").file_name())
+        .collect();
+    assert_eq!(left, ["cmp"], "no temporary folder left");
+}

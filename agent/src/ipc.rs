@@ -205,7 +205,10 @@ impl IpcTransport {
             // Only the coordinator publishes here, but a count beyond the capacity would
             // make the slice below panic: refuse it instead.
             if w.bodies.len() > shared::scenario::MAX_AGENTS {
-                bail!("a world with {} bodies, beyond the capacity", w.bodies.len());
+                bail!(
+                    "a world with {} bodies, beyond the capacity",
+                    w.bodies.len()
+                );
             }
             turn = Some(TurnInput {
                 seq: w.seq,

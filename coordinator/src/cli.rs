@@ -41,9 +41,14 @@ pub enum Command {
 pub struct RunArgs {
     /// The scenario file (TOML); the embedded paper example when omitted.
     pub scenario: Option<PathBuf>,
-    /// Output folder (default `runs/<name>-<UTC time>`).
+    /// Output folder (default `runs/<name>-<UTC time>`). One that exists and is not
+    /// empty is refused unless `--force`.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Replace the `--out` folder whole when it exists and is not empty (the new run is
+    /// written beside it and swapped in; no old file survives).
+    #[arg(long)]
+    pub force: bool,
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,
@@ -86,9 +91,14 @@ pub struct CompareArgs {
     /// The planners to compare (comma-separated; default: all).
     #[arg(long, value_delimiter = ',', value_parser = parse_planner)]
     pub planners: Vec<PlannerKind>,
-    /// Output folder for `compare.csv` and `compare.md` (default `runs/compare-<UTC time>`).
+    /// Output folder for `compare.csv`, `compare.md` and one folder per run (default
+    /// `runs/compare-<UTC time>`). One that exists and is not empty is refused unless
+    /// `--force`.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Replace the `--out` folder whole when it exists and is not empty.
+    #[arg(long)]
+    pub force: bool,
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

@@ -1,5 +1,6 @@
 //! `coordinator compare SCENARIO...`: every planner on every scenario, through the same
-//! processes, protocol and safety monitor, tabulated side by side.
+//! processes, protocol and safety monitor, tabulated side by side; each run's own files in
+//! a folder of their own.
 
 use std::path::Path;
 
@@ -105,7 +106,39 @@ fn csv_bytes(rows: &[Row]) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
-/// Run `compare`.
+/// The folder name of one run of the comparison: `<scenario>-<planner>`, made of
+/// letters, digits, `-` and `_` only, with `-2`, `-3`, ... when two scenarios share a
+/// name.
+fn run_folder_name(scenario: &str, planner: PlannerKind, taken: &mut Vec<String>) -> String {
+    let clean: String = scenario
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let base = format!("{clean}-{}", planner.name());
+    let name = (1..)
+        .map(|k| {
+            if k == 1 {
+                base.clone()
+            } else {
+                format!("{base}-{k}")
+            }
+        })
+        .find(|n| !taken.contains(n))
+        .unwrap_or(base);
+    taken.push(name.clone());
+    name
+}
+
+/// Run `compare`: every scenario is validated and the output folder checked before any
+/// agent starts. One line per run on stderr, then the table; each run's files (its
+/// `summary.json` with the refused moves in `faults`, its resolved `scenario.toml`, ...)
+/// go to a folder of their own inside the output folder.
 pub fn run(args: &CompareArgs) -> Result<(), CliError> {
     let planners = if args.planners.is_empty() {
         PlannerKind::ALL.to_vec()
@@ -121,29 +154,61 @@ pub fn run(args: &CompareArgs) -> Result<(), CliError> {
             .map(|f| load_and_plan(Some(f)))
             .collect::<Result<Vec<_>, _>>()?
     };
+    let out = output::OutDir::check(
+        args.out
+            .clone()
+            .unwrap_or_else(|| output::default_run_dir("compare")),
+        args.force,
+    )?;
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
         progress: false,
         ..RunOptions::default()
     };
+    // Dropped on an error or an interruption: nothing half-written is left.
+    let staging = out.begin()?;
     let mut rows = Vec::new();
+    let mut taken = Vec::new();
     for l in &loaded {
         for &planner in &planners {
             let scenario = l.scenario.with_planner(planner);
-            eprintln!("{} with {} ...", scenario.name, planner.name());
+            let folder = run_folder_name(&scenario.name, planner, &mut taken);
             let outcome = run_scenario(&scenario, &l.centre_path, &options)
                 .map_err(|failure| CliError::Other(failure.error))?;
             if outcome.interrupted {
-                return Err(CliError::Other(anyhow::anyhow!("interrupted")));
+                return Err(CliError::Other(anyhow::anyhow!(
+                    "interrupted during {} with {}: nothing written",
+                    scenario.name,
+                    planner.name()
+                )));
             }
-            rows.push(row(&outcome.run, planner, &outcome.timing.compute_us));
+            output::write_run(
+                &staging.path().join(&folder),
+                &scenario,
+                &l.source,
+                &outcome.run,
+                &outcome.timing,
+            )?;
+            let r = row(&outcome.run, planner, &outcome.timing.compute_us);
+            // One line per run, when it is done.
+            eprintln!(
+                "{} with {}: {}, {} collisions, {} unsafe moves refused, {} faults -> {folder}/",
+                scenario.name,
+                planner.name(),
+                if r.completed {
+                    "completed"
+                } else {
+                    "not completed"
+                },
+                r.collisions,
+                r.unsafe_moves,
+                outcome.run.faults.len()
+            );
+            rows.push(r);
         }
     }
-    let dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| output::default_run_dir("compare"));
-    write(&dir, &rows)?;
+    write(staging.path(), &rows)?;
+    let dir = staging.commit()?;
     eprint!("{}", markdown(&rows));
     eprintln!("-> {}", dir.display());
     Ok(())
@@ -154,4 +219,20 @@ fn write(dir: &Path, rows: &[Row]) -> anyhow::Result<()> {
     output::write_atomically(&dir.join("compare.csv"), &csv_bytes(rows)?)?;
     output::write_atomically(&dir.join("compare.md"), markdown(rows).as_bytes())?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_folders_are_plain_names_and_never_shared() {
+        let mut taken = Vec::new();
+        let a = run_folder_name("paper example/1", PlannerKind::Cbf, &mut taken);
+        let b = run_folder_name("paper example/1", PlannerKind::Cbf, &mut taken);
+        let c = run_folder_name("paper example/1", PlannerKind::BestPoint, &mut taken);
+        assert_eq!(a, "paper_example_1-cbf");
+        assert_eq!(b, "paper_example_1-cbf-2");
+        assert_eq!(c, "paper_example_1-best-point");
+    }
 }

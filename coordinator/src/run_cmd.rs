@@ -1,4 +1,4 @@
-//! `coordinator run [SCENARIO] [--out DIR]`.
+//! `coordinator run [SCENARIO] [--out DIR [--force]]`.
 
 use std::time::Duration;
 
@@ -33,6 +33,14 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
             n - 1
         )));
     }
+    // Before any agent is spawned or anything created: a folder holding something is
+    // refused unless --force.
+    let out = output::OutDir::check(
+        args.out
+            .clone()
+            .unwrap_or_else(|| output::default_run_dir(&scenario.name)),
+        args.force,
+    )?;
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
         turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
@@ -47,21 +55,30 @@ pub fn run(args: &RunArgs) -> Result<(), CliError> {
         Ok(outcome) => (outcome, None),
         Err(failure) => (*failure.partial, Some(failure.error)),
     };
-    let dir = args
-        .out
-        .clone()
-        .unwrap_or_else(|| output::default_run_dir(&scenario.name));
-    output::write_run(&dir, &loaded.text, &outcome.run, &outcome.timing)?;
-    if !args.no_plots {
+    // Everything is written into a fresh sibling folder, then swapped in whole.
+    let staging = out.begin()?;
+    output::write_run(
+        staging.path(),
+        scenario,
+        &loaded.source,
+        &outcome.run,
+        &outcome.timing,
+    )?;
+    let plots = if args.no_plots {
+        None
+    } else {
         // The data files are complete already; a failed drawing costs only the pictures.
-        match crate::render::render_run_dir(&dir) {
-            Ok(files) => tracing::info!(
-                "{} plot files in {}",
-                files.len(),
-                dir.join("plots").display()
-            ),
-            Err(e) => tracing::warn!("plots not drawn: {e:#}"),
-        }
+        Some(crate::render::render_run_dir(staging.path()))
+    };
+    let dir = staging.commit()?;
+    match plots {
+        Some(Ok(files)) => tracing::info!(
+            "{} plot files in {}",
+            files.len(),
+            dir.join(crate::render::PLOTS_DIR).display()
+        ),
+        Some(Err(e)) => tracing::warn!("plots not drawn: {e:#}"),
+        None => {}
     }
     let s = outcome.run.summary();
     eprintln!(

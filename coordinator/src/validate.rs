@@ -12,8 +12,10 @@ use crate::error::CliError;
 pub struct Loaded {
     /// The validated scenario.
     pub scenario: Scenario,
-    /// The file's text (kept with the outputs, so a run can be re-rendered).
+    /// The file's text.
     pub text: String,
+    /// The file as given (or the embedded paper scenario's name), for messages.
+    pub source: String,
     /// The centre path, one pose per step.
     pub centre_path: Vec<Pose>,
 }
@@ -34,13 +36,14 @@ pub fn load_and_plan(file: Option<&std::path::Path>) -> Result<Loaded, ScenarioE
         ),
     };
     let centre_path = plan_centre_path(&scenario).map_err(|e| ScenarioError::Invalid {
-        file: name,
+        file: name.clone(),
         field: "path".into(),
         reason: format!("no path for the formation centre from start to goal: {e}"),
     })?;
     Ok(Loaded {
         scenario,
         text,
+        source: name,
         centre_path,
     })
 }

@@ -321,7 +321,8 @@ fn a_simulated_paper_run_renders() {
     let dir = scratch("paper");
     coordinator::output::write_run(
         &dir,
-        shared::scenario::PAPER_SCENARIO_TOML,
+        &scenario,
+        shared::scenario::PAPER_SCENARIO_NAME,
         &run,
         &coordinator::output::Timing::default(),
     )
