@@ -60,8 +60,9 @@ impl TurnSplit {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Incoming {
     /// The process that published it, from iceoryx2's connection (the publisher's
-    /// unique id embeds its process id), not from anything the sample says.
-    pub publisher_pid: u32,
+    /// unique id embeds its process id), not from anything the sample says; `None` when
+    /// the sample could not be received at all.
+    pub publisher_pid: Option<u32>,
     /// The checked message, or why it was refused.
     pub msg: Result<StateMsg, MalformedState>,
 }
@@ -377,18 +378,21 @@ impl CoordinatorIpc {
             .notify_with_custom_event_id(EventId::new(EVENT_ECHO))
             .map_err(|e| anyhow!("ringing agent {agent}'s echo: {e:?}"))?;
         loop {
-            while let Some(incoming) = self.receive(agent)? {
+            while let Some(incoming) = self.receive(agent) {
                 // An answer sent before the ring is a late one from an earlier echo.
                 if let Ok(msg) = &incoming.msg
-                    && incoming.publisher_pid == pid
+                    && incoming.publisher_pid == Some(pid)
                     && msg.kind == StateKind::Echo
                     && msg.sent_ns >= rung_ns
                 {
                     let held_ns = wire::monotonic_ns();
                     return Ok(TurnSplit::of(rung_ns, msg, held_ns));
                 }
+                if incoming.publisher_pid.is_none() {
+                    return Ok(None);
+                }
             }
-            if !self.wait_done(agent, deadline)? {
+            if !self.wait_done(agent, deadline) {
                 return Ok(None);
             }
         }
@@ -404,38 +408,46 @@ impl CoordinatorIpc {
     }
 
     /// Take the next state sample from `agent`'s channel, copied out of shared memory and
-    /// checked ([`AgentState::read_checked`]); `None` when there is none.
-    pub fn receive(&self, agent: usize) -> anyhow::Result<Option<Incoming>> {
-        let c = self.channel(agent)?;
-        let Some(sample) = c
-            .state_sub
-            .receive()
-            .map_err(|e| anyhow!("receiving agent {agent}'s state: {e:?}"))?
-        else {
-            return Ok(None);
-        };
-        Ok(Some(Incoming {
-            publisher_pid: pid_of_id(sample.origin().value()),
-            msg: sample.payload().read_checked(agent),
-        }))
+    /// checked ([`AgentState::read_checked`]); `None` when there is none (or the channel
+    /// is closed). A sample that cannot be received at all comes back as
+    /// [`MalformedState::Unreadable`]: what the agent's process does to its channel is
+    /// its fault, never the coordinator's error.
+    pub fn receive(&self, agent: usize) -> Option<Incoming> {
+        let c = self.channel(agent).ok()?;
+        match c.state_sub.receive() {
+            Ok(None) => None,
+            Ok(Some(sample)) => Some(Incoming {
+                publisher_pid: Some(pid_of_id(sample.origin().value())),
+                msg: sample.payload().read_checked(agent),
+            }),
+            Err(e) => Some(Incoming {
+                publisher_pid: None,
+                msg: Err(MalformedState::Unreadable(format!("{e:?}"))),
+            }),
+        }
     }
 
     /// Block (no polling) until `agent` signals a published state or `until` passes;
     /// false at the deadline or when a signal interrupted the wait (look at
-    /// [`Self::termination_requested`]).
-    pub fn wait_done(&self, agent: usize, until: Instant) -> anyhow::Result<bool> {
+    /// [`Self::termination_requested`]). A wait that fails (a closed channel) sleeps
+    /// until `until` instead, so callers poll at their own pace.
+    pub fn wait_done(&self, agent: usize, until: Instant) -> bool {
         let now = Instant::now();
         if now >= until {
-            return Ok(false);
+            return false;
         }
-        match self
-            .channel(agent)?
-            .done_listener
-            .timed_wait(|_| {}, until - now)
-        {
-            Ok(events) => Ok(events > 0 || Instant::now() < until),
-            Err(ListenerWaitError::InterruptSignal) => Ok(false),
-            Err(e) => Err(anyhow!("waiting for agent {agent}: {e:?}")),
+        let Ok(c) = self.channel(agent) else {
+            std::thread::sleep(until - now);
+            return false;
+        };
+        match c.done_listener.timed_wait(|_| {}, until - now) {
+            Ok(events) => events > 0 || Instant::now() < until,
+            Err(ListenerWaitError::InterruptSignal) => false,
+            Err(e) => {
+                tracing::debug!("waiting for agent {agent}: {e:?}");
+                std::thread::sleep(until.saturating_duration_since(Instant::now()));
+                false
+            }
         }
     }
 

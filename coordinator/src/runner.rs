@@ -34,7 +34,7 @@ use shared::misbehave::Misbehave;
 use shared::run::{Recorder, Run};
 use shared::scenario::Scenario;
 use shared::turn::{MAX_WAYPOINTS, Move, MoveStatus};
-use shared::wire::{StateKind, StateMsg, monotonic_ns};
+use shared::wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
@@ -360,7 +360,7 @@ impl Driver<'_, '_> {
             self.spawn(i, false)?;
         }
         let all: Vec<usize> = (0..n).collect();
-        self.start_agents(0, &all, self.options.startup_timeout)?;
+        self.start_agents(0, &all, self.options.startup_timeout, false)?;
         self.progress.startup_s = started.elapsed().as_secs_f64();
         self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
             let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
@@ -505,15 +505,23 @@ impl Driver<'_, '_> {
     fn drain(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
         let pid = self.procs.pid(agent);
         let (mut extra, mut malformed) = (0usize, Vec::new());
-        while let Some(incoming) = self.ipc.receive(agent)? {
-            if Some(incoming.publisher_pid) != pid {
-                self.on_impersonation(step, agent, incoming.publisher_pid)?;
+        while let Some(incoming) = self.ipc.receive(agent) {
+            if let Some(from) = incoming.publisher_pid
+                && Some(from) != pid
+            {
+                self.on_impersonation(step, agent, from)?;
                 continue;
             }
             match incoming.msg {
                 Ok(msg) if msg.kind == StateKind::Echo => {}
                 Ok(_) => extra += 1,
-                Err(why) => malformed.push(why.to_string()),
+                Err(why) => {
+                    let unreadable = matches!(why, MalformedState::Unreadable(_));
+                    malformed.push(why.to_string());
+                    if unreadable {
+                        break;
+                    }
+                }
             }
         }
         if extra > 0 {
@@ -555,9 +563,11 @@ impl Driver<'_, '_> {
         let mut unsolicited = 0usize;
         let answer = loop {
             let mut found = None;
-            while let Some(incoming) = self.ipc.receive(agent)? {
-                if Some(incoming.publisher_pid) != pid {
-                    self.on_impersonation(step, agent, incoming.publisher_pid)?;
+            while let Some(incoming) = self.ipc.receive(agent) {
+                if let Some(from) = incoming.publisher_pid
+                    && Some(from) != pid
+                {
+                    self.on_impersonation(step, agent, from)?;
                     continue;
                 }
                 match judge_answer(incoming, grant, step, pid) {
@@ -583,7 +593,7 @@ impl Driver<'_, '_> {
                 break Answer::Missed;
             }
             self.ipc
-                .wait_done(agent, (now + LIVENESS_SLICE).min(deadline))?;
+                .wait_done(agent, (now + LIVENESS_SLICE).min(deadline));
         };
         if unsolicited > 0 {
             self.recorder.note_fault(
@@ -663,12 +673,15 @@ impl Driver<'_, '_> {
 
     /// Wait for the ready handshake of every agent in `agents` (their processes are
     /// started). An agent that exits first, sends a bad handshake or none in `timeout`
-    /// is recorded `failed-to-start` and frozen (or replaced, with `respawn`).
+    /// is recorded `failed-to-start` and frozen (or replaced, with `respawn`). For
+    /// `replacements`, success is recorded `respawned` and failure `respawn_failed`,
+    /// never retried.
     fn start_agents(
         &mut self,
         step: usize,
         agents: &[usize],
         timeout: Duration,
+        replacements: bool,
     ) -> anyhow::Result<()> {
         let deadline = Instant::now() + timeout;
         let mut pending: Vec<usize> = agents.to_vec();
@@ -681,15 +694,32 @@ impl Driver<'_, '_> {
                     pending.retain(|&a| a != agent);
                     continue;
                 }
-                while let Some(incoming) = self.ipc.receive(agent)? {
-                    if Some(incoming.publisher_pid) != pid {
-                        self.on_impersonation(step, agent, incoming.publisher_pid)?;
+                while let Some(incoming) = self.ipc.receive(agent) {
+                    if let Some(from) = incoming.publisher_pid
+                        && Some(from) != pid
+                    {
+                        self.on_impersonation(step, agent, from)?;
                         continue;
                     }
                     match incoming.msg {
                         Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
                             pending.retain(|&a| a != agent);
-                            self.ipc.update_connections(agent)?;
+                            if let Err(e) = self.ipc.update_connections(agent) {
+                                tracing::warn!("agent {agent}: {e:#}");
+                            }
+                            if replacements {
+                                self.recorder.mark_alive(agent);
+                                self.recorder.note_fault(
+                                    step,
+                                    agent,
+                                    "respawned",
+                                    format!(
+                                        "replacement process {} takes the slot from the last position",
+                                        msg.pid
+                                    ),
+                                    None,
+                                );
+                            }
                             break;
                         }
                         Ok(msg) if msg.kind == StateKind::Ready => {
@@ -746,7 +776,7 @@ impl Driver<'_, '_> {
                 break;
             }
             self.ipc
-                .wait_done(pending[0], (Instant::now() + LIVENESS_SLICE).min(deadline))?;
+                .wait_done(pending[0], (Instant::now() + LIVENESS_SLICE).min(deadline));
         }
         let started: Vec<usize> = agents
             .iter()
@@ -755,7 +785,16 @@ impl Driver<'_, '_> {
             .collect();
         self.scan_for_intruders(step, &started)?;
         for (agent, why) in failed {
-            self.on_failed_start(step, agent, &why)?;
+            if replacements {
+                tracing::warn!("agent {agent}: the replacement did not start: {why}");
+                self.procs.kill_now(agent);
+                self.ipc.close_channel(agent);
+                self.ipc.cleanup_dead_nodes();
+                self.recorder
+                    .note_fault(step, agent, "respawn_failed", why, None);
+            } else {
+                self.on_failed_start(step, agent, &why)?;
+            }
         }
         Ok(())
     }
@@ -826,59 +865,7 @@ impl Driver<'_, '_> {
             return Ok(());
         }
         // The replacement's own failure is recorded, and not retried (no respawn loop).
-        self.start_replacement(step, agent)
-    }
-
-    /// Wait for the handshake of `agent`'s replacement process.
-    fn start_replacement(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
-        let pid = self.procs.pid(agent).unwrap_or(0);
-        let deadline = Instant::now() + REPLACEMENT_TIMEOUT;
-        loop {
-            while let Some(incoming) = self.ipc.receive(agent)? {
-                if incoming.publisher_pid != pid {
-                    self.on_impersonation(step, agent, incoming.publisher_pid)?;
-                    continue;
-                }
-                if let Ok(msg) = &incoming.msg
-                    && msg.kind == StateKind::Ready
-                    && msg.pid == pid
-                {
-                    self.ipc.update_connections(agent)?;
-                    self.recorder.mark_alive(agent);
-                    self.recorder.note_fault(
-                        step,
-                        agent,
-                        "respawned",
-                        format!("replacement process {pid} takes the slot from the last position"),
-                        None,
-                    );
-                    return Ok(());
-                }
-            }
-            let why = if self.procs.poll(agent) == Exit::Exited {
-                Some("it exited before its handshake".to_string())
-            } else if Instant::now() >= deadline {
-                Some(format!(
-                    "no handshake within {:.1} s",
-                    REPLACEMENT_TIMEOUT.as_secs_f64()
-                ))
-            } else if self.ipc.termination_requested() {
-                bail!("interrupted while a replacement agent was starting");
-            } else {
-                None
-            };
-            if let Some(why) = why {
-                tracing::warn!("agent {agent}: the replacement did not start: {why}");
-                self.procs.kill_now(agent);
-                self.ipc.close_channel(agent);
-                self.ipc.cleanup_dead_nodes();
-                self.recorder
-                    .note_fault(step, agent, "respawn_failed", why, None);
-                return Ok(());
-            }
-            self.ipc
-                .wait_done(agent, (Instant::now() + LIVENESS_SLICE).min(deadline))?;
-        }
+        self.start_agents(step, &[agent], REPLACEMENT_TIMEOUT, true)
     }
 
     /// A live agent missed its deadline: it keeps its place; after too many misses in a

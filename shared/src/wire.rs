@@ -445,6 +445,10 @@ pub enum MalformedState {
         /// When it claims it sent.
         sent_ns: u64,
     },
+    /// The sample could not be taken from the channel at all (the publisher's memory
+    /// could not be mapped, for instance).
+    #[error("the sample could not be received: {0}")]
+    Unreadable(String),
     /// A handshake or echo carries a move (waypoints).
     #[error("a {kind:?} message carries {count} waypoints")]
     UnexpectedWaypoints {
