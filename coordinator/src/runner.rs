@@ -8,7 +8,6 @@
 //! `respawn`, a replacement process takes its place from there.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
@@ -112,17 +111,10 @@ pub struct BetweenSteps<'a> {
     pub alive: &'a [bool],
 }
 
-/// Prefix of every run prefix: `fc<coordinator pid>x<counter>_`.
-pub const PREFIX_STEM: &str = "fc";
-
-/// A prefix no other run on this machine uses: process id and a counter.
-pub fn unique_prefix() -> String {
-    static COUNTER: AtomicU32 = AtomicU32::new(0);
-    format!(
-        "{PREFIX_STEM}{}x{}_",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    )
+/// A new run's prefix: no other run on this machine uses it, and no one can predict it
+/// (see [`shared::wire::RunPrefix`]).
+pub fn unique_prefix() -> anyhow::Result<String> {
+    Ok(shared::wire::RunPrefix::new_random()?.as_str().to_string())
 }
 
 fn rss_kib(pid: u32) -> Option<f64> {
@@ -166,8 +158,8 @@ pub fn run_scenario_with(
     let n = scenario.agents.len();
     let bin = agents::locate_agent_binary(options.agent_bin.as_deref())?;
     agents::raise_fd_limit();
-    crate::ipc::clean_stale_runs(PREFIX_STEM);
-    let prefix = unique_prefix();
+    crate::ipc::clean_stale_runs();
+    let prefix = unique_prefix()?;
     let mut ipc = CoordinatorIpc::create(&prefix, n)?;
     ipc.publish_mission(scenario)?;
     let mut procs = AgentProcesses::new(bin, &prefix, n);

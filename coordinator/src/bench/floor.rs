@@ -137,7 +137,7 @@ pub struct PingPongSession {
 impl PingPongSession {
     /// Start the ping-pong process from `bin` and shake hands over both channels.
     pub fn start(bin: &Path) -> anyhow::Result<Self> {
-        let prefix = unique_prefix();
+        let prefix = unique_prefix()?;
         let config = wire::ipc_config(&prefix, Role::Coordinator)?;
         let socket_path = std::env::temp_dir().join(format!("{prefix}pingpong.sock"));
         let mut session = Self {
