@@ -101,6 +101,9 @@ impl CoordinatorIpc {
             .config(&config)
             .create::<ipc::Service>()
             .map_err(|e| anyhow!("creating the coordinator node: {e:?}"))?;
+        // The node made the run's management segment in /dev/shm, open to everyone:
+        // private before any other process of the run starts (see the function).
+        wire::make_run_files_private(prefix)?;
         // Install iceoryx2's signal handlers now: Ctrl-C and SIGTERM then interrupt waits
         // and are polled with `termination_requested`, so outputs are flushed.
         let _ = node.wait(Duration::ZERO);

@@ -160,6 +160,9 @@ pub fn run_scenario_with(
     agents::raise_fd_limit();
     crate::ipc::clean_stale_runs();
     let prefix = unique_prefix()?;
+    // The run's private folder, made before anything else of the run (a folder already
+    // there is refused); dropped last: after the agents and the node.
+    let _root = shared::wire::RunRoot::create(&prefix)?;
     let mut ipc = CoordinatorIpc::create(&prefix, n)?;
     ipc.publish_mission(scenario)?;
     let mut procs = AgentProcesses::new(bin, &prefix, n);
