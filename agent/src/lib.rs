@@ -67,6 +67,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(root) = shared::wire::run_root(&args.run) {
         shared::wire::check_run_root(&root).with_context(|| format!("opening run {}", args.run))?;
     }
+    if args.misbehave == Some(Misbehave::Fork) {
+        misbehave::start_strays(&args.run)?;
+    }
     if args.pingpong {
         let liveness = Duration::from_millis(args.liveness_ms.max(1));
         return pingpong::run(&args.run, args.uds.as_deref(), liveness);

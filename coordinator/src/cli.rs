@@ -63,7 +63,8 @@ pub struct RunArgs {
     #[arg(long = "kill-agent", value_name = "AGENT@STEP", value_parser = parse_kill)]
     pub kill_agent: Vec<(usize, usize)>,
     /// Test mode: agent AGENT publishes bad moves of kind MODE (nan, teleport,
-    /// through-obstacle, silent, garbage); repeatable, e.g. `--misbehave 3=nan`.
+    /// through-obstacle, silent, garbage) or leaves processes behind (fork); repeatable,
+    /// e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
     pub misbehave: Vec<(usize, String)>,
     /// Do not draw the plots and the animation (`coordinator render DIR` draws them
@@ -114,7 +115,14 @@ fn parse_kill(s: &str) -> Result<(usize, usize), String> {
 }
 
 /// The modes of `agent --misbehave`.
-pub const MISBEHAVE_MODES: [&str; 5] = ["nan", "teleport", "through-obstacle", "silent", "garbage"];
+pub const MISBEHAVE_MODES: [&str; 6] = [
+    "nan",
+    "teleport",
+    "through-obstacle",
+    "silent",
+    "garbage",
+    "fork",
+];
 
 /// `AGENT=MODE`.
 fn parse_misbehave(s: &str) -> Result<(usize, String), String> {
