@@ -455,6 +455,11 @@ pub fn remove_run_root(prefix: &str) -> std::io::Result<()> {
     }
 }
 
+/// Environment variable the coordinator sets on every agent process: the run's prefix.
+/// Whatever an agent starts inherits it (unless it clears its environment), so at the end
+/// of the run the coordinator finds, kills and reaps every process the run left behind.
+pub const RUN_ENV: &str = "FORMATION_RUN";
+
 /// A run prefix: `fc<coordinator pid>x<random hex>_`, the one place that writes and reads
 /// the format. The pid tells a crashed run's leftovers (its coordinator is gone) from a
 /// live run's; the random part, from the OS random source, makes the names of a run's
