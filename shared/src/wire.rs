@@ -939,6 +939,23 @@ mod tests {
         }
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o700)).expect("chmod");
         check_run_root(&path).expect("0700");
+        // Another user's folder, 0700 or not, is refused (only root can make one here).
+        if effective_uid() == 0 {
+            std::os::unix::fs::chown(&path, Some(65534), None).expect("chown");
+            let err = check_run_root(&path).expect_err("not ours");
+            assert!(
+                matches!(
+                    err,
+                    RunFilesError::Owner {
+                        owner: 65534,
+                        euid: 0,
+                        ..
+                    }
+                ),
+                "{err:?}"
+            );
+            std::os::unix::fs::chown(&path, Some(0), None).expect("chown back");
+        }
         // A link to a good folder is still refused: it is not the folder.
         let link = std::path::PathBuf::from(format!("{}link", path.display()));
         std::os::unix::fs::symlink(&path, &link).expect("symlink");
