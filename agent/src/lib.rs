@@ -71,15 +71,13 @@ pub fn init_logging() {
 
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    // Join only a run that exists: a node opened for no run would leave files behind.
-    if let Some(root) = shared::wire::run_root(&args.run)
-        && !root.is_dir()
-    {
-        anyhow::bail!(
-            "opening run {}: no such run ({} does not exist; the coordinator starts agents)",
-            args.run,
-            root.display()
-        );
+    // Join only a run that exists (a node opened for no run would leave files behind),
+    // and only through a folder no other user can reach (ours, 0700, not a link).
+    if let Some(root) = shared::wire::run_root(&args.run) {
+        shared::wire::check_run_root(&root).with_context(|| format!("opening run {}", args.run))?;
+    }
+    if args.misbehave == Some(Misbehave::Fork) {
+        misbehave::start_strays(&args.run)?;
     }
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.pingpong {

@@ -5,6 +5,50 @@ use shared::geometry::{Disk, Point, Vector};
 pub use shared::misbehave::Misbehave;
 use shared::turn::{Move, MoveStatus};
 
+/// `argv[0]` of the children [`Misbehave::Fork`] starts for run `prefix`, so that tests
+/// can find them: `formation-stray-<prefix>`.
+pub fn stray_marker(prefix: &str) -> String {
+    format!("formation-stray-{prefix}")
+}
+
+/// [`Misbehave::Fork`]: start two `sleep` processes named [`stray_marker`] that ignore
+/// SIGTERM and SIGHUP, the second in a new session (out of the agent's process group);
+/// returns their pids. They are never waited for.
+pub fn start_strays(prefix: &str) -> anyhow::Result<[u32; 2]> {
+    use std::os::unix::process::CommandExt;
+
+    use anyhow::Context;
+    use nix::sys::signal::{SigHandler, Signal, signal};
+
+    let start = |escape: bool| -> anyhow::Result<u32> {
+        let mut command = std::process::Command::new("sleep");
+        command
+            .arg0(stray_marker(prefix))
+            .arg("2147483647")
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null());
+        // SAFETY: between fork and exec the closure only calls async-signal-safe
+        // functions (sigaction, setsid) and allocates nothing.
+        unsafe {
+            command.pre_exec(move || {
+                // Ignored dispositions survive exec.
+                signal(Signal::SIGTERM, SigHandler::SigIgn)?;
+                signal(Signal::SIGHUP, SigHandler::SigIgn)?;
+                if escape {
+                    nix::unistd::setsid()?;
+                }
+                Ok(())
+            });
+        }
+        let child = command
+            .spawn()
+            .with_context(|| format!("starting a stray process (escape: {escape})"))?;
+        Ok(child.id())
+    };
+    Ok([start(false)?, start(true)?])
+}
+
 /// Turn an honest move into this mode's bad one (`None`: publish nothing). Modes that do
 /// not corrupt moves return the honest move unchanged.
 pub fn corrupt(
@@ -77,5 +121,23 @@ pub fn corrupt(
                 0xBAD,
             ))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fork_mode_publishes_the_honest_move() {
+        let me = Point::new(1.0, 2.0);
+        let honest = Move {
+            slot: Point::new(3.0, 4.0),
+            best: Point::new(2.0, 3.0),
+            status: MoveStatus::AtSlot,
+            waypoints: vec![me, Point::new(2.0, 3.0)],
+        };
+        let got = corrupt(Misbehave::Fork, honest.clone(), &me, &[], 7);
+        assert_eq!(got, Some((honest.clone(), honest.status as u32)));
     }
 }

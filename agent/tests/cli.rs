@@ -73,3 +73,35 @@ fn an_invalid_run_prefix_is_refused() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("run prefix"));
 }
+
+#[test]
+fn a_run_folder_other_users_could_reach_is_refused_before_anything_is_opened() {
+    use std::os::unix::fs::{DirBuilderExt, PermissionsExt};
+    let prefix = format!("openrun{}_", std::process::id());
+    let Some(root) = shared::wire::run_root(&prefix) else {
+        return; // no /dev/shm: no run folder to check
+    };
+    std::fs::DirBuilder::new()
+        .mode(0o700)
+        .create(&root)
+        .expect("run folder");
+    std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o777)).expect("chmod");
+    let out = agent()
+        .args(["--run", &prefix, "--agent", "0"])
+        .env("RUST_LOG", "error")
+        .output()
+        .expect("agent");
+    let inside: Vec<_> = std::fs::read_dir(&root)
+        .expect("still there")
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    std::fs::remove_dir_all(&root).expect("clean up");
+    let left = remove_files_of(&prefix);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&root.display().to_string()), "{err}");
+    assert!(err.contains("0777"), "{err}");
+    assert!(inside.is_empty(), "the agent made {inside:?}");
+    assert_eq!(left, 0, "the agent made files of {prefix} in /dev/shm");
+}

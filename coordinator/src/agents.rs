@@ -1,6 +1,27 @@
 //! The agent processes: spawned, watched, killed on request, stopped cleanly, reaped.
 //! Dropping [`AgentProcesses`] kills and reaps whatever is still running, so no path out
 //! of the coordinator (error, panic) leaves an orphan.
+//!
+//! An agent is an untrusted process, and it may start processes of its own. None of them
+//! outlives the run:
+//! - each agent leads a process group of its own, and every signal to an agent goes to
+//!   the whole group (`killpg`), while the agent is not yet reaped: its pid, the group's
+//!   id, cannot name anyone else then. When an agent exits, its group is killed before
+//!   the agent is reaped.
+//! - the coordinator is a child subreaper (`PR_SET_CHILD_SUBREAPER`): a process whose
+//!   parent dies is handed to it, not to init, even if it left the group (`setsid`).
+//! - every agent gets [`wire::RUN_ENV`]`=<prefix>` in its environment, and whatever it
+//!   starts inherits it. When the run ends ([`AgentProcesses::stop_all`], drop), every
+//!   live process of the run found through `/proc/PID/environ` is killed, and every
+//!   process of the run killed is reaped, by pid (never `waitpid(-1)`: several runs may
+//!   share this process, as in the integration tests, and no run touches another's).
+//!
+//! Limits (a same-user process can always do these; only a cgroup or a PID namespace
+//! holds every descendant for sure): a process that both leaves the agent's group and
+//! clears or rewrites its environment (or makes itself unreadable with
+//! `PR_SET_DUMPABLE`) is not found, and survives the run; a process of the run that
+//! exits on its own after its agent is gone stays a zombie of the coordinator (it holds
+//! a pid, nothing else) until the coordinator exits.
 
 use std::os::fd::BorrowedFd;
 use std::os::unix::process::CommandExt;
@@ -8,10 +29,15 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use std::collections::BTreeMap;
+
 use anyhow::{Context, bail};
+use nix::errno::Errno;
 use nix::fcntl::{FcntlArg, FdFlag, fcntl};
-use nix::sys::signal::{Signal, kill};
+use nix::sys::signal::{Signal, kill, killpg};
+use nix::sys::wait::{Id, WaitPidFlag, WaitStatus, waitid, waitpid};
 use nix::unistd::Pid;
+use shared::wire;
 
 /// Find the `agent` executable: `explicit` if given, else `FORMATION_AGENT_BIN`, else
 /// the `agent` file beside the running coordinator.
@@ -74,6 +100,60 @@ pub enum Exit {
     Exited,
 }
 
+/// What `/proc/PID/stat` says about a process.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct ProcStat {
+    pid: u32,
+    /// `R`, `S`, `D`, `Z` (zombie), ...
+    state: u8,
+    ppid: u32,
+    pgid: u32,
+    /// Start time since boot, in clock ticks: with the pid, names one process for good.
+    start: u64,
+}
+
+impl ProcStat {
+    fn read(pid: u32) -> Option<Self> {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+        // pid (comm) state ppid pgrp ...: fields from `state` (field 3) on; the command
+        // may hold spaces and parentheses, the last `)` ends it.
+        let rest: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+        Some(Self {
+            pid,
+            state: *rest.first()?.as_bytes().first()?,
+            ppid: rest.get(1)?.parse().ok()?,
+            pgid: rest.get(2)?.parse().ok()?,
+            start: rest.get(19)?.parse().ok()?,
+        })
+    }
+
+    fn zombie(&self) -> bool {
+        matches!(self.state, b'Z' | b'X')
+    }
+}
+
+/// Every process in `/proc` now.
+fn all_processes() -> Vec<ProcStat> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse().ok())
+        .filter_map(ProcStat::read)
+        .collect()
+}
+
+/// Whether process `pid`'s environment holds exactly `entry` (`NAME=value`). False if it
+/// cannot be read: a zombie's, another user's.
+fn environment_has(pid: u32, entry: &[u8]) -> bool {
+    std::fs::read(format!("/proc/{pid}/environ"))
+        .is_ok_and(|env| env.split(|&b| b == 0).any(|e| e == entry))
+}
+
+/// How long the end-of-run sweep may take before it gives up on what it cannot reap.
+const SWEEP_TIMEOUT: Duration = Duration::from_secs(2);
+
 /// The run's agent processes, by agent index.
 pub struct AgentProcesses {
     bin: PathBuf,
@@ -81,26 +161,37 @@ pub struct AgentProcesses {
     children: Vec<Option<Child>>,
     /// Every process started in this run, with its agent.
     spawned: Vec<(u32, usize)>,
+    /// Other processes of the run that were signalled (members of an agent's group, or
+    /// found by the sweep), by pid, with their start time: reaped by pid once dead.
+    strays: BTreeMap<u32, u64>,
 }
 
 impl AgentProcesses {
-    /// No process yet; `bin` is the agent executable, `prefix` the run's prefix.
+    /// No process yet; `bin` is the agent executable, `prefix` the run's prefix. Makes
+    /// this process a child subreaper (process-wide, idempotent): orphans of the run come
+    /// back to it to be reaped.
     pub fn new(bin: PathBuf, prefix: &str, agents: usize) -> Self {
+        if let Err(e) = nix::sys::prctl::set_child_subreaper(true) {
+            tracing::warn!("cannot become a child subreaper ({e}): an agent's orphans go to init");
+        }
         Self {
             bin,
             prefix: prefix.to_string(),
             children: (0..agents).map(|_| None).collect(),
             spawned: Vec::new(),
+            strays: BTreeMap::new(),
         }
     }
 
     /// Start agent `agent`'s process (in its own process group, so a Ctrl-C on the
-    /// terminal reaches only the coordinator, which then stops the agents cleanly).
+    /// terminal reaches only the coordinator, which then stops the agents cleanly, and so
+    /// a signal to the agent reaches whatever it started in its group too).
     pub fn spawn(&mut self, agent: usize, extra_args: &[String]) -> anyhow::Result<u32> {
         set_cloexec_on_all_fds();
         let child = Command::new(&self.bin)
             .args(["--run", &self.prefix, "--agent", &agent.to_string()])
             .args(extra_args)
+            .env(wire::RUN_ENV, &self.prefix)
             .stdin(Stdio::null())
             .process_group(0)
             .spawn()
@@ -126,41 +217,98 @@ impl AgentProcesses {
 
     /// Whether agent `agent`'s process still runs (reaping it if it exited).
     pub fn poll(&mut self, agent: usize) -> Exit {
-        match self.children[agent].as_mut().map(Child::try_wait) {
-            Some(Ok(None)) => Exit::Running,
-            Some(Ok(Some(status))) => {
-                tracing::info!("agent {agent} exited: {status}");
-                self.children[agent] = None;
-                Exit::Exited
-            }
-            Some(Err(e)) => {
-                tracing::warn!("agent {agent}: cannot query its process: {e}");
-                Exit::Running
-            }
+        self.reap_exited(&[agent]);
+        match self.children[agent] {
+            Some(_) => Exit::Running,
             None => Exit::Exited,
         }
     }
 
-    /// Send SIGKILL to agent `agent`'s process without reaping it (fault injection: the
-    /// coordinator must then notice the death the way it would notice any other).
-    pub fn signal_kill(&mut self, agent: usize) -> Option<u32> {
-        let pid = self.pid(agent)?;
-        kill(Pid::from_raw(pid as i32), Signal::SIGKILL).ok()?;
-        Some(pid)
+    /// Whether agent `agent`'s process has exited, without reaping it.
+    fn has_exited(&self, agent: usize) -> bool {
+        let Some(child) = &self.children[agent] else {
+            return false;
+        };
+        let flags = WaitPidFlag::WEXITED | WaitPidFlag::WNOHANG | WaitPidFlag::WNOWAIT;
+        match waitid(Id::Pid(Pid::from_raw(child.id() as i32)), flags) {
+            Ok(WaitStatus::StillAlive) => false,
+            Ok(_) => true,
+            Err(e) => {
+                tracing::warn!("agent {agent}: cannot query its process: {e}");
+                false
+            }
+        }
     }
 
-    /// Kill agent `agent` with SIGKILL and reap it.
+    /// Reap those of `agents` whose process exited, after killing what is left in their
+    /// process groups (the unreaped zombie still holds the group's id).
+    fn reap_exited(&mut self, agents: &[usize]) {
+        let exited: Vec<usize> = agents
+            .iter()
+            .copied()
+            .filter(|&i| self.has_exited(i))
+            .collect();
+        if exited.is_empty() {
+            return;
+        }
+        self.signal(&exited, Signal::SIGKILL);
+        for i in exited {
+            if let Some(mut child) = self.children[i].take() {
+                match child.wait() {
+                    Ok(status) => tracing::info!("agent {i} exited: {status}"),
+                    Err(e) => tracing::warn!("agent {i}: cannot reap its process: {e}"),
+                }
+            }
+        }
+    }
+
+    /// Send `signal` to the process group of each of `agents` that is not reaped yet, and
+    /// to the agent itself (in case it left its group). Members of the groups are noted
+    /// first, to be reaped once dead (they are handed to this process when their agent
+    /// dies). Returns the pids of the agents signalled.
+    fn signal(&mut self, agents: &[usize], signal: Signal) -> Vec<u32> {
+        let leaders: Vec<u32> = agents.iter().filter_map(|&i| self.pid(i)).collect();
+        if leaders.is_empty() {
+            return leaders;
+        }
+        for p in all_processes() {
+            if leaders.contains(&p.pgid) && !leaders.contains(&p.pid) {
+                self.strays.insert(p.pid, p.start);
+            }
+        }
+        leaders
+            .into_iter()
+            .filter(|&pid| {
+                // An unreaped agent's pid cannot be reused, so neither can its group's id.
+                let pid = Pid::from_raw(pid as i32);
+                let group = killpg(pid, signal);
+                let leader = kill(pid, signal);
+                group.is_ok() || leader.is_ok()
+            })
+            .collect()
+    }
+
+    /// Send SIGKILL to agent `agent`'s process group without reaping the agent (fault
+    /// injection: the coordinator must then notice the death the way it would notice any
+    /// other).
+    pub fn signal_kill(&mut self, agent: usize) -> Option<u32> {
+        self.signal(&[agent], Signal::SIGKILL).first().copied()
+    }
+
+    /// Kill agent `agent`'s process group with SIGKILL and reap the agent.
     pub fn kill_now(&mut self, agent: usize) {
+        self.signal(&[agent], Signal::SIGKILL);
         if let Some(mut child) = self.children[agent].take() {
-            let _ = child.kill();
             let _ = child.wait();
         }
     }
 
     /// Agents whose process is running.
     pub fn running(&mut self) -> Vec<usize> {
+        let all: Vec<usize> = (0..self.children.len()).collect();
+        self.reap_exited(&all);
         (0..self.children.len())
-            .filter(|&i| self.poll(i) == Exit::Running)
+            .filter(|&i| self.children[i].is_some())
             .collect()
     }
 
@@ -179,41 +327,104 @@ impl AgentProcesses {
     }
 
     /// Stop every process: the caller has already asked them to quit; wait `grace`, then
-    /// SIGTERM, then SIGKILL whatever still runs. Every process is reaped.
+    /// SIGTERM, then SIGKILL whatever still runs. Every agent is reaped, and every other
+    /// process of the run is killed and reaped ([`Self::sweep`]).
     pub fn stop_all(&mut self, grace: Duration) {
-        if self.wait_all(grace) {
-            return;
-        }
-        for i in self.running() {
-            if let Some(pid) = self.pid(i) {
+        if !self.wait_all(grace) {
+            let late = self.running();
+            for &i in &late {
                 tracing::warn!("agent {i} did not quit in {grace:?}: sending SIGTERM");
-                let _ = kill(Pid::from_raw(pid as i32), Signal::SIGTERM);
+            }
+            self.signal(&late, Signal::SIGTERM);
+            if !self.wait_all(Duration::from_secs(2)) {
+                for i in self.running() {
+                    tracing::warn!("agent {i} ignored SIGTERM: killing it");
+                    self.kill_now(i);
+                }
             }
         }
-        if self.wait_all(Duration::from_secs(2)) {
-            return;
+        self.sweep();
+    }
+
+    /// Kill every live process of the run other than the agents (found by
+    /// [`wire::RUN_ENV`] in its environment) and reap every process of the run noted
+    /// dead, by pid, until none is left or [`SWEEP_TIMEOUT`] passes. Call once the agents
+    /// are reaped: an orphan is handed to this process only once its parent is gone.
+    fn sweep(&mut self) {
+        let me = std::process::id();
+        let marker = format!("{}={}", wire::RUN_ENV, self.prefix).into_bytes();
+        let deadline = Instant::now() + SWEEP_TIMEOUT;
+        loop {
+            let agents: Vec<u32> = (0..self.children.len())
+                .filter_map(|i| self.pid(i))
+                .collect();
+            let mut found = 0;
+            for p in all_processes() {
+                if p.pid != me
+                    && !p.zombie()
+                    && !agents.contains(&p.pid)
+                    && environment_has(p.pid, &marker)
+                {
+                    tracing::warn!(
+                        "process {} of run {} outlived its agent: killing it",
+                        p.pid,
+                        self.prefix
+                    );
+                    let _ = kill(Pid::from_raw(p.pid as i32), Signal::SIGKILL);
+                    self.strays.insert(p.pid, p.start);
+                    found += 1;
+                }
+            }
+            self.reap_strays(me);
+            if found == 0 && self.strays.is_empty() {
+                return;
+            }
+            if Instant::now() >= deadline {
+                tracing::warn!(
+                    "run {}: processes {:?} could not be reaped in {SWEEP_TIMEOUT:?}",
+                    self.prefix,
+                    self.strays.keys().collect::<Vec<_>>()
+                );
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(5));
         }
-        for i in self.running() {
-            tracing::warn!("agent {i} ignored SIGTERM: killing it");
-            self.kill_now(i);
-        }
+    }
+
+    /// Reap every noted stray that is now a zombie child of this process (`me`); forget
+    /// the ones that are gone (their parent, a process of the run, reaped them).
+    fn reap_strays(&mut self, me: u32) {
+        self.strays.retain(|&pid, &mut start| {
+            let Some(p) = ProcStat::read(pid).filter(|p| p.start == start) else {
+                return false;
+            };
+            if !(p.zombie() && p.ppid == me) {
+                // Alive still (dying), or a zombie whose parent, a process of the run, is
+                // still dying: handed to this process once that parent is gone.
+                return true;
+            }
+            // Our zombie child, with the start time noted: this very process.
+            !matches!(
+                waitpid(Pid::from_raw(pid as i32), Some(WaitPidFlag::WNOHANG)),
+                Ok(WaitStatus::Exited(..) | WaitStatus::Signaled(..)) | Err(Errno::ECHILD)
+            )
+        });
     }
 }
 
 impl Drop for AgentProcesses {
     fn drop(&mut self) {
-        for child in self.children.iter_mut().filter_map(Option::take) {
-            let mut child = child;
-            let _ = kill(Pid::from_raw(child.id() as i32), Signal::SIGTERM);
+        let live = self.running();
+        if !live.is_empty() {
+            self.signal(&live, Signal::SIGTERM);
             let deadline = Instant::now() + Duration::from_millis(500);
-            while Instant::now() < deadline {
-                if let Ok(Some(_)) = child.try_wait() {
-                    break;
-                }
+            while Instant::now() < deadline && !self.running().is_empty() {
                 std::thread::sleep(Duration::from_millis(5));
             }
-            let _ = child.kill();
-            let _ = child.wait();
+            for i in self.running() {
+                self.kill_now(i);
+            }
         }
+        self.sweep();
     }
 }

@@ -246,6 +246,9 @@ impl CoordinatorIpc {
             .config(&config)
             .create::<ipc::Service>()
             .map_err(|e| anyhow!("creating the coordinator node: {e:?}"))?;
+        // The node made the run's management segment in /dev/shm, open to everyone:
+        // private before any other process of the run starts (see the function).
+        wire::make_run_files_private(prefix)?;
         // Install iceoryx2's signal handlers now: Ctrl-C and SIGTERM then interrupt waits
         // and are polled with `termination_requested`, so outputs are flushed.
         let _ = node.wait(Duration::ZERO);
@@ -508,12 +511,15 @@ pub fn remove_run_files(prefix: &str) {
     let _ = wire::remove_run_root(prefix);
 }
 
-/// Remove what crashed runs left behind: every run prefix `<stem><pid>x<n>_` found in
+/// Remove what crashed runs left behind: every run prefix ([`wire::RunPrefix`]) found in
 /// /dev/shm or below the iceoryx2 root whose coordinator process no longer exists. Dead
 /// nodes are cleaned through iceoryx2 first; files that no node owns any more (the dead
-/// coordinator's services) are removed after. Returns the prefixes cleaned.
-pub fn clean_stale_runs(stem: &str) -> Vec<String> {
+/// coordinator's services) are removed after. Only this user's files count: another
+/// user's (or a symbolic link) is never a leftover of ours. Returns the prefixes cleaned.
+pub fn clean_stale_runs() -> Vec<String> {
+    use std::os::unix::fs::MetadataExt;
     let root = std::path::PathBuf::from(Config::default().global.root_path().to_string());
+    let euid = wire::effective_uid();
     let mut prefixes = std::collections::BTreeSet::new();
     let mut files = Vec::new();
     let mut scan = |dir: &std::path::Path| {
@@ -522,7 +528,11 @@ pub fn clean_stale_runs(stem: &str) -> Vec<String> {
         };
         for e in entries.flatten() {
             let name = e.file_name().to_string_lossy().to_string();
-            if let Some(prefix) = stale_prefix(&name, stem) {
+            // `DirEntry::metadata` does not follow a symbolic link.
+            let ours = e
+                .metadata()
+                .is_ok_and(|m| m.uid() == euid && !m.file_type().is_symlink());
+            if ours && let Some(prefix) = stale_prefix(&name) {
                 prefixes.insert(prefix);
                 files.push(e.path());
             }
@@ -565,28 +575,17 @@ pub fn clean_stale_runs(stem: &str) -> Vec<String> {
     prefixes.into_iter().collect()
 }
 
-/// The run prefix in file `name` if it is `<stem><pid>x<n>_...` and process `pid` is
-/// gone.
-fn stale_prefix(name: &str, stem: &str) -> Option<String> {
-    let rest = name.strip_prefix(stem)?;
-    let (pid, rest) = rest.split_once('x')?;
-    let (counter, _) = rest.split_once('_')?;
-    if pid.is_empty()
-        || counter.is_empty()
-        || !pid.bytes().all(|b| b.is_ascii_digit())
-        || !counter.bytes().all(|b| b.is_ascii_digit())
-    {
+/// The run prefix file `name` starts with, if its coordinator process is gone.
+fn stale_prefix(name: &str) -> Option<String> {
+    let prefix = wire::RunPrefix::parse(name)?;
+    if std::path::Path::new(&format!("/proc/{}", prefix.pid())).exists() {
         return None;
     }
-    if std::path::Path::new(&format!("/proc/{pid}")).exists() {
-        return None;
-    }
-    let prefix = format!("{stem}{pid}x{counter}_");
     // Its agents may still be on their way out (they leave within a second).
-    if processes_serving(&prefix) {
+    if processes_serving(prefix.as_str()) {
         return None;
     }
-    Some(prefix)
+    Some(prefix.as_str().to_string())
 }
 
 /// Whether a process was started for run `prefix` (its command line holds

@@ -24,7 +24,6 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
@@ -149,17 +148,10 @@ pub struct BetweenSteps<'a> {
     pub pids: &'a [Option<u32>],
 }
 
-/// Prefix of every run prefix: `fc<coordinator pid>x<counter>_`.
-pub const PREFIX_STEM: &str = "fc";
-
-/// A prefix no other run on this machine uses: process id and a counter.
-pub fn unique_prefix() -> String {
-    static COUNTER: AtomicU32 = AtomicU32::new(0);
-    format!(
-        "{PREFIX_STEM}{}x{}_",
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    )
+/// A new run's prefix: no other run on this machine uses it, and no one can predict it
+/// (see [`shared::wire::RunPrefix`]).
+pub fn unique_prefix() -> anyhow::Result<String> {
+    Ok(shared::wire::RunPrefix::new_random()?.as_str().to_string())
 }
 
 fn rss_kib(pid: u32) -> Option<f64> {
@@ -231,8 +223,17 @@ pub fn run_scenario_with(
         Err(e) => return Err(fail(e, &recorder, progress)),
     };
     agents::raise_fd_limit();
-    crate::ipc::clean_stale_runs(PREFIX_STEM);
-    let prefix = unique_prefix();
+    crate::ipc::clean_stale_runs();
+    let prefix = match unique_prefix() {
+        Ok(prefix) => prefix,
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
+    };
+    // The run's private folder, made before anything else of the run (a folder already
+    // there is refused); dropped last: after the agents and the node.
+    let _root = match shared::wire::RunRoot::create(&prefix) {
+        Ok(root) => root,
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
+    };
     let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
         Ok(ipc) => ipc,
         Err(e) => {

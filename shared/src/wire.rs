@@ -574,6 +574,9 @@ pub enum PrefixError {
     /// The prefix is not a valid file name, or longer than [`MAX_PREFIX_LEN`].
     #[error("run prefix {0:?} must be 1 to 24 characters of [A-Za-z0-9_-]")]
     Invalid(String),
+    /// The OS random source failed to give the random part of a new prefix.
+    #[error("no random run prefix: the OS random source failed: {0}")]
+    Random(String),
 }
 
 /// Longest run prefix accepted: socket paths built from it must fit in 108 bytes.
@@ -631,6 +634,309 @@ pub fn remove_run_root(prefix: &str) -> std::io::Result<()> {
         Some(root) if root.exists() => std::fs::remove_dir_all(root),
         _ => Ok(()),
     }
+}
+
+/// Environment variable the coordinator sets on every agent process: the run's prefix.
+/// Whatever an agent starts inherits it (unless it clears its environment), so at the end
+/// of the run the coordinator finds, kills and reaps every process the run left behind.
+pub const RUN_ENV: &str = "FORMATION_RUN";
+
+/// A run prefix: `fc<coordinator pid>x<random hex>_`, the one place that writes and reads
+/// the format. The pid tells a crashed run's leftovers (its coordinator is gone) from a
+/// live run's; the random part, from the OS random source, makes the names of a run's
+/// files unpredictable, so no other local user can make them first (squat the run folder
+/// or the management segment before the coordinator does).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct RunPrefix {
+    text: String,
+    pid: u32,
+}
+
+impl RunPrefix {
+    /// Start of every run prefix.
+    pub const STEM: &'static str = "fc";
+    /// Most hex digits in the random part (64 bits); fewer when the pid is long, so that
+    /// the prefix fits in [`MAX_PREFIX_LEN`]: at least 10 (40 bits) for any `u32` pid,
+    /// 13 or more for the usual pids of up to 7 digits.
+    const MAX_RANDOM_DIGITS: usize = 16;
+    /// Most digits of a `u32` pid.
+    const MAX_PID_DIGITS: usize = 10;
+
+    /// A new prefix for a run coordinated by this process.
+    pub fn new_random() -> Result<Self, PrefixError> {
+        use rand::TryRngCore;
+        let mut bytes = [0u8; 8];
+        rand::rngs::OsRng
+            .try_fill_bytes(&mut bytes)
+            .map_err(|e| PrefixError::Random(e.to_string()))?;
+        Ok(Self::with_random(
+            std::process::id(),
+            u64::from_le_bytes(bytes),
+        ))
+    }
+
+    fn with_random(pid: u32, random: u64) -> Self {
+        let head = format!("{}{pid}x", Self::STEM);
+        let digits = (MAX_PREFIX_LEN - 1 - head.len()).min(Self::MAX_RANDOM_DIGITS);
+        let hex = format!("{random:016x}");
+        Self {
+            text: format!("{head}{}_", &hex[..digits]),
+            pid,
+        }
+    }
+
+    /// The run prefix that `name` (a file or folder of a run, `<prefix><anything>`) starts
+    /// with, if any. Also reads the prefixes of earlier versions, whose random part was a
+    /// decimal counter, so their leftovers are still cleaned.
+    pub fn parse(name: &str) -> Option<Self> {
+        let rest = name.strip_prefix(Self::STEM)?;
+        let pid_digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+        let (pid, rest) = rest.split_at(pid_digits);
+        let rest = rest.strip_prefix('x')?;
+        let hex_digits = rest
+            .bytes()
+            .take_while(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(b))
+            .count();
+        if !(1..=Self::MAX_PID_DIGITS).contains(&pid_digits)
+            || !(1..=Self::MAX_RANDOM_DIGITS).contains(&hex_digits)
+            || rest.as_bytes().get(hex_digits) != Some(&b'_')
+        {
+            return None;
+        }
+        let pid = pid.parse::<u32>().ok().filter(|&p| p > 0)?;
+        // Every byte counted is ASCII, so `len` is a character boundary.
+        let len = Self::STEM.len() + pid_digits + 1 + hex_digits + 1;
+        (len <= MAX_PREFIX_LEN).then(|| Self {
+            text: name[..len].to_string(),
+            pid,
+        })
+    }
+
+    /// The process id of the run's coordinator.
+    pub fn pid(&self) -> u32 {
+        self.pid
+    }
+
+    /// The prefix itself.
+    pub fn as_str(&self) -> &str {
+        &self.text
+    }
+}
+
+impl std::fmt::Display for RunPrefix {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.text)
+    }
+}
+
+/// Why a run's folder or one of its files in /dev/shm cannot be trusted.
+#[derive(Debug, thiserror::Error)]
+pub enum RunFilesError {
+    /// The run folder does not exist.
+    #[error("{} does not exist (no such run; the coordinator starts agents)", .0.display())]
+    Missing(std::path::PathBuf),
+    /// The coordinator found the folder of its new run already there.
+    #[error(
+        "{} already exists: this run did not make it, so it will not use it (nor delete it)",
+        .0.display()
+    )]
+    Exists(std::path::PathBuf),
+    /// Not a directory, or a file that is not a regular file (e.g. a symbolic link).
+    #[error("{} is not what the run made (a symbolic link?): refusing it", .0.display())]
+    WrongType(std::path::PathBuf),
+    /// Owned by another user than this process's effective user.
+    #[error(
+        "{} belongs to user {owner}, not to this process's user {euid}: refusing it",
+        path.display()
+    )]
+    Owner {
+        /// The folder or file.
+        path: std::path::PathBuf,
+        /// Its owner.
+        owner: u32,
+        /// This process's effective user id.
+        euid: u32,
+    },
+    /// A run folder whose mode is not exactly 0700.
+    #[error(
+        "{} has mode {mode:04o}, not 0700 (other users could reach the run's files): refusing it",
+        path.display()
+    )]
+    Mode {
+        /// The folder.
+        path: std::path::PathBuf,
+        /// Its permission bits.
+        mode: u32,
+    },
+    /// The file system refused an operation.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The folder or file.
+        path: std::path::PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+}
+
+/// This process's effective user id.
+pub fn effective_uid() -> u32 {
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    unsafe { libc::geteuid() }
+}
+
+/// Check that `path` is a run folder no other user can reach: a directory, not a symbolic
+/// link (lstat), owned by this process's effective user, mode exactly 0700. Every agent
+/// checks it before it opens anything. Checking the path and then using it is safe here:
+/// /dev/shm is sticky, so only the folder's owner (this user) can rename or remove it.
+pub fn check_run_root(path: &std::path::Path) -> Result<(), RunFilesError> {
+    use std::os::unix::fs::MetadataExt;
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(meta) => meta,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(RunFilesError::Missing(path.to_path_buf()));
+        }
+        Err(source) => {
+            return Err(RunFilesError::Io {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+    };
+    if !meta.file_type().is_dir() {
+        return Err(RunFilesError::WrongType(path.to_path_buf()));
+    }
+    let euid = effective_uid();
+    if meta.uid() != euid {
+        return Err(RunFilesError::Owner {
+            path: path.to_path_buf(),
+            owner: meta.uid(),
+            euid,
+        });
+    }
+    let mode = meta.mode() & 0o7777;
+    if mode != 0o700 {
+        return Err(RunFilesError::Mode {
+            path: path.to_path_buf(),
+            mode,
+        });
+    }
+    Ok(())
+}
+
+/// The run folder ([`run_root`]) as the coordinator makes it, before anything else of the
+/// run (before its iceoryx2 node): exclusively, so a folder that is already there (made by
+/// someone else, or a leftover) is refused and left alone; mode 0700; then checked
+/// ([`check_run_root`]). Dropping it removes the folder and everything in it (removing
+/// it earlier with [`remove_run_root`] is fine). Where there is no /dev/shm there is no
+/// folder (iceoryx2's default root is used, shared with other users).
+#[derive(Debug)]
+pub struct RunRoot {
+    path: Option<std::path::PathBuf>,
+}
+
+impl RunRoot {
+    /// Make run `prefix`'s folder.
+    pub fn create(prefix: &str) -> Result<Self, RunFilesError> {
+        use std::os::unix::fs::{DirBuilderExt, PermissionsExt};
+        let Some(path) = run_root(prefix) else {
+            return Ok(Self { path: None });
+        };
+        if let Err(source) = std::fs::DirBuilder::new().mode(0o700).create(&path) {
+            return Err(if source.kind() == std::io::ErrorKind::AlreadyExists {
+                RunFilesError::Exists(path)
+            } else {
+                RunFilesError::Io { path, source }
+            });
+        }
+        // Ours from here on: dropping `root` removes it, whatever fails below.
+        let root = Self {
+            path: Some(path.clone()),
+        };
+        // The umask may have taken bits off 0700.
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o700)).map_err(
+            |source| RunFilesError::Io {
+                path: path.clone(),
+                source,
+            },
+        )?;
+        check_run_root(&path)?;
+        Ok(root)
+    }
+
+    /// The folder (`None` where there is no /dev/shm).
+    pub fn path(&self) -> Option<&std::path::Path> {
+        self.path.as_deref()
+    }
+}
+
+impl Drop for RunRoot {
+    fn drop(&mut self) {
+        if let Some(path) = &self.path
+            && let Err(e) = std::fs::remove_dir_all(path)
+            && e.kind() != std::io::ErrorKind::NotFound
+        {
+            tracing::warn!("removing the run folder {}: {e}", path.display());
+        }
+    }
+}
+
+/// The files of run `prefix` directly in /dev/shm (not in its folder), with their
+/// metadata (lstat): iceoryx2's shared-memory segments, which `shm_open` puts there
+/// whatever the configured root.
+pub fn run_files_in_shm(prefix: &str) -> Vec<(std::path::PathBuf, std::fs::Metadata)> {
+    let root = run_root(prefix);
+    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with(prefix))
+        .filter(|e| Some(e.path()) != root)
+        .filter_map(|e| Some((e.path(), std::fs::symlink_metadata(e.path()).ok()?)))
+        .collect()
+}
+
+/// Take group and other permissions off every file of run `prefix` in /dev/shm
+/// ([`run_files_in_shm`]); returns how many were changed. iceoryx2 0.10 makes the
+/// management segment (`<prefix>node.<version>.global_mgmt`) there readable and writable
+/// by everyone (`enable_global_access`, 0666); its other segments are 0600 already. Call
+/// it right after the coordinator's node is made (that makes the segment), before any
+/// agent starts. A file of the run that is not this user's, or not a regular file, is an
+/// error: someone else made it.
+///
+/// Limit: between iceoryx2's `fchmod(0666)` and this call, a process of another user that
+/// watches /dev/shm could open the segment and keep it open. It could then change the
+/// counter iceoryx2 numbers the run's nodes with (so that an agent's node might fail to
+/// start: a denial of service), but not read or write the run's data: the services'
+/// segments are 0600 from their creation.
+pub fn make_run_files_private(prefix: &str) -> Result<usize, RunFilesError> {
+    use std::os::unix::fs::{MetadataExt, PermissionsExt};
+    let euid = effective_uid();
+    let mut changed = 0;
+    for (path, meta) in run_files_in_shm(prefix) {
+        if meta.uid() != euid {
+            return Err(RunFilesError::Owner {
+                path,
+                owner: meta.uid(),
+                euid,
+            });
+        }
+        if !meta.file_type().is_file() {
+            return Err(RunFilesError::WrongType(path));
+        }
+        let mode = meta.mode() & 0o7777;
+        if mode & 0o077 != 0 {
+            // By path, not by descriptor: the file is this user's in the sticky /dev/shm,
+            // so no one else can swap it meanwhile.
+            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode & 0o700))
+                .map_err(|source| RunFilesError::Io {
+                    path: path.clone(),
+                    source,
+                })?;
+            changed += 1;
+        }
+    }
+    Ok(changed)
 }
 
 /// Benchmark floor (`coordinator bench`): coordinator to ping-pong process, one small
@@ -698,6 +1004,175 @@ mod tests {
         }
         if let Some(root) = run_root("fc123_4_") {
             assert_eq!(root, std::path::Path::new("/dev/shm/fc123_4_iox2"));
+        }
+    }
+
+    #[test]
+    fn two_run_prefixes_differ_in_their_random_part_and_parse_back_to_the_pid() {
+        let a = RunPrefix::new_random().expect("OS random source");
+        let b = RunPrefix::new_random().expect("OS random source");
+        let head = format!("fc{}x", std::process::id());
+        let random_part = |p: &RunPrefix| {
+            let s = p.as_str();
+            s[head.len()..s.len() - 1].to_string()
+        };
+        for p in [&a, &b] {
+            assert!(p.as_str().starts_with(&head), "{p}");
+            assert!(p.as_str().ends_with('_'), "{p}");
+            assert!(p.as_str().len() <= MAX_PREFIX_LEN, "{p}");
+            assert!(ipc_config(p.as_str(), Role::Coordinator).is_ok(), "{p}");
+            assert_eq!(p.pid(), std::process::id());
+            assert_eq!(RunPrefix::parse(p.as_str()).as_ref(), Some(p));
+            let file = format!("{p}node.0_10_0.global_mgmt");
+            assert_eq!(RunPrefix::parse(&file).as_ref(), Some(p), "{file}");
+            // At least 10 hex digits (40 bits), 13 for the usual pids of up to 7 digits.
+            assert!(random_part(p).len() >= 10, "{p}");
+        }
+        assert_ne!(random_part(&a), random_part(&b));
+        // The longest pid still leaves 10 random digits within the limit.
+        let long = RunPrefix::with_random(u32::MAX, 0x0123_4567_89ab_cdef);
+        assert_eq!(long.as_str(), "fc4294967295x0123456789_");
+        assert_eq!(RunPrefix::parse(long.as_str()), Some(long));
+        // A prefix of an earlier version (a decimal counter) is still recognised.
+        let old = RunPrefix::parse("fc123x4_iox2").expect("old format");
+        assert_eq!((old.as_str(), old.pid()), ("fc123x4_", 123));
+        for bad in [
+            "",
+            "fc",
+            "fcx1_",
+            "fc12x_",
+            "fc12x12",
+            "fc0x1_",
+            "fc12xg_",
+            "fc12X1_",
+            "fc12x0123456789abcdef0_",
+            "fc12345678901x1_",
+            "xfc12x1_",
+            "fc4294967296x1_",
+        ] {
+            assert_eq!(RunPrefix::parse(bad), None, "{bad:?}");
+        }
+    }
+
+    /// A fresh prefix whose folder and files no run uses, for the file tests below.
+    fn test_prefix() -> Option<RunPrefix> {
+        let p = RunPrefix::new_random().expect("OS random source");
+        run_root(p.as_str()).map(|_| p)
+    }
+
+    #[test]
+    fn a_new_run_folder_is_private_and_goes_with_its_guard() {
+        use std::os::unix::fs::MetadataExt;
+        let Some(prefix) = test_prefix() else { return };
+        let root = RunRoot::create(prefix.as_str()).expect("run folder");
+        let path = root.path().expect("a folder on /dev/shm").to_path_buf();
+        let meta = std::fs::symlink_metadata(&path).expect("made");
+        assert!(meta.is_dir());
+        assert_eq!(meta.mode() & 0o7777, 0o700);
+        assert_eq!(meta.uid(), effective_uid());
+        check_run_root(&path).expect("passes its own check");
+        std::fs::write(path.join("inside"), b"x").expect("usable");
+        drop(root);
+        assert!(!path.exists(), "the guard removes the folder");
+    }
+
+    #[test]
+    fn a_run_folder_that_already_exists_is_refused_and_left_alone() {
+        use std::os::unix::fs::DirBuilderExt;
+        let Some(prefix) = test_prefix() else { return };
+        let path = run_root(prefix.as_str()).expect("a folder on /dev/shm");
+        std::fs::DirBuilder::new()
+            .mode(0o700)
+            .create(&path)
+            .expect("squat");
+        std::fs::write(path.join("theirs"), b"x").expect("a file in it");
+        let err = RunRoot::create(prefix.as_str()).expect_err("an existing folder");
+        assert!(matches!(err, RunFilesError::Exists(_)), "{err:?}");
+        assert!(
+            err.to_string().contains(&path.display().to_string()),
+            "{err}"
+        );
+        assert!(path.join("theirs").exists(), "nothing of it deleted");
+        std::fs::remove_dir_all(&path).expect("clean up");
+    }
+
+    #[test]
+    fn a_run_folder_others_could_reach_or_that_is_a_link_is_refused() {
+        use std::os::unix::fs::{DirBuilderExt, PermissionsExt};
+        let Some(prefix) = test_prefix() else { return };
+        let path = run_root(prefix.as_str()).expect("a folder on /dev/shm");
+        assert!(matches!(
+            check_run_root(&path),
+            Err(RunFilesError::Missing(_))
+        ));
+        std::fs::DirBuilder::new()
+            .mode(0o700)
+            .create(&path)
+            .expect("folder");
+        for mode in [0o777, 0o750, 0o701, 0o1700, 0o500] {
+            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).expect("chmod");
+            let err = check_run_root(&path).expect_err("not 0700");
+            assert!(
+                matches!(err, RunFilesError::Mode { mode: m, .. } if m == mode),
+                "{err:?}"
+            );
+            assert!(err.to_string().contains(&path.display().to_string()));
+        }
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o700)).expect("chmod");
+        check_run_root(&path).expect("0700");
+        // Another user's folder, 0700 or not, is refused (only root can make one here).
+        if effective_uid() == 0 {
+            std::os::unix::fs::chown(&path, Some(65534), None).expect("chown");
+            let err = check_run_root(&path).expect_err("not ours");
+            assert!(
+                matches!(
+                    err,
+                    RunFilesError::Owner {
+                        owner: 65534,
+                        euid: 0,
+                        ..
+                    }
+                ),
+                "{err:?}"
+            );
+            std::os::unix::fs::chown(&path, Some(0), None).expect("chown back");
+        }
+        // A link to a good folder is still refused: it is not the folder.
+        let link = std::path::PathBuf::from(format!("{}link", path.display()));
+        std::os::unix::fs::symlink(&path, &link).expect("symlink");
+        assert!(matches!(
+            check_run_root(&link),
+            Err(RunFilesError::WrongType(_))
+        ));
+        std::fs::remove_file(&link).expect("clean up");
+        std::fs::remove_dir_all(&path).expect("clean up");
+    }
+
+    #[test]
+    fn the_run_files_in_dev_shm_are_made_private_and_foreign_ones_refused() {
+        use std::os::unix::fs::{MetadataExt, PermissionsExt};
+        let Some(prefix) = test_prefix() else { return };
+        let mgmt = std::path::PathBuf::from(format!("/dev/shm/{prefix}node.global_mgmt"));
+        let data = std::path::PathBuf::from(format!("/dev/shm/{prefix}data"));
+        for (file, mode) in [(&mgmt, 0o666), (&data, 0o600)] {
+            std::fs::write(file, b"x").expect("file");
+            std::fs::set_permissions(file, std::fs::Permissions::from_mode(mode)).expect("chmod");
+        }
+        assert_eq!(run_files_in_shm(prefix.as_str()).len(), 2);
+        assert_eq!(make_run_files_private(prefix.as_str()).expect("private"), 1);
+        for file in [&mgmt, &data] {
+            let mode = std::fs::metadata(file).expect("file").mode();
+            assert_eq!(mode & 0o777, 0o600, "{}", file.display());
+        }
+        // A symbolic link among them is not followed but refused.
+        let link = std::path::PathBuf::from(format!("/dev/shm/{prefix}link"));
+        std::os::unix::fs::symlink(&data, &link).expect("symlink");
+        assert!(matches!(
+            make_run_files_private(prefix.as_str()),
+            Err(RunFilesError::WrongType(_))
+        ));
+        for file in [&mgmt, &data, &link] {
+            std::fs::remove_file(file).expect("clean up");
         }
     }
 

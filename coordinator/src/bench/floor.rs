@@ -132,14 +132,21 @@ pub struct PingPongSession {
     node: Option<Node<ipc::Service>>,
     seq: u64,
     closed: bool,
+    /// The session's private folder (last: removed after everything else).
+    _root: wire::RunRoot,
 }
 
 impl PingPongSession {
     /// Start the ping-pong process from `bin` and shake hands over both channels.
     pub fn start(bin: &Path) -> anyhow::Result<Self> {
-        let prefix = unique_prefix();
+        let prefix = unique_prefix()?;
         let config = wire::ipc_config(&prefix, Role::Coordinator)?;
-        let socket_path = std::env::temp_dir().join(format!("{prefix}pingpong.sock"));
+        let root = wire::RunRoot::create(&prefix)?;
+        // In the private folder: no other user can connect to the socket.
+        let socket_path = match root.path() {
+            Some(folder) => folder.join("pingpong.sock"),
+            None => std::env::temp_dir().join(format!("{prefix}pingpong.sock")),
+        };
         let mut session = Self {
             procs: AgentProcesses::new(bin.to_path_buf(), &prefix, 1),
             prefix,
@@ -150,6 +157,7 @@ impl PingPongSession {
             node: None,
             seq: 0,
             closed: false,
+            _root: root,
         };
         session.connect()?;
         Ok(session)
@@ -166,6 +174,8 @@ impl PingPongSession {
             .config(&self.config)
             .create::<ipc::Service>()
             .map_err(|e| anyhow!("creating the floor's node: {e:?}"))?;
+        // The management segment it made in /dev/shm is open to everyone: make it private.
+        wire::make_run_files_private(&self.prefix)?;
         // iceoryx2's signal handlers: Ctrl-C interrupts the waits below.
         let _ = node.wait(Duration::ZERO);
         let ports = Ports::create(&node)?;
