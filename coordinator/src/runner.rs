@@ -18,6 +18,7 @@
 //!   between turns, is `unsolicited` and changes nothing;
 //! - an agent that exits, fails its handshake or never sends one is `failed-to-start`
 //!   and frozen where it starts (or replaced, with `respawn`); the run goes on.
+//!
 //! If the coordinator itself fails (an error or a panic), its agents are still stopped,
 //! the run's shared memory is still removed, and the steps completed so far are returned
 //! in [`RunFailure::partial`].
@@ -226,7 +227,7 @@ pub fn run_scenario_with(
     crate::ipc::clean_stale_runs();
     let prefix = match unique_prefix() {
         Ok(prefix) => prefix,
-        Err(e) => return Err(fail(e.into(), &recorder, progress)),
+        Err(e) => return Err(fail(e, &recorder, progress)),
     };
     // The run's private folder, made before anything else of the run (a folder already
     // there is refused); dropped last: after the agents and the node.
