@@ -49,12 +49,12 @@
 
 use std::cmp::Ordering;
 use std::f64::consts::TAU;
-use std::ops::{Add, ControlFlow};
+use std::ops::ControlFlow;
 
 use pathfinding::directed::astar::astar;
-use pathfinding::num_traits::Zero;
 
 use crate::geometry::{Disk, Field, FreeSpace, Point, Vector};
+use crate::ordered::TotalF64;
 
 /// How far inside a disk (or outside the field) a start, a goal or any point of a path may
 /// be, in metres.
@@ -618,46 +618,6 @@ fn candidate_disks(space: &FreeSpace, s: &Point, t: &Point, limit_m: f64) -> Vec
     out
 }
 
-/// A path cost with a total order, for [`astar`].
-#[derive(Clone, Copy, Debug)]
-struct Cost(f64);
-
-impl PartialEq for Cost {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-
-impl Eq for Cost {}
-
-impl PartialOrd for Cost {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Cost {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.0.total_cmp(&other.0)
-    }
-}
-
-impl Add for Cost {
-    type Output = Self;
-    fn add(self, other: Self) -> Self {
-        Self(self.0 + other.0)
-    }
-}
-
-impl Zero for Cost {
-    fn zero() -> Self {
-        Self(0.0)
-    }
-    fn is_zero(&self) -> bool {
-        self.0 == 0.0
-    }
-}
-
 /// Circle id of the start point in a [`NodeKey`].
 const START: u32 = u32::MAX - 1;
 /// Circle id of the goal point in a [`NodeKey`].
@@ -882,13 +842,13 @@ impl<'a, 's> Planner<'a, 's> {
         }
     }
 
-    fn search(&mut self) -> Option<(Vec<Node>, Cost)> {
+    fn search(&mut self) -> Option<(Vec<Node>, TotalF64)> {
         let start = self.start_node();
         let goal = self.to;
         astar(
             &start,
             |node| self.successors(node),
-            |node| Cost((goal - node.point).norm()),
+            |node| TotalF64((goal - node.point).norm()),
             |node| node.key.to == GOAL,
         )
     }
@@ -974,7 +934,7 @@ impl<'a, 's> Planner<'a, 's> {
         })
     }
 
-    fn successors(&mut self, node: &Node) -> Vec<(Node, Cost)> {
+    fn successors(&mut self, node: &Node) -> Vec<(Node, TotalF64)> {
         let mut out = Vec::new();
         let on_circle = node.key.to != START;
         let (extent_rad, radius_m) = if on_circle {
@@ -1015,7 +975,7 @@ impl<'a, 's> Planner<'a, 's> {
                         point: edge.arrive,
                         angle_rad: edge.arrive_angle_rad,
                     },
-                    Cost(cost),
+                    TotalF64(cost),
                 ));
             }
         }
@@ -1038,7 +998,7 @@ impl<'a, 's> Planner<'a, 's> {
                         point: self.to,
                         angle_rad: 0.0,
                     },
-                    Cost(cost),
+                    TotalF64(cost),
                 ));
             }
         }

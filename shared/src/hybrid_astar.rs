@@ -32,7 +32,7 @@
 //! The search is deterministic: no hash-map iteration, and the open list breaks ties on
 //! cost then on insertion order.
 
-use std::cmp::Ordering;
+use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
 use std::f64::consts::{FRAC_PI_2, PI, SQRT_2, TAU};
 use std::hash::{BuildHasherDefault, Hasher};
@@ -44,6 +44,7 @@ use crate::dubins;
 use crate::geometry::{
     Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment, wrap_angle_rad,
 };
+use crate::ordered::TotalF64;
 use crate::reeds_shepp::{self, CurvePath, Steer};
 
 /// Settings of the Hybrid A* search. [`HybridAStarSettings::new`] gives sensible defaults
@@ -1001,32 +1002,22 @@ struct Node {
 }
 
 /// An entry of the open list: lowest `f` first, then highest `g` (deeper), then oldest.
-#[derive(Clone, Copy, Debug)]
+/// `BinaryHeap` pops the greatest, so `f` and the node index are reversed; the fields
+/// compare in this order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 struct Entry {
-    f_m: f64,
-    g_m: f64,
-    node: u32,
+    f_m: Reverse<TotalF64>,
+    g_m: TotalF64,
+    node: Reverse<u32>,
 }
 
-impl PartialEq for Entry {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-impl Eq for Entry {}
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        // BinaryHeap pops the greatest: invert f and the node index.
-        other
-            .f_m
-            .total_cmp(&self.f_m)
-            .then(self.g_m.total_cmp(&other.g_m))
-            .then(other.node.cmp(&self.node))
+impl Entry {
+    fn new(f_m: f64, g_m: f64, node: u32) -> Self {
+        Self {
+            f_m: Reverse(TotalF64(f_m)),
+            g_m: TotalF64(g_m),
+            node: Reverse(node),
+        }
     }
 }
 
@@ -1132,11 +1123,7 @@ impl<'a> Search<'a> {
         });
         let start_key = self.cell_key(&self.start);
         self.cells.insert(start_key, 0);
-        self.open.push(Entry {
-            f_m: h_m,
-            g_m: 0.0,
-            node: 0,
-        });
+        self.open.push(Entry::new(h_m, 0.0, 0));
 
         let cell_m = self.settings.cell_m;
         let ratio = self.settings.analytic_expansion_ratio;
@@ -1146,10 +1133,15 @@ impl<'a> Search<'a> {
         let mut expansions = 0usize;
         let mut analytic_attempts = 1usize;
 
-        while let Some(entry) = self.open.pop() {
-            let index = entry.node as usize;
+        while let Some(Entry {
+            f_m: Reverse(TotalF64(entry_f_m)),
+            g_m: TotalF64(entry_g_m),
+            node: Reverse(index),
+        }) = self.open.pop()
+        {
+            let index = index as usize;
             let node = self.nodes[index];
-            if node.closed || node.g_m != entry.g_m {
+            if node.closed || node.g_m != entry_g_m {
                 continue; // stale entry
             }
             if expansions >= self.settings.max_expansions {
@@ -1159,7 +1151,7 @@ impl<'a> Search<'a> {
             expansions += 1;
 
             // Analytic expansion, more often as the search closes in (Smac's schedule).
-            let h_m = entry.f_m - entry.g_m;
+            let h_m = entry_f_m - entry_g_m;
             closest_cells = closest_cells.min(h_m / cell_m);
             let desired = (closest_cells / ratio).floor().max(ratio.ceil()) as i64;
             countdown = countdown.min(desired);
@@ -1234,11 +1226,7 @@ impl<'a> Search<'a> {
                         slot
                     }
                 };
-                self.open.push(Entry {
-                    f_m: g_m + h_m,
-                    g_m,
-                    node: slot,
-                });
+                self.open.push(Entry::new(g_m + h_m, g_m, slot));
             }
         }
         Err(PlanError::NoPath)

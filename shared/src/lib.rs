@@ -24,6 +24,7 @@ pub mod formation;
 pub mod geometry;
 pub mod hybrid_astar;
 pub mod misbehave;
+mod ordered;
 pub mod reeds_shepp;
 pub mod run;
 pub mod safety;
