@@ -10,13 +10,13 @@
 //!   circles), useful only when the poses are close.
 //!
 //! All six are evaluated in closed form (Shkel & Lumelsky 2001) and the shortest is kept.
-//! Paths are [`CurvePath`]s from [`crate::reeds_shepp`] whose segment lengths are all
+//! Paths are [`CurvePath`]s (module [`crate::curve`]) whose segment lengths are all
 //! non-negative. Hybrid A* uses these when reversing is not allowed.
 
 use std::f64::consts::TAU;
 
+use crate::curve::{CurvePath, Segment, Steer, check_turning_radius, scaled_segment};
 use crate::geometry::Pose;
-use crate::reeds_shepp::{CurvePath, Segment, Steer, scaled_segment};
 
 /// The shortest forward-only path from `from` to `to` for turning radius `turning_radius_m`.
 ///
@@ -59,14 +59,6 @@ pub fn shortest_path(from: &Pose, to: &Pose, turning_radius_m: f64) -> CurvePath
 pub fn shortest_length_m(from: &Pose, to: &Pose, turning_radius_m: f64) -> f64 {
     check_turning_radius(turning_radius_m);
     solve(from, to, turning_radius_m).map_or(f64::NAN, |word| word.total * turning_radius_m)
-}
-
-/// Asserts the turning radius contract of the public entry points.
-fn check_turning_radius(turning_radius_m: f64) {
-    assert!(
-        turning_radius_m > 0.0 && turning_radius_m.is_finite(),
-        "turning radius must be finite and > 0 m, got {turning_radius_m}"
-    );
 }
 
 /// Angles this close below a full turn are snapped to zero.

@@ -40,12 +40,13 @@ use std::ops::ControlFlow;
 
 use pathfinding::directed::dijkstra::{DijkstraReachable, dijkstra_reach};
 
+use crate::curve::{CurvePath, Steer};
 use crate::dubins;
 use crate::geometry::{
     Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment, wrap_angle_rad,
 };
 use crate::ordered::TotalF64;
-use crate::reeds_shepp::{self, CurvePath, Steer};
+use crate::reeds_shepp;
 
 /// Settings of the Hybrid A* search. [`HybridAStarSettings::new`] gives sensible defaults
 /// for a turning radius and a clearance; every field may then be tuned.

@@ -5,7 +5,8 @@
 //! - [`formation`]: ideal slots (the paper's equation 2);
 //! - [`best_point`]: the exact best point (Theorem 1) with reachability;
 //! - [`disk_path`]: shortest collision-free path for a point among disks;
-//! - [`reeds_shepp`] and [`dubins`]: shortest curvature-bounded paths between poses;
+//! - [`curve`]: curvature-bounded paths (arcs and lines) between poses;
+//! - [`reeds_shepp`] and [`dubins`]: the shortest such paths;
 //! - [`hybrid_astar`]: the formation centre's planner;
 //! - [`scenario`]: the TOML scenario model and its validation;
 //! - [`turn`]: one agent's turn (slot, best point, path), shared by simulation and agents;
@@ -18,6 +19,7 @@
 pub mod best_point;
 pub mod cbf;
 pub mod clcbs;
+pub mod curve;
 pub mod disk_path;
 pub mod dubins;
 pub mod formation;

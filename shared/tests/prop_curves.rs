@@ -3,8 +3,8 @@
 use std::f64::consts::{FRAC_PI_4, PI, TAU};
 
 use proptest::prelude::*;
+use shared::curve::{CurvePath, Steer};
 use shared::geometry::Pose;
-use shared::reeds_shepp::{CurvePath, Steer};
 use shared::{dubins, reeds_shepp};
 
 /// Relative tolerance for comparing lengths.
