@@ -16,6 +16,8 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
 use shared::disk_path::{PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
@@ -29,20 +31,6 @@ const DISK_RADIUS_M: f64 = 1.3;
 /// Queries per kind, cycled through by the benchmark loop.
 const QUERY_COUNT: usize = 1024;
 
-/// A seeded splitmix64 generator: reproducible fields without a `rand` dependency.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A uniform number in `[0, 1)`.
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / (u64::MAX as f64 + 1.0)
-    }
-}
-
 /// A field of `count` disks, queries inside disks, and free queries.
 struct Workload {
     field: Field,
@@ -52,17 +40,23 @@ struct Workload {
 }
 
 fn workload(count: usize, side_m: f64, seed: u64) -> Workload {
-    let mut rng = SplitMix64(seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let field = Field::new(side_m, side_m);
     let disks: Vec<Disk> = (0..count)
-        .map(|_| Disk::new(rng.unit() * side_m, rng.unit() * side_m, DISK_RADIUS_M))
+        .map(|_| {
+            Disk::new(
+                rng.random::<f64>() * side_m,
+                rng.random::<f64>() * side_m,
+                DISK_RADIUS_M,
+            )
+        })
         .collect();
     let inside_queries = (0..QUERY_COUNT)
         .map(|_| {
-            let disk = disks[(rng.unit() * count as f64) as usize % count];
+            let disk = disks[rng.random_range(0..count)];
             // Uniform over the disk area.
-            let r = DISK_RADIUS_M * rng.unit().sqrt();
-            let a = std::f64::consts::TAU * rng.unit();
+            let r = DISK_RADIUS_M * rng.random::<f64>().sqrt();
+            let a = std::f64::consts::TAU * rng.random::<f64>();
             disk.center + r * Vector::new(a.cos(), a.sin())
         })
         .collect();
@@ -72,7 +66,7 @@ fn workload(count: usize, side_m: f64, seed: u64) -> Workload {
         let layers = [&grid];
         let space = FreeSpace::new(field, &layers);
         while free_queries.len() < QUERY_COUNT {
-            let p = Point::new(rng.unit() * side_m, rng.unit() * side_m);
+            let p = Point::new(rng.random::<f64>() * side_m, rng.random::<f64>() * side_m);
             if space.is_free(&p, 0.0) {
                 free_queries.push(p);
             }

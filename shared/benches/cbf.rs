@@ -8,6 +8,8 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use shared::cbf::{CbfPlanner, CbfSettings, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, Field, Point, Pose, Vector};
@@ -18,20 +20,6 @@ use shared::turn::Body;
 const QUERY_COUNT: usize = 256;
 const AGENT_RADIUS_M: f64 = 0.3;
 
-/// A seeded splitmix64 generator: reproducible fields without a `rand` dependency.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    /// A uniform number in `[0, 1)`.
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / (u64::MAX as f64 + 1.0)
-    }
-}
-
 /// One turn's inputs: position, centre (= slot), other agents.
 struct Query {
     me: Point,
@@ -40,10 +28,16 @@ struct Query {
 }
 
 fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
-    let mut rng = SplitMix64(seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let field = Field::new(100.0, 100.0);
     let obstacles: Vec<Disk> = (0..count)
-        .map(|_| Disk::new(rng.unit() * 100.0, rng.unit() * 100.0, 0.5 + rng.unit()))
+        .map(|_| {
+            Disk::new(
+                rng.random::<f64>() * 100.0,
+                rng.random::<f64>() * 100.0,
+                0.5 + rng.random::<f64>(),
+            )
+        })
         .collect();
     let spec = AgentSpec {
         slot: Slot::new(0.0, 0.0),
@@ -62,17 +56,24 @@ fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
     };
     let mut queries = Vec::with_capacity(QUERY_COUNT);
     while queries.len() < QUERY_COUNT {
-        let me = Point::new(5.0 + rng.unit() * 90.0, 5.0 + rng.unit() * 90.0);
+        let me = Point::new(
+            5.0 + rng.random::<f64>() * 90.0,
+            5.0 + rng.random::<f64>() * 90.0,
+        );
         let others: Vec<Body> = (0..5)
             .map(|_| Body {
-                position: me + Vector::new(rng.unit() * 8.0 - 4.0, rng.unit() * 8.0 - 4.0),
+                position: me
+                    + Vector::new(
+                        rng.random::<f64>() * 8.0 - 4.0,
+                        rng.random::<f64>() * 8.0 - 4.0,
+                    ),
                 radius_m: AGENT_RADIUS_M,
             })
             .collect();
         if !free(&me, &others) {
             continue;
         }
-        let angle = rng.unit() * std::f64::consts::TAU;
+        let angle = rng.random::<f64>() * std::f64::consts::TAU;
         let slot = me + 3.0 * Vector::new(angle.cos(), angle.sin());
         queries.push(Query {
             me,

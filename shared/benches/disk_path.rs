@@ -8,22 +8,10 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use shared::disk_path::{PathError, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
-
-/// SplitMix64: a small seeded generator, enough for benchmark inputs.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next_unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 const RADIUS_M: f64 = 1.3;
 /// Field area per obstacle, in square metres (about 15 % covered).
@@ -38,11 +26,17 @@ struct Scene {
 }
 
 fn scene(obstacles: usize, seed: u64) -> Scene {
-    let mut rng = SplitMix(seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let side_m = (obstacles as f64 * AREA_PER_OBSTACLE_M2).sqrt();
     let field = Field::new(side_m, side_m);
     let disks = (0..obstacles)
-        .map(|_| Disk::new(rng.next_unit() * side_m, rng.next_unit() * side_m, RADIUS_M))
+        .map(|_| {
+            Disk::new(
+                rng.random::<f64>() * side_m,
+                rng.random::<f64>() * side_m,
+                RADIUS_M,
+            )
+        })
         .collect();
     let grid = DiskGrid::new(disks);
     let (mut visible, mut blocked) = (Vec::new(), Vec::new());
@@ -50,9 +44,9 @@ fn scene(obstacles: usize, seed: u64) -> Scene {
         let layers = [&grid];
         let space = FreeSpace::new(field, &layers);
         while visible.len() < MOVES_PER_KIND || blocked.len() < MOVES_PER_KIND {
-            let start = Point::new(rng.next_unit() * side_m, rng.next_unit() * side_m);
-            let angle = rng.next_unit() * std::f64::consts::TAU;
-            let dist_m = 0.5 + 4.5 * rng.next_unit();
+            let start = Point::new(rng.random::<f64>() * side_m, rng.random::<f64>() * side_m);
+            let angle = rng.random::<f64>() * std::f64::consts::TAU;
+            let dist_m = 0.5 + 4.5 * rng.random::<f64>();
             let goal = start + dist_m * nalgebra::Vector2::new(angle.cos(), angle.sin());
             if !space.is_free(&start, 0.0) || !space.is_free(&goal, 0.0) {
                 continue;

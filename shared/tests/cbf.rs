@@ -2,6 +2,8 @@
 //! the paper's failed LogSumExp barrier breaking the invariant where the CBF does not,
 //! and bit-for-bit determinism.
 
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use shared::cbf::{
     CbfPlanner, CbfSettings, DEFAULT_LSE_SHARPNESS_PER_M, ZcbfLogSumExpPlanner, is_deadlocked,
     solve_qp_2d,
@@ -191,25 +193,12 @@ fn the_logsumexp_barrier_overshoots_into_an_obstacle_where_the_cbf_does_not() {
     assert!(h < 0.0, "the barrier overshot zero: h = {h}");
 }
 
-/// A seeded splitmix64 generator, for reproducible random fields.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / (u64::MAX as f64 + 1.0)
-    }
-}
-
 /// How often the comparison sees it: agents cross random obstacle fields towards random
 /// slots, each planner in a plain stepping loop; the LogSumExp barrier breaks the
 /// invariant on some runs, the CBF on none.
 #[test]
 fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
-    let mut rng = SplitMix64(0xcbf);
+    let mut rng = ChaCha8Rng::seed_from_u64(0xcbf);
     let field = Field::new(30.0, 20.0);
     let radius_m = 0.3;
     let settings = CbfSettings::default();
@@ -218,9 +207,9 @@ fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
         let obstacles: Vec<Disk> = (0..25)
             .map(|_| {
                 Disk::new(
-                    4.0 + 22.0 * rng.unit(),
-                    2.0 + 16.0 * rng.unit(),
-                    0.5 + rng.unit(),
+                    4.0 + 22.0 * rng.random::<f64>(),
+                    2.0 + 16.0 * rng.random::<f64>(),
+                    0.5 + rng.random::<f64>(),
                 )
             })
             .collect();
@@ -229,8 +218,8 @@ fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
                 .iter()
                 .all(|d| (p - d.center).norm() >= d.radius_m + radius_m + 0.01)
         };
-        let start = Point::new(2.5, 3.0 + 14.0 * rng.unit());
-        let slot = Point::new(29.0, 2.0 + 16.0 * rng.unit());
+        let start = Point::new(2.5, 3.0 + 14.0 * rng.random::<f64>());
+        let slot = Point::new(29.0, 2.0 + 16.0 * rng.random::<f64>());
         if !free(&start) {
             continue;
         }
@@ -275,7 +264,7 @@ fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
 /// The failure needs two or more neighbours.
 #[test]
 fn with_a_single_neighbour_the_logsumexp_barrier_is_safe() {
-    let mut rng = SplitMix64(0x5afe);
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5afe);
     let field = Field::new(100.0, 100.0);
     let obstacles = [Disk::new(50.0, 50.0, 1.0)];
     let radius_m = 0.3;
@@ -288,11 +277,11 @@ fn with_a_single_neighbour_the_logsumexp_barrier_is_safe() {
     )
     .unwrap();
     for _ in 0..200 {
-        let angle = std::f64::consts::TAU * rng.unit();
+        let angle = std::f64::consts::TAU * rng.random::<f64>();
         let direction = Vector::new(angle.cos(), angle.sin());
-        let mut me = Point::new(50.0, 50.0) + (1.3 + 3.0 * rng.unit()) * direction;
-        let slot = Point::new(50.0, 50.0) - (1.5 + 3.0 * rng.unit()) * direction
-            + Vector::new(rng.unit() - 0.5, rng.unit() - 0.5);
+        let mut me = Point::new(50.0, 50.0) + (1.3 + 3.0 * rng.random::<f64>()) * direction;
+        let slot = Point::new(50.0, 50.0) - (1.5 + 3.0 * rng.random::<f64>()) * direction
+            + Vector::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5);
         for _ in 0..30 {
             let mv = lse.plan_move(&at(slot), &me, &[]);
             let c = move_clearance_m(&field, &obstacles, &[], radius_m, &mv);

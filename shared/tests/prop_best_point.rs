@@ -2,6 +2,8 @@
 //! independently of the grid index.
 
 use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use shared::best_point::{BestPointError, nearest_free_point, nearest_reachable_free_point};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Vector};
 
@@ -125,20 +127,12 @@ fn is_feasible_brute_force(scene: &Scene, p: &Point) -> bool {
 /// Points to compare the result with: uniform points over the field, the corners, and a
 /// fine polar grid around the query out to `radius_m`.
 fn sample_points(scene: &Scene, radius_m: f64) -> Vec<Point> {
-    let mut state = scene.sample_seed;
-    let mut unit = move || {
-        // splitmix64
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / u64::MAX as f64
-    };
+    let mut rng = ChaCha8Rng::seed_from_u64(scene.sample_seed);
     let mut points: Vec<Point> = scene.field.corners().to_vec();
     for _ in 0..3000 {
         points.push(Point::new(
-            unit() * scene.field.width_m,
-            unit() * scene.field.height_m,
+            rng.random::<f64>() * scene.field.width_m,
+            rng.random::<f64>() * scene.field.height_m,
         ));
     }
     let (rings, spokes) = (60, 360);

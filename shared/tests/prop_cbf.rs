@@ -9,6 +9,8 @@
 //!   the safety invariant along the whole segment, checked by brute force.
 
 use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use shared::cbf::{CbfPlanner, CbfSettings, HalfPlane, QpError, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
@@ -147,27 +149,6 @@ fn exact_brute_force(u_nom: (i64, i64), rows: &[IntRow]) -> Option<(i128, i128)>
         .min_by(|a, b| (a.0 * b.1).cmp(&(b.0 * a.1)))
 }
 
-/// A seeded splitmix64 generator: the random fields derive from one proptest seed.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) as f64 / (u64::MAX as f64 + 1.0)
-    }
-
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        ((self.unit() * n as f64) as usize).min(n.saturating_sub(1))
-    }
-}
-
 /// A random world with one moving agent in a safe state.
 #[derive(Debug)]
 struct World {
@@ -213,35 +194,36 @@ fn segment_clearance_m(w: &World, a: &Point, b: &Point) -> f64 {
 /// points, and often one touching an obstacle, another agent or an edge exactly. When
 /// the bodies leave no room (rare), they are dropped and the agent starts mid-field.
 fn world(seed: u64) -> World {
-    let mut rng = SplitMix64(seed);
-    let field = Field::new(rng.range(4.0, 40.0), rng.range(4.0, 40.0));
-    let radius_m = rng.range(0.1, 1.0);
-    let obstacles: Vec<Disk> = (0..rng.below(25))
+    // The random fields derive from one proptest seed.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let field = Field::new(rng.random_range(4.0..40.0), rng.random_range(4.0..40.0));
+    let radius_m = rng.random_range(0.1..1.0);
+    let obstacles: Vec<Disk> = (0..rng.random_range(0..25))
         .map(|_| {
             Disk::new(
-                rng.range(0.0, field.width_m),
-                rng.range(0.0, field.height_m),
-                rng.range(0.2, 2.5),
+                rng.random_range(0.0..field.width_m),
+                rng.random_range(0.0..field.height_m),
+                rng.random_range(0.2..2.5),
             )
         })
         .collect();
-    let others: Vec<Body> = (0..rng.below(7))
+    let others: Vec<Body> = (0..rng.random_range(0..7))
         .map(|_| Body {
             position: Point::new(
-                rng.range(0.0, field.width_m),
-                rng.range(0.0, field.height_m),
+                rng.random_range(0.0..field.width_m),
+                rng.random_range(0.0..field.height_m),
             ),
-            radius_m: rng.range(0.1, 1.0),
+            radius_m: rng.random_range(0.1..1.0),
         })
         .collect();
-    let dt_s = rng.range(0.05, 2.0);
-    let max_speed_m_per_s = rng.range(0.1, 4.0);
+    let dt_s = rng.random_range(0.05..2.0);
+    let max_speed_m_per_s = rng.random_range(0.1..4.0);
     let settings = CbfSettings {
-        gamma_per_s: rng.range(0.01, 1.0) / dt_s,
+        gamma_per_s: rng.random_range(0.01..1.0) / dt_s,
         dt_s,
-        gain_per_s: rng.range(0.1, 5.0),
+        gain_per_s: rng.random_range(0.1..5.0),
         max_speed_m_per_s,
-        sensing_radius_m: radius_m + max_speed_m_per_s * dt_s + 1e-5 + rng.range(0.0, 4.0),
+        sensing_radius_m: radius_m + max_speed_m_per_s * dt_s + 1e-5 + rng.random_range(0.0..4.0),
     };
     let mut w = World {
         field,
@@ -252,21 +234,24 @@ fn world(seed: u64) -> World {
         start: Point::origin(),
     };
     for _ in 0..2000 {
-        let angle = rng.range(0.0, std::f64::consts::TAU);
+        let angle = rng.random_range(0.0..std::f64::consts::TAU);
         let towards = Vector::new(angle.cos(), angle.sin());
-        let p = match rng.below(4) {
+        let p = match rng.random_range(0..4) {
             0 if !w.obstacles.is_empty() => {
-                let d = w.obstacles[rng.below(w.obstacles.len())];
+                let d = w.obstacles[rng.random_range(0..w.obstacles.len())];
                 d.center + (d.radius_m + radius_m) * towards
             }
             1 if !w.others.is_empty() => {
-                let o = w.others[rng.below(w.others.len())];
+                let o = w.others[rng.random_range(0..w.others.len())];
                 o.position + (o.radius_m + radius_m) * towards
             }
-            2 => Point::new(radius_m, rng.range(radius_m, field.height_m - radius_m)),
+            2 => Point::new(
+                radius_m,
+                rng.random_range(radius_m..field.height_m - radius_m),
+            ),
             _ => Point::new(
-                rng.range(0.0, field.width_m),
-                rng.range(0.0, field.height_m),
+                rng.random_range(0.0..field.width_m),
+                rng.random_range(0.0..field.height_m),
             ),
         };
         // Safe, as the invariant has it (touching within rounding is safe).
@@ -384,12 +369,12 @@ proptest! {
         let planner = CbfPlanner::new(w.field, &w.obstacles, &spec, w.settings)
             .expect("the settings are valid by construction");
         let grid = DiskGrid::new(w.obstacles.clone());
-        let mut rng = SplitMix64(seed ^ 0xdead_beef);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xdead_beef);
         let mut me = w.start;
         for step in 0..20 {
             let centre = Pose::new(
-                rng.range(-5.0, w.field.width_m + 5.0),
-                rng.range(-5.0, w.field.height_m + 5.0),
+                rng.random_range(-5.0..w.field.width_m + 5.0),
+                rng.random_range(-5.0..w.field.height_m + 5.0),
                 0.0,
             );
             let mv = planner.plan_move(&centre, &me, &w.others);
