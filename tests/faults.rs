@@ -11,6 +11,8 @@ use std::time::{Duration, Instant};
 
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use support::{
     agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, prefix_stem, run_to_end,
     summary,
@@ -111,22 +113,13 @@ fn every_misbehaviour_is_refused_and_nobody_collides() {
     }
 }
 
-/// A tiny deterministic generator for the randomized trials.
-fn splitmix(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 #[test]
 fn random_agents_killed_at_random_steps_over_twenty_seeds() {
     let mut detections = Vec::new();
     for seed in 0..20u64 {
-        let mut rng = seed;
-        let agent = (splitmix(&mut rng) % 6) as usize;
-        let step = 1 + (splitmix(&mut rng) % 169) as usize;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let agent = rng.random_range(0..6usize);
+        let step = rng.random_range(1..170usize);
         let respawn = seed % 2 == 1;
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
@@ -189,7 +182,7 @@ fn large_scenario() -> PathBuf {
 #[test]
 fn agents_killed_from_outside_at_random_moments_are_survived() {
     for seed in 0..3u64 {
-        let mut rng = 100 + seed;
+        let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
         let scenario = large_scenario();
@@ -198,9 +191,9 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
             .expect("start");
         let pid = child.id();
         wait_for_agents(pid, 64);
-        std::thread::sleep(Duration::from_millis(200 + splitmix(&mut rng) % 1500));
+        std::thread::sleep(Duration::from_millis(rng.random_range(200..1700)));
         let victims = support::processes_mentioning(&format!("--run {}", prefix_stem(pid)));
-        let victim = victims[(splitmix(&mut rng) % victims.len() as u64) as usize];
+        let victim = victims[rng.random_range(0..victims.len())];
         kill(Pid::from_raw(victim as i32), Signal::SIGKILL).expect("kill agent");
         let output = child.wait_with_output().expect("wait");
         assert!(
