@@ -59,6 +59,26 @@ pub enum BestPointError {
 /// [`FEASIBILITY_TOLERANCE_M`]. `query` may lie anywhere, also outside the field or inside
 /// disks. Ties between equally near points are broken deterministically (smallest `x`,
 /// then smallest `y`, among the candidates).
+///
+/// ```
+/// use shared::best_point::nearest_free_point;
+/// use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
+///
+/// let grid = DiskGrid::new(vec![Disk::new(5.0, 5.0, 1.0), Disk::new(9.5, 5.0, 1.0)]);
+/// let layers = [&grid];
+/// let space = FreeSpace::new(Field::new(10.0, 10.0), &layers);
+/// // A free query is its own best point.
+/// let free = Point::new(2.0, 2.0);
+/// assert_eq!(nearest_free_point(&space, &free), Ok(free));
+/// // Inside a disk: the radial projection onto its circle.
+/// let best = nearest_free_point(&space, &Point::new(5.5, 5.0))?;
+/// assert!((best - Point::new(6.0, 5.0)).norm() < 1e-12);
+/// // Outside the field, beside a disk that crosses the edge: the circle meets the edge at
+/// // two points equally near; the tie goes to the smaller `y`.
+/// let best = nearest_free_point(&space, &Point::new(10.5, 5.0))?;
+/// assert!((best - Point::new(10.0, 5.0 - 0.75f64.sqrt())).norm() < 1e-12);
+/// # Ok::<(), shared::best_point::BestPointError>(())
+/// ```
 pub fn nearest_free_point(space: &FreeSpace, query: &Point) -> Result<Point, BestPointError> {
     let mut search = CandidateSearch::new(space, query).ok_or(BestPointError::NoFreePoint)?;
     search
@@ -80,6 +100,38 @@ pub fn nearest_free_point(space: &FreeSpace, query: &Point) -> Result<Point, Bes
 /// When `from` is not free, it is not a fallback: the result is the nearest free
 /// candidate `is_reachable` accepts, or [`BestPointError::NoFreePoint`] when it accepts
 /// none.
+///
+/// ```
+/// use std::f64::consts::{FRAC_PI_4, PI};
+///
+/// use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
+/// use shared::disk_path::PathsFrom;
+/// use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
+///
+/// // Eight overlapping disks ring the slot: the slot is free, but closed off.
+/// let slot = Point::new(5.0, 5.0);
+/// let ring = (0..8)
+///     .map(|k| {
+///         let a = k as f64 * FRAC_PI_4;
+///         Disk::new(5.0 + 2.0 * a.cos(), 5.0 + 2.0 * a.sin(), 1.0)
+///     })
+///     .collect();
+/// let grid = DiskGrid::new(ring);
+/// let layers = [&grid];
+/// let space = FreeSpace::new(Field::new(10.0, 10.0), &layers);
+/// assert_eq!(nearest_free_point(&space, &slot), Ok(slot));
+///
+/// // From outside the ring, the best reachable point is where two neighbouring circles
+/// // cross on the outside.
+/// let me = Point::new(1.0, 1.0);
+/// let mut paths = PathsFrom::new(&space, &me);
+/// let best = nearest_reachable_free_point(&space, &slot, &me, |p| {
+///     paths.shortest_path(p).is_ok()
+/// })?;
+/// let expected_m = 2.0 * (PI / 8.0).cos() + (2f64.sqrt() - 1.0).sqrt();
+/// assert!(((best - slot).norm() - expected_m).abs() < 1e-9);
+/// # Ok::<(), shared::best_point::BestPointError>(())
+/// ```
 pub fn nearest_reachable_free_point(
     space: &FreeSpace,
     query: &Point,

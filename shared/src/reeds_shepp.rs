@@ -71,6 +71,25 @@ pub fn shortest_path(from: &Pose, to: &Pose, turning_radius_m: f64) -> CurvePath
 /// # Panics
 ///
 /// If `turning_radius_m` is not finite and strictly positive (callers validate it).
+///
+/// ```
+/// use std::f64::consts::FRAC_PI_2;
+///
+/// use shared::geometry::Pose;
+/// use shared::{dubins, reeds_shepp};
+///
+/// let rho = 2.0;
+/// let start = Pose::new(0.0, 0.0, 0.0);
+/// // A quarter turn to the left, exactly on the turning circle: one arc.
+/// let quarter = Pose::new(rho, rho, FRAC_PI_2);
+/// let length_m = reeds_shepp::shortest_length_m(&start, &quarter, rho);
+/// assert!((length_m - rho * FRAC_PI_2).abs() < 1e-9);
+/// // 3 m straight behind: reversing is shortest; driving forwards only must turn around.
+/// let behind = Pose::new(-3.0, 0.0, 0.0);
+/// let reverse_m = reeds_shepp::shortest_length_m(&start, &behind, rho);
+/// assert!((reverse_m - 3.0).abs() < 1e-9);
+/// assert!(dubins::shortest_length_m(&start, &behind, rho) > reverse_m + rho);
+/// ```
 pub fn shortest_length_m(from: &Pose, to: &Pose, turning_radius_m: f64) -> f64 {
     check_turning_radius(turning_radius_m);
     solve(from, to, turning_radius_m).map_or(f64::NAN, |word| word.total * turning_radius_m)

@@ -16,6 +16,33 @@ use crate::geometry::{Disk, FreeSpace, Point};
 /// `space`'s disks are the already inflated obstacles; the path keeps a signed clearance of
 /// at least `-`[`FREE_TOLERANCE_M`] from each of them and stays inside the field. Start and
 /// goal may lie on disk boundaries. `from == to` gives a single zero-length segment.
+///
+/// ```
+/// use std::f64::consts::PI;
+///
+/// use shared::disk_path::{PathError, PathPiece, shortest_path};
+/// use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
+///
+/// // One disk of radius 1 m between start and goal.
+/// let grid = DiskGrid::new(vec![Disk::new(5.0, 5.0, 1.0)]);
+/// let layers = [&grid];
+/// let space = FreeSpace::new(Field::new(10.0, 10.0), &layers);
+/// let (from, to) = (Point::new(2.0, 5.0), Point::new(8.0, 5.0));
+/// let path = shortest_path(&space, &from, &to)?;
+/// // Tangent, arc around the disk, tangent: two tangents of length sqrt(3^2 - 1^2) and
+/// // the arc between the tangent points.
+/// assert!(matches!(
+///     path.pieces[..],
+///     [PathPiece::Segment { .. }, PathPiece::Arc { .. }, PathPiece::Segment { .. }]
+/// ));
+/// let expected_m = 2.0 * 8f64.sqrt() + (PI - 2.0 * (1.0f64 / 3.0).acos());
+/// assert!((path.length_m() - expected_m).abs() < 1e-9);
+/// assert_eq!((path.start(), path.end()), (from, to));
+/// // A goal inside the disk has no path.
+/// let inside = Point::new(5.5, 5.0);
+/// assert_eq!(shortest_path(&space, &from, &inside), Err(PathError::GoalNotFree));
+/// # Ok::<(), PathError>(())
+/// ```
 pub fn shortest_path(space: &FreeSpace, from: &Point, to: &Point) -> Result<DiskPath, PathError> {
     if !space.is_free(from, FREE_TOLERANCE_M) {
         return Err(PathError::StartNotFree);

@@ -20,14 +20,20 @@ use crate::geometry::{Disk, Field, Pose};
 ///
 /// ```
 /// use shared::geometry::{Disk, Field, Pose};
-/// use shared::hybrid_astar::{HybridAStarSettings, plan, resample};
+/// use shared::hybrid_astar::{HybridAStarSettings, path_length_m, plan, resample};
 ///
+/// // A disk of radius 2 m right on the straight line from start to goal.
 /// let field = Field::new(40.0, 30.0);
 /// let obstacles = [Disk::new(20.0, 15.0, 2.0)];
 /// let settings = HybridAStarSettings::new(2.0, 0.5, false);
 /// let (start, goal) = (Pose::new(5.0, 15.0, 0.0), Pose::new(35.0, 15.0, 0.0));
 /// let path = plan(&field, &obstacles, &start, &goal, &settings)?;
-/// assert_eq!(path.last(), Some(&goal));
+/// assert_eq!((path.first(), path.last()), (Some(&start), Some(&goal)));
+/// // The path goes around the disk, 0.5 m clear of it, and not far out of the way.
+/// let clear = |p: &Pose| (p.position() - obstacles[0].center).norm() >= 2.0 + 0.5;
+/// assert!(path.iter().all(clear));
+/// let length_m = path_length_m(&path);
+/// assert!(length_m > 30.0 && length_m < 33.0, "{length_m}");
 /// let steps = resample(&path, 0.25);
 /// assert_eq!(steps[0], start);
 /// # Ok::<(), shared::hybrid_astar::PlanError>(())
