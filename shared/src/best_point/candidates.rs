@@ -1,0 +1,327 @@
+//! The candidates for the best point, and their enumeration nearest first by rings of
+//! growing radius around the query (see the module docs for why that is exact).
+
+use std::cmp::Ordering;
+use std::ops::ControlFlow;
+
+use crate::geometry::{
+    Disk, Field, FreeSpace, Point, Vector, circle_circle_intersections, circle_line_intersections,
+};
+
+/// How far, in metres, a candidate may sit inside a disk or outside the field and still
+/// count as free: room for the rounding of the constructions, nothing more. Reported
+/// points are the exact constructions, never nudged.
+pub const FEASIBILITY_TOLERANCE_M: f64 = 1e-9;
+
+/// A point that may be the best point, with its distance to the query.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Candidate {
+    pub(super) distance_m: f64,
+    pub(super) point: Point,
+}
+
+impl Candidate {
+    /// Nearest first; ties by `x`, then `y`, so the order never depends on how the
+    /// candidates were found.
+    fn cmp_nearest_first(&self, other: &Self) -> Ordering {
+        self.distance_m
+            .total_cmp(&other.distance_m)
+            .then(self.point.x.total_cmp(&other.point.x))
+            .then(self.point.y.total_cmp(&other.point.y))
+    }
+}
+
+/// The incremental enumeration: free candidates in increasing distance from the query.
+pub(super) struct CandidateSearch<'s> {
+    space: &'s FreeSpace<'s>,
+    query: Point,
+    /// No free point is nearer than this (field distance, depth in the disks at `query`).
+    lower_bound_m: f64,
+    /// Every candidate within this distance of `query` is in `pending` or was tried.
+    searched_m: f64,
+    /// Rings enumerated so far.
+    rings: u32,
+    /// Margin of the next ring beyond `lower_bound_m`.
+    ring_margin_m: f64,
+    /// Distance from `query` to the farthest corner: a ring this large holds the field.
+    field_reach_m: f64,
+    /// The candidates owed to the field alone (clamp, edge projections, corners), each
+    /// taken into `pending` once a ring reaches it.
+    field_candidates: [Option<Candidate>; 9],
+    /// Disks whose candidates have been enumerated.
+    gathered: Vec<Disk>,
+    /// The `(layer, index)` of the gathered disks, sorted.
+    gathered_ids: Vec<(usize, usize)>,
+    /// The query itself, when it is free and not yet handed out.
+    free_query: Option<Candidate>,
+    /// Candidates not tried yet, sorted farthest first (the nearest is popped).
+    pending: Vec<Candidate>,
+    /// The last candidate tried, to skip exact duplicates (which sort next to it).
+    last_tried: Option<Point>,
+}
+
+impl<'s> CandidateSearch<'s> {
+    /// A search around `query`; `None` when there is no nearest point to look for
+    /// (non-finite query, degenerate field).
+    pub(super) fn new(space: &'s FreeSpace<'s>, query: &Point) -> Option<Self> {
+        let field = space.field;
+        let field_is_valid = field.width_m.is_finite()
+            && field.height_m.is_finite()
+            && field.width_m >= 0.0
+            && field.height_m >= 0.0;
+        if !field_is_valid || !query.x.is_finite() || !query.y.is_finite() {
+            return None;
+        }
+        // How deep the query is in the disks: the same test as `FreeSpace::is_free`, and
+        // a lower bound on the distance to any free point.
+        let mut depth_m: f64 = 0.0;
+        let _ = space.visit_near(query, 0.0, |_, disk| {
+            depth_m = depth_m.max(-disk.signed_distance_m(query));
+            ControlFlow::<()>::Continue(())
+        });
+        let query_is_free =
+            field.contains(query, FEASIBILITY_TOLERANCE_M) && depth_m <= FEASIBILITY_TOLERANCE_M;
+        let lower_bound_m = depth_m.max((query - field.clamp(query)).norm());
+        let field_reach_m = field
+            .corners()
+            .iter()
+            .map(|corner| (corner - query).norm())
+            .fold(0.0, f64::max);
+        let scale_m = lower_bound_m
+            .max(field.width_m)
+            .max(field.height_m)
+            .max(1.0);
+        let ring_margin_m = (0.25 * space.max_radius_m()).max(1e-12 * scale_m);
+        Some(Self {
+            space,
+            query: *query,
+            lower_bound_m,
+            searched_m: 0.0,
+            rings: 0,
+            ring_margin_m,
+            field_reach_m,
+            field_candidates: [None; 9],
+            gathered: Vec::new(),
+            gathered_ids: Vec::new(),
+            // At distance 0 the only candidate is the query itself.
+            free_query: query_is_free.then_some(Candidate {
+                distance_m: 0.0,
+                point: *query,
+            }),
+            pending: Vec::new(),
+            // The query is settled: copies of it (a clamp, a projection) are skipped.
+            last_tried: Some(*query),
+        })
+    }
+
+    /// Whether the rings so far hold the whole field: every candidate is known.
+    fn is_exhaustive(&self) -> bool {
+        self.searched_m >= self.field_reach_m
+    }
+
+    /// The next free candidate no farther than `limit_m`, nearest first; `None` when
+    /// there is none.
+    pub(super) fn next_free(&mut self, limit_m: f64) -> Option<Candidate> {
+        if let Some(query) = self.free_query.take() {
+            return Some(query);
+        }
+        loop {
+            let proven_m = if self.is_exhaustive() {
+                f64::INFINITY
+            } else {
+                self.searched_m
+            };
+            while let Some(&candidate) = self.pending.last() {
+                if candidate.distance_m > proven_m {
+                    break;
+                }
+                if candidate.distance_m > limit_m {
+                    return None;
+                }
+                self.pending.pop();
+                if self.last_tried == Some(candidate.point) {
+                    continue;
+                }
+                self.last_tried = Some(candidate.point);
+                if self
+                    .space
+                    .is_free(&candidate.point, FEASIBILITY_TOLERANCE_M)
+                {
+                    return Some(candidate);
+                }
+            }
+            if self.is_exhaustive() || self.searched_m >= limit_m {
+                return None;
+            }
+            self.grow();
+        }
+    }
+
+    /// Widen the search to the next ring and enumerate the candidates it brings.
+    fn grow(&mut self) {
+        if self.rings == 0 {
+            self.field_candidates = field_candidates(&self.space.field, &self.query);
+            self.pending.reserve(16);
+        } else {
+            self.ring_margin_m *= 2.0;
+        }
+        let radius_m = (self.lower_bound_m + self.ring_margin_m).max(self.searched_m);
+        // Disks are gathered with some slack, so that rounding can never leave out a disk
+        // with a candidate computed to lie within `radius_m`. Then every candidate pushed
+        // by a later ring is computed to lie beyond `radius_m`, so none can repeat a point
+        // already tried.
+        let slack_m = 1e-9 * (1.0 + radius_m + self.query.x.abs() + self.query.y.abs());
+        let reach_m = radius_m + slack_m;
+        let holds_field = radius_m >= self.field_reach_m;
+        for slot in &mut self.field_candidates {
+            if let Some(candidate) = *slot
+                && (holds_field || candidate.distance_m <= radius_m)
+            {
+                self.pending.push(candidate);
+                *slot = None;
+            }
+        }
+        let new_from = self.gathered.len();
+        if let Some((min, max)) = self.ring_box(reach_m) {
+            let query = self.query;
+            let (gathered, gathered_ids) = (&mut self.gathered, &mut self.gathered_ids);
+            // Ids gathered by earlier rings are sorted; a box query reports a disk once.
+            let earlier = gathered_ids.len();
+            let _ = self.space.visit_box(&min, &max, |id, disk| {
+                let to_center_m = (disk.center - query).norm();
+                let circle_meets_ring = (to_center_m - disk.radius_m).abs() <= reach_m;
+                if disk.radius_m > 0.0
+                    && circle_meets_ring
+                    && gathered_ids[..earlier].binary_search(&id).is_err()
+                {
+                    gathered.push(*disk);
+                    gathered_ids.push(id);
+                }
+                ControlFlow::<()>::Continue(())
+            });
+            gathered_ids.sort_unstable();
+        }
+        for i in new_from..self.gathered.len() {
+            self.push_disk_candidates(i);
+        }
+        self.searched_m = radius_m;
+        self.rings += 1;
+        self.pending.sort_unstable_by(|a, b| b.cmp_nearest_first(a));
+    }
+
+    /// Bounding box of the ball of radius `reach_m` around the query clipped to the
+    /// field (grown by the tolerance); `None` when they do not meet.
+    fn ring_box(&self, reach_m: f64) -> Option<(Point, Point)> {
+        let field = self.space.field;
+        let q = self.query;
+        let tol = FEASIBILITY_TOLERANCE_M;
+        let mut min = Point::new((q.x - reach_m).max(-tol), (q.y - reach_m).max(-tol));
+        let mut max = Point::new(
+            (q.x + reach_m).min(field.width_m + tol),
+            (q.y + reach_m).min(field.height_m + tol),
+        );
+        // Half extent of the ball along one axis at the given offset along the other.
+        let half_extent = |offset_m: f64| {
+            let h2 = (reach_m - offset_m) * (reach_m + offset_m);
+            (h2 >= 0.0).then(|| h2.sqrt())
+        };
+        // Written so that NaN gives `false`; `f64::clamp` needs an ordered range.
+        let is_box = |min: &Point, max: &Point| min.x <= max.x && min.y <= max.y;
+        if !is_box(&min, &max) {
+            return None;
+        }
+        let dy = half_extent(q.x.clamp(min.x, max.x) - q.x)?;
+        min.y = min.y.max(q.y - dy);
+        max.y = max.y.min(q.y + dy);
+        if !is_box(&min, &max) {
+            return None;
+        }
+        let dx = half_extent(q.y.clamp(min.y, max.y) - q.y)?;
+        min.x = min.x.max(q.x - dx);
+        max.x = max.x.min(q.x + dx);
+        is_box(&min, &max).then_some((min, max))
+    }
+
+    /// Queue `point` if it lies in the field (a point outside can never be free).
+    fn push(&mut self, point: Point) {
+        if self.space.field.contains(&point, FEASIBILITY_TOLERANCE_M) {
+            self.pending.push(Candidate {
+                distance_m: (point - self.query).norm(),
+                point,
+            });
+        }
+    }
+
+    /// The candidates owed to gathered disk `i`: the radial projection of the query onto
+    /// its circle, its crossings with the edge lines, and its crossings with every disk
+    /// gathered before it.
+    fn push_disk_candidates(&mut self, i: usize) {
+        let disk = self.gathered[i];
+        let outward = self.query - disk.center;
+        let outward_m = outward.norm();
+        let direction = if outward_m > 0.0 {
+            outward / outward_m
+        } else {
+            // The query is the centre: every point of the circle ties. Offer one; the ends
+            // of the circle's free arcs come as crossings.
+            Vector::x()
+        };
+        self.push(disk.center + disk.radius_m * direction);
+
+        let field = self.space.field;
+        let edge_lines = [
+            (Point::new(0.0, 0.0), Vector::y()),
+            (Point::new(field.width_m, 0.0), Vector::y()),
+            (Point::new(0.0, 0.0), Vector::x()),
+            (Point::new(0.0, field.height_m), Vector::x()),
+        ];
+        for (line_point, line_direction) in edge_lines {
+            if let Some(crossings) =
+                circle_line_intersections(&disk.center, disk.radius_m, &line_point, &line_direction)
+            {
+                crossings.into_iter().for_each(|p| self.push(p));
+            }
+        }
+
+        for j in 0..i {
+            let other = self.gathered[j];
+            // Cheap rejection of the (many) pairs that are far apart.
+            let reach_m = disk.radius_m + other.radius_m;
+            if (disk.center - other.center).norm_squared() > reach_m * reach_m {
+                continue;
+            }
+            if let Some(crossings) = circle_circle_intersections(
+                &disk.center,
+                disk.radius_m,
+                &other.center,
+                other.radius_m,
+            ) {
+                crossings.into_iter().for_each(|p| self.push(p));
+            }
+        }
+    }
+}
+
+/// The candidates owed to the field alone: the clamp of `query` into the field, its
+/// projections on the four edges (clamped to the edge), and the four corners.
+fn field_candidates(field: &Field, query: &Point) -> [Option<Candidate>; 9] {
+    let q = query;
+    let [c0, c1, c2, c3] = field.corners();
+    [
+        field.clamp(q),
+        field.clamp(&Point::new(0.0, q.y)),
+        field.clamp(&Point::new(field.width_m, q.y)),
+        field.clamp(&Point::new(q.x, 0.0)),
+        field.clamp(&Point::new(q.x, field.height_m)),
+        c0,
+        c1,
+        c2,
+        c3,
+    ]
+    .map(|point| {
+        Some(Candidate {
+            distance_m: (point - q).norm(),
+            point,
+        })
+    })
+}
