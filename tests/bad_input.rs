@@ -23,7 +23,8 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use coordinator::validate::load_and_plan;
-use shared::scenario::{MAX_AGENTS, MAX_OBSTACLES, Scenario, ScenarioError};
+use shared::scenario::{Scenario, ScenarioError};
+use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 
 /// The corpus must hold at least this many files.
 const MIN_CORPUS_FILES: usize = 30;

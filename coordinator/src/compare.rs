@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::Context;
 use serde::Serialize;
 use shared::run::Run;
-use shared::scenario::PlannerKind;
+use shared::vocabulary::PlannerKind;
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;

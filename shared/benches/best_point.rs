@@ -22,7 +22,8 @@ use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
 use shared::run::Recorder;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::turn::{AgentPlanner, Body, PLANNING_MARGIN_M};
+use shared::turn::{AgentPlanner, PLANNING_MARGIN_M};
+use shared::vocabulary::Body;
 
 /// Radius of every (inflated) disk, in metres.
 const DISK_RADIUS_M: f64 = 1.3;

@@ -3,6 +3,8 @@
 //! One concept per module:
 //! - [`geometry`]: points, poses, disks, the field, the disk grid index, free space;
 //! - [`formation`]: ideal slots (the paper's equation 2);
+//! - [`vocabulary`]: the words every other part speaks (bodies, moves, agents, planners
+//!   and their settings, capacities); a leaf, so the modules form no import cycle;
 //! - [`best_point`]: the exact best point (Theorem 1) with reachability;
 //! - [`disk_path`]: shortest collision-free path for a point among disks;
 //! - [`reeds_shepp`] and [`dubins`]: shortest curvature-bounded paths between poses;
@@ -30,4 +32,5 @@ pub mod safety;
 pub mod scenario;
 pub mod simulate;
 pub mod turn;
+pub mod vocabulary;
 pub mod wire;

@@ -9,14 +9,9 @@ use std::path::Path;
 use rand::{Rng, SeedableRng};
 use serde::Deserialize;
 
-use crate::cbf::{CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
 use crate::formation::Slot;
 use crate::geometry::{Disk, Field, Point, Pose};
-
-/// Most agents a scenario may hold (the wire types' fixed capacity).
-pub const MAX_AGENTS: usize = 256;
-/// Most obstacles a scenario may hold (the wire types' fixed capacity).
-pub const MAX_OBSTACLES: usize = 16_384;
+use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec};
 /// Largest field side accepted, in metres: beyond this the numbers stop being a field.
 pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
 /// Bound on the number of centre steps: `step_m` may not cut the field's diagonal into
@@ -32,71 +27,6 @@ pub const MAX_ANGLE_DEG: f64 = 360.0;
 pub const PAPER_SCENARIO_TOML: &str = include_str!("../../scenarios/paper.toml");
 /// The name shown for the embedded paper scenario in messages.
 pub const PAPER_SCENARIO_NAME: &str = "<embedded paper.toml>";
-
-/// Which controller moves the agents.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum PlannerKind {
-    /// The paper's method: exact best point, then a shortest collision-free path to it.
-    #[default]
-    BestPoint,
-    /// A control-barrier-function QP with one constraint per neighbour
-    /// ([`crate::cbf`]): safe by construction, may deadlock.
-    Cbf,
-    /// The paper's failed zeroing barrier with a LogSumExp-smoothed max: kept to show its
-    /// violations (the safety monitor refuses them).
-    ZcbfLogsumexp,
-}
-
-impl PlannerKind {
-    /// Every planner, in code order.
-    pub const ALL: [PlannerKind; 3] = [Self::BestPoint, Self::Cbf, Self::ZcbfLogsumexp];
-
-    /// The name used in files and on the command line.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::BestPoint => "best-point",
-            Self::Cbf => "cbf",
-            Self::ZcbfLogsumexp => "zcbf-logsumexp",
-        }
-    }
-
-    /// The planner called `name`, if any.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == name)
-    }
-
-    /// The wire code.
-    pub fn code(&self) -> u32 {
-        *self as u32
-    }
-
-    /// The planner with wire code `code`, if any.
-    pub fn from_code(code: u32) -> Option<Self> {
-        Self::ALL.get(code as usize).copied()
-    }
-}
-
-/// The controller and its settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlannerSpec {
-    /// Which controller.
-    pub kind: PlannerKind,
-    /// Settings of the barrier-function planners (unused by the best-point planner).
-    pub cbf: CbfSettings,
-    /// Sharpness of the LogSumExp smooth max, in 1/m (`zcbf-logsumexp` only).
-    pub lse_sharpness_per_m: f64,
-}
-
-impl Default for PlannerSpec {
-    fn default() -> Self {
-        Self {
-            kind: PlannerKind::BestPoint,
-            cbf: CbfSettings::default(),
-            lse_sharpness_per_m: DEFAULT_LSE_SHARPNESS_PER_M,
-        }
-    }
-}
 
 /// A validated scenario: every number finite and in range, every body placed legally.
 #[derive(Clone, Debug, PartialEq)]
@@ -116,15 +46,6 @@ pub struct Scenario {
     pub path: PathSpec,
     /// The controller and its settings.
     pub planner: PlannerSpec,
-}
-
-/// One agent: its formation slot and body radius.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AgentSpec {
-    /// Its slot in the formation.
-    pub slot: Slot,
-    /// Radius of its body, in metres.
-    pub radius_m: f64,
 }
 
 /// Settings of the formation centre's path.
@@ -321,17 +242,6 @@ impl PoseFile {
 }
 
 // ---------------------------------------------------------------------------------------
-
-impl PlannerSpec {
-    /// Check the barrier settings for every agent (unused settings are still checked, so
-    /// switching planners on the command line cannot meet an invalid file).
-    pub fn check(&self, agents: &[AgentSpec]) -> Result<(), CbfSettingsError> {
-        for a in agents {
-            self.cbf.validate_for_agent(a.radius_m)?;
-        }
-        Ok(())
-    }
-}
 
 impl Scenario {
     /// The same scenario run by another planner.

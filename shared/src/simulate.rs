@@ -5,12 +5,12 @@
 //! move is checked against the safety invariant before it is taken. The multi-process
 //! run must reproduce this trajectory to the bit.
 
-use crate::cbf::CbfSettingsError;
 use crate::geometry::Pose;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::run::{Recorder, Run};
 use crate::scenario::Scenario;
 use crate::turn::TurnPlanner;
+use crate::vocabulary::CbfSettingsError;
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {

@@ -9,12 +9,11 @@
 //!   the safety invariant along the whole segment, checked by brute force.
 
 use proptest::prelude::*;
-use shared::cbf::{CbfPlanner, CbfSettings, HalfPlane, QpError, solve_qp_2d};
+use shared::cbf::{CbfPlanner, HalfPlane, QpError, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::safety::check_move;
-use shared::scenario::AgentSpec;
-use shared::turn::{Body, MAX_WAYPOINTS};
+use shared::vocabulary::{AgentSpec, Body, CbfSettings, MAX_WAYPOINTS};
 
 /// The returned point must satisfy every row, normalised to a unit normal, to this, in
 /// the units of `u`.
