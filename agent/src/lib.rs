@@ -1,5 +1,5 @@
 //! One formation agent: it waits for its turn, reads the world, computes its slot, best
-//! point and path with [`shared::turn::AgentPlanner`], and publishes its move.
+//! point and path with [`shared::turn::BestPointPlanner`], and publishes its move.
 //!
 //! The turn loop, [`serve`], talks to the world only through the [`Transport`] trait, so
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.

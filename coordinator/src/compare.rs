@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::run::Run;
+use shared::record::Run;
 use shared::vocabulary::PlannerKind;
 
 use crate::cli::CompareArgs;

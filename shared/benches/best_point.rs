@@ -19,10 +19,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
 use shared::disk_path::{PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
-use shared::run::Recorder;
+use shared::record::Recorder;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::turn::{AgentPlanner, PLANNING_MARGIN_M};
+use shared::turn::{BestPointPlanner, PLANNING_MARGIN_M};
 use shared::vocabulary::Body;
 
 /// Radius of every (inflated) disk, in metres.
@@ -145,12 +145,12 @@ type Turn = (usize, Pose, Point, Vec<Body>);
 
 /// Every turn of the steps `sampled` of the reference simulation of `scenario` (the same
 /// turns as `simulate`), run up to the last of them.
-fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<AgentPlanner>, Vec<Turn>) {
+fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointPlanner>, Vec<Turn>) {
     let path = plan_centre_path(scenario).expect("a centre path");
-    let planners: Vec<AgentPlanner> = scenario
+    let planners: Vec<BestPointPlanner> = scenario
         .agents
         .iter()
-        .map(|spec| AgentPlanner::new(scenario.field, &scenario.obstacles, spec))
+        .map(|spec| BestPointPlanner::new(scenario.field, &scenario.obstacles, spec))
         .collect();
     let mut recorder = Recorder::new(scenario, &path);
     let mut turns = Vec::new();

@@ -283,7 +283,7 @@ fn sensed(
 
 /// The CBF-QP planner of one agent: one barrier constraint per sensed neighbour and per
 /// field edge, an exact QP, one straight step of `dt` (see the module documentation for
-/// the safety argument). Same turn interface as [`crate::turn::AgentPlanner`].
+/// the safety argument). Same turn interface as [`crate::turn::BestPointPlanner`].
 #[derive(Clone, Debug)]
 pub struct CbfPlanner {
     field: Field,

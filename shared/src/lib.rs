@@ -9,10 +9,12 @@
 //! - [`disk_path`]: shortest collision-free path for a point among disks;
 //! - [`reeds_shepp`] and [`dubins`]: shortest curvature-bounded paths between poses;
 //! - [`hybrid_astar`]: the formation centre's planner;
+//! - [`cbf`]: the control-barrier-function planners and their exact 2-D QP;
 //! - [`scenario`]: the TOML scenario model and its validation;
-//! - [`turn`]: one agent's turn (slot, best point, path), shared by simulation and agents;
+//! - [`turn`]: one agent's turn: the paper's best-point planner, and every planner behind
+//!   one interface, shared by simulation and agents;
 //! - [`safety`]: the safety invariant checked with plain geometry;
-//! - [`run`]: the record of a run and its figures;
+//! - [`record`]: the record of a run and its figures;
 //! - [`simulate`]: the in-process reference simulation;
 //! - [`wire`]: the zero-copy messages between coordinator and agents.
 #![warn(missing_docs)]
@@ -26,8 +28,8 @@ pub mod formation;
 pub mod geometry;
 pub mod hybrid_astar;
 pub mod misbehave;
+pub mod record;
 pub mod reeds_shepp;
-pub mod run;
 pub mod safety;
 pub mod scenario;
 pub mod simulate;

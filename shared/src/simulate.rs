@@ -1,13 +1,13 @@
 //! The reference simulation: the paper's solution flow (Fig. 5) in one process.
 //!
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
-//! plans its move while the others stand still ([`AgentPlanner::plan_move`]), and the
+//! plans its move while the others stand still ([`TurnPlanner::plan_move`]), and the
 //! move is checked against the safety invariant before it is taken. The multi-process
 //! run must reproduce this trajectory to the bit.
 
 use crate::geometry::Pose;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
-use crate::run::{Recorder, Run};
+use crate::record::{Recorder, Run};
 use crate::scenario::Scenario;
 use crate::turn::TurnPlanner;
 use crate::vocabulary::CbfSettingsError;

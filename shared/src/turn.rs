@@ -2,7 +2,8 @@
 //! point, shortest collision-free path to it, as a polyline the agent then follows.
 //!
 //! This is the one place the decision is made: the reference simulation and the agent
-//! process both call [`AgentPlanner::plan_move`], so their trajectories agree to the bit.
+//! process both call [`TurnPlanner::plan_move`] (the paper's [`BestPointPlanner`] or a
+//! barrier planner), so their trajectories agree to the bit.
 
 use crate::best_point::{self, BestPointError};
 use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
@@ -18,7 +19,8 @@ use crate::vocabulary::{
 /// least half of it away from every true body.
 pub const PLANNING_MARGIN_M: f64 = 1e-3;
 
-/// Everything an agent needs to take its turns; built once, reused every step.
+/// The paper's planner for one agent (exact best point, then the shortest path to it):
+/// everything the agent needs to take its turns; built once, reused every step.
 ///
 /// The agent is planned as a point: every other body is inflated by the agent's radius
 /// plus [`PLANNING_MARGIN_M`], and the field is shrunk by the same amount on every side.
@@ -26,7 +28,7 @@ pub const PLANNING_MARGIN_M: f64 = 1e-3;
 /// shifted by that inset; results are mapped back (exactly for the slot and the agent's
 /// own position).
 #[derive(Clone, Debug)]
-pub struct AgentPlanner {
+pub struct BestPointPlanner {
     /// The field the agent's centre may use, in the planning frame.
     field: Field,
     /// Planning frame origin in world coordinates (the inset on both axes).
@@ -38,7 +40,7 @@ pub struct AgentPlanner {
     obstacles: DiskGrid,
 }
 
-impl AgentPlanner {
+impl BestPointPlanner {
     /// The planner of agent `spec` in `field` among `obstacles` (true radii).
     pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
         let grow_m = spec.radius_m + PLANNING_MARGIN_M;
@@ -173,8 +175,8 @@ impl AgentPlanner {
 /// agent processes call.
 #[derive(Clone, Debug)]
 pub enum TurnPlanner {
-    /// The paper's method, exact ([`AgentPlanner`]).
-    BestPoint(AgentPlanner),
+    /// The paper's method, exact ([`BestPointPlanner`]).
+    BestPoint(BestPointPlanner),
     /// The control-barrier-function QP.
     Cbf(CbfPlanner),
     /// The paper's failed LogSumExp barrier, for comparison.
@@ -191,7 +193,9 @@ impl TurnPlanner {
         spec: &AgentSpec,
     ) -> Result<Self, CbfSettingsError> {
         Ok(match planner.kind {
-            PlannerKind::BestPoint => Self::BestPoint(AgentPlanner::new(field, obstacles, spec)),
+            PlannerKind::BestPoint => {
+                Self::BestPoint(BestPointPlanner::new(field, obstacles, spec))
+            }
             PlannerKind::Cbf => Self::Cbf(CbfPlanner::new(field, obstacles, spec, planner.cbf)?),
             PlannerKind::ZcbfLogsumexp => Self::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
                 field,

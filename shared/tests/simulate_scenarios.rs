@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use shared::geometry::DiskGrid;
-use shared::run::Run;
+use shared::record::Run;
 use shared::safety::{self, SAFETY_TOLERANCE_M};
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
