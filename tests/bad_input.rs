@@ -295,7 +295,7 @@ start = {{ x_m = 20.0, y_m = 20.0, heading_deg = 0.0 }}
 goal = {{ x_m = 198.0, y_m = 198.0, heading_deg = 0.0 }}
 turning_radius_m = 2.0
 step_m = 0.5
-center_clearance_m = 0.3
+centre_clearance_m = 0.3
 "#
     )
 }

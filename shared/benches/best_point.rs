@@ -135,7 +135,7 @@ fn packed_scenario() -> Scenario {
     text += "]\n[path]\n\
              start = { x_m = 15.0, y_m = 15.0, heading_deg = 0.0 }\n\
              goal = { x_m = 85.0, y_m = 45.0, heading_deg = 23.0 }\n\
-             turning_radius_m = 8.0\nstep_m = 0.3\ncenter_clearance_m = 1.0\n\
+             turning_radius_m = 8.0\nstep_m = 0.3\ncentre_clearance_m = 1.0\n\
              allow_reverse = false\n";
     Scenario::parse(&text, "packed-200").expect("a valid scenario")
 }

@@ -16,7 +16,7 @@ use crate::vocabulary::CbfSettingsError;
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
     let p = &scenario.path;
     let settings =
-        HybridAStarSettings::new(p.turning_radius_m, p.center_clearance_m, p.allow_reverse);
+        HybridAStarSettings::new(p.turning_radius_m, p.centre_clearance_m, p.allow_reverse);
     let dense = hybrid_astar::plan(
         &scenario.field,
         &scenario.obstacles,

@@ -12,7 +12,7 @@ use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, Plann
 pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
 /// Bound on the number of centre steps: `step_m` may not cut the field's diagonal into
 /// more than a quarter of this many steps. It also bounds how finely the centre path
-/// planner samples the path: every `turning_radius_m / 16` and `center_clearance_m / 2`
+/// planner samples the path: every `turning_radius_m / 16` and `centre_clearance_m / 2`
 /// at most, so neither may cut the diagonal into more than this many samples.
 pub const MAX_STEPS: usize = 200_000;
 /// Largest magnitude of an angle in degrees (headings and slot angles): beyond it an
@@ -133,9 +133,9 @@ impl Checker<'_> {
             goal,
             turning_radius_m: self.positive("path.turning_radius_m", p.turning_radius_m, side_m)?,
             step_m: self.positive("path.step_m", p.step_m, side_m)?,
-            center_clearance_m: self.non_negative(
-                "path.center_clearance_m",
-                p.center_clearance_m,
+            centre_clearance_m: self.non_negative(
+                "path.centre_clearance_m",
+                p.centre_clearance_m,
                 0.5 * width_m.min(height_m),
             )?,
             allow_reverse: p.allow_reverse,
@@ -151,7 +151,7 @@ impl Checker<'_> {
             ));
         }
         // The planner samples the centre path every turning_radius_m / 16 and
-        // center_clearance_m / 2 at most: bound the samples as the steps are bounded.
+        // centre_clearance_m / 2 at most: bound the samples as the steps are bounded.
         let finest_m = diagonal_m / MAX_STEPS as f64;
         if path.turning_radius_m / 16.0 < finest_m {
             return Err(self.invalid(
@@ -163,12 +163,12 @@ impl Checker<'_> {
                 ),
             ));
         }
-        if path.center_clearance_m > 0.0 && path.center_clearance_m / 2.0 < finest_m {
+        if path.centre_clearance_m > 0.0 && path.centre_clearance_m / 2.0 < finest_m {
             return Err(self.invalid(
-                "path.center_clearance_m",
+                "path.centre_clearance_m",
                 format!(
                     "{} m is too small for a {width_m} x {height_m} m field (the planner would sample the path more than {MAX_STEPS} times across it; 0 or at least {} m)",
-                    num(path.center_clearance_m),
+                    num(path.centre_clearance_m),
                     num(2.0 * finest_m)
                 ),
             ));
@@ -402,25 +402,25 @@ impl Checker<'_> {
     ) -> Result<(), ScenarioError> {
         for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
             let p = pose.position();
-            if field.signed_inset_m(&p) < path.center_clearance_m {
+            if field.signed_inset_m(&p) < path.centre_clearance_m {
                 return Err(self.invalid(
                     name,
                     format!(
                         "({}, {}) is closer to the field's edge than the centre clearance {} m",
-                        p.x, p.y, path.center_clearance_m
+                        p.x, p.y, path.centre_clearance_m
                     ),
                 ));
             }
             if let Some((k, o)) = obstacles
                 .iter()
                 .enumerate()
-                .find(|(_, o)| o.signed_distance_m(&p) < path.center_clearance_m)
+                .find(|(_, o)| o.signed_distance_m(&p) < path.centre_clearance_m)
             {
                 return Err(self.invalid(
                     name,
                     format!(
                         "({}, {}) is within the centre clearance {} m of obstacle {k} at ({}, {}) radius {} m",
-                        p.x, p.y, path.center_clearance_m, o.center.x, o.center.y, o.radius_m
+                        p.x, p.y, path.centre_clearance_m, o.center.x, o.center.y, o.radius_m
                     ),
                 ));
             }

@@ -166,7 +166,9 @@ pub(super) struct PathFile {
     pub(super) goal: PoseFile,
     pub(super) turning_radius_m: f64,
     pub(super) step_m: f64,
-    pub(super) center_clearance_m: f64,
+    /// Also read under its older spelling, `center_clearance_m`, so older files load.
+    #[serde(alias = "center_clearance_m")]
+    pub(super) centre_clearance_m: f64,
     #[serde(default)]
     pub(super) allow_reverse: bool,
 }
@@ -316,6 +318,37 @@ mod tests {
             assert!((a.slot.theta_rad - f64::to_radians(th)).abs() < 1e-15);
         }
         assert_eq!(s.path.start, Pose::new(2.0, 2.0, 0.0));
+    }
+
+    #[test]
+    fn both_spellings_of_the_centre_clearance_load_the_same_scenario() {
+        assert!(MINIMAL.contains("\ncentre_clearance_m = 0.3\n"));
+        let old = MINIMAL.replace("centre_clearance_m", "center_clearance_m");
+        let new = Scenario::parse(MINIMAL, "new.toml").unwrap_or_else(|e| panic!("{e}"));
+        let old = Scenario::parse(&old, "old.toml").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(old, new);
+        assert_eq!(new.path.centre_clearance_m, 0.3);
+        // Written back, the old spelling becomes the new one.
+        let resolved = old
+            .to_resolved_toml("old.toml")
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            resolved.contains("\ncentre_clearance_m = 0.3\n"),
+            "{resolved}"
+        );
+        assert!(!resolved.contains("center"), "{resolved}");
+        // One key under two names: giving both is an error naming it.
+        let both = MINIMAL.replace(
+            "centre_clearance_m = 0.3",
+            "centre_clearance_m = 0.3\ncenter_clearance_m = 0.3",
+        );
+        let e = Scenario::parse(&both, "both.toml").unwrap_err();
+        assert!(e.to_string().starts_with("both.toml: "), "{e}");
+        assert!(e.to_string().contains("centre_clearance_m"), "{e}");
+        // Errors name the field by its new spelling, whichever the file used.
+        let negative = MINIMAL.replace("centre_clearance_m = 0.3", "center_clearance_m = -1.0");
+        let e = Scenario::parse(&negative, "neg.toml").unwrap_err();
+        assert_eq!(e.field(), "path.centre_clearance_m", "{e}");
     }
 
     #[test]

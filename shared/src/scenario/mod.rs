@@ -44,5 +44,5 @@ start = { x_m = 3.0, y_m = 5.0, heading_deg = 0.0 }
 goal = { x_m = 17.0, y_m = 5.0, heading_deg = 0.0 }
 turning_radius_m = 2.0
 step_m = 0.5
-center_clearance_m = 0.3
+centre_clearance_m = 0.3
 "#;

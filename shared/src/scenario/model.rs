@@ -35,7 +35,7 @@ pub struct PathSpec {
     /// Centre travel between two steps, in metres.
     pub step_m: f64,
     /// Clearance the centre keeps from every obstacle boundary and field edge, in metres.
-    pub center_clearance_m: f64,
+    pub centre_clearance_m: f64,
     /// Whether the centre may drive backwards.
     pub allow_reverse: bool,
 }

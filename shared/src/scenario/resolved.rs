@@ -130,7 +130,7 @@ impl Scenario {
         }
         let _ = writeln!(t, "turning_radius_m = {}", toml_f64(p.turning_radius_m));
         let _ = writeln!(t, "step_m = {}", toml_f64(p.step_m));
-        let _ = writeln!(t, "center_clearance_m = {}", toml_f64(p.center_clearance_m));
+        let _ = writeln!(t, "centre_clearance_m = {}", toml_f64(p.centre_clearance_m));
         let _ = writeln!(t, "allow_reverse = {}", p.allow_reverse);
         Ok(t)
     }
@@ -309,7 +309,7 @@ start = { x_m = 3.0, y_m = 5.0, heading_deg = -0.0 }
 goal = { x_m = 17.0, y_m = 5.0, heading_deg = -359.99999999999994 }
 turning_radius_m = 2.0
 step_m = 0.1
-center_clearance_m = 0.0
+centre_clearance_m = 0.0
 allow_reverse = true
 "#;
         let s = Scenario::parse(text, "odd.toml").unwrap_or_else(|e| panic!("{e}"));
@@ -338,7 +338,7 @@ start = { x_m = 0.2, y_m = 0.3, heading_deg = 0.0 }
 goal = { x_m = 0.6, y_m = 0.3, heading_deg = 0.0 }
 turning_radius_m = 0.1
 step_m = 0.05
-center_clearance_m = 0.1
+centre_clearance_m = 0.1
 "#;
         let s = Scenario::parse(tiny, "tiny.toml").unwrap_or_else(|e| panic!("{e}"));
         round_trip(&s, "tiny.toml");
