@@ -49,6 +49,19 @@ pub enum SimulateError {
 }
 
 /// Plan the centre path and run the whole scenario.
+///
+/// ```
+/// use shared::scenario::Scenario;
+/// use shared::simulate::simulate;
+/// // The paper's example (section III): six agents through the obstacle field.
+/// let run = simulate(&Scenario::paper()).unwrap();
+/// let summary = run.summary();
+/// assert_eq!(summary.agents, 6);
+/// assert!(summary.completed);
+/// assert_eq!(summary.collisions, 0);
+/// assert!(summary.max_deviation_m > 0.0, "the obstacles disturb the formation");
+/// assert!(summary.final_mean_deviation_m < 0.05, "and it recovers");
+/// ```
 pub fn simulate(scenario: &Scenario) -> Result<Run, SimulateError> {
     let path = plan_centre_path(scenario)?;
     simulate_along(scenario, &path)

@@ -48,6 +48,32 @@ impl Scenario {
     }
 
     /// Parse and validate scenario text; `file` names it in errors.
+    ///
+    /// ```
+    /// use shared::scenario::Scenario;
+    /// let text = r#"
+    /// name = "two"
+    /// [field]
+    /// width_m = 20.0
+    /// height_m = 10.0
+    /// [formation]
+    /// slots = [ { r_m = 0.0, theta_deg = 0.0 }, { r_m = 1.0, theta_deg = 90.0 } ]
+    /// [path]
+    /// start = { x_m = 3.0, y_m = 5.0, heading_deg = 0.0 }
+    /// goal = { x_m = 17.0, y_m = 5.0, heading_deg = 0.0 }
+    /// turning_radius_m = 2.0
+    /// step_m = 0.5
+    /// centre_clearance_m = 0.3
+    /// "#;
+    /// let s = Scenario::parse(text, "two.toml").unwrap();
+    /// assert_eq!(s.agents.len(), 2);
+    /// assert_eq!(s.agents[1].radius_m, 0.3, "the paper's default agent radius");
+    /// assert_eq!(s.path.step_m, 0.5);
+    /// // A value out of range is refused, naming the file and the field.
+    /// let bad = text.replace("step_m = 0.5", "step_m = -1.0");
+    /// let e = Scenario::parse(&bad, "two.toml").unwrap_err();
+    /// assert_eq!(e.to_string(), "two.toml: path.step_m: must be positive, got -1");
+    /// ```
     pub fn parse(text: &str, file: &str) -> Result<Self, ScenarioError> {
         let raw = parse_file(text, file)?;
         Checker { file }.check(raw)
