@@ -23,7 +23,8 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use coordinator::validate::load_and_plan;
-use shared::scenario::{MAX_AGENTS, MAX_OBSTACLES, Scenario, ScenarioError};
+use shared::scenario::{Scenario, ScenarioError};
+use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 
 /// The corpus must hold at least this many files.
 const MIN_CORPUS_FILES: usize = 30;
@@ -294,7 +295,7 @@ start = {{ x_m = 20.0, y_m = 20.0, heading_deg = 0.0 }}
 goal = {{ x_m = 198.0, y_m = 198.0, heading_deg = 0.0 }}
 turning_radius_m = 2.0
 step_m = 0.5
-center_clearance_m = 0.3
+centre_clearance_m = 0.3
 "#
     )
 }

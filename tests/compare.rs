@@ -130,7 +130,7 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
     let original = shared::scenario::Scenario::load(&paper).expect("paper.toml");
     assert_eq!(
         resolved,
-        original.with_planner(shared::scenario::PlannerKind::ZcbfLogsumexp)
+        original.with_planner(shared::vocabulary::PlannerKind::ZcbfLogsumexp)
     );
     assert!(!text.contains("random"));
 }

@@ -5,7 +5,7 @@
 mod support;
 
 use coordinator::runner::{RunOptions, run_scenario};
-use shared::run::Run;
+use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
 

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::SystemTime;
 
-use shared::scenario::{PlannerKind, Scenario};
+use shared::scenario::Scenario;
+use shared::vocabulary::PlannerKind;
 
 fn coordinator(args: &[&str]) -> Command {
     let mut c = Command::new(support::coordinator_bin());

@@ -12,7 +12,7 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
-use shared::turn::Move;
+use shared::vocabulary::Move;
 use shared::wire::{
     self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role,
     StateKind, World,
@@ -36,13 +36,13 @@ pub struct Tamper {
 const RAW_COUNTS: [u64; 3] = [wire_capacity_plus_one(), 1 << 40, u64::MAX];
 
 const fn wire_capacity_plus_one() -> u64 {
-    shared::turn::MAX_WAYPOINTS as u64 + 1
+    shared::vocabulary::MAX_WAYPOINTS as u64 + 1
 }
 
 /// Write `state`'s waypoint count field raw, as a hostile process can (test modes).
 fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
     let vec = std::ptr::addr_of_mut!(state.waypoints).cast::<u8>();
-    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::turn::MAX_WAYPOINTS]>();
+    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::vocabulary::MAX_WAYPOINTS]>();
     // SAFETY: `StaticVec` is `repr(C)` { data: [_; CAPACITY], len: u64 }: the count lies
     // right after the array, inside the sample.
     unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };
@@ -204,7 +204,7 @@ impl IpcTransport {
             }
             // Only the coordinator publishes here, but a count beyond the capacity would
             // make the slice below panic: refuse it instead.
-            if w.bodies.len() > shared::scenario::MAX_AGENTS {
+            if w.bodies.len() > shared::vocabulary::MAX_AGENTS {
                 bail!(
                     "a world with {} bodies, beyond the capacity",
                     w.bodies.len()
@@ -295,8 +295,8 @@ impl Transport for IpcTransport {
             .receive()
             .map_err(|e| anyhow!("receiving the mission: {e:?}"))?
         {
-            if m.obstacles.len() > shared::scenario::MAX_OBSTACLES
-                || m.agents.len() > shared::scenario::MAX_AGENTS
+            if m.obstacles.len() > shared::vocabulary::MAX_OBSTACLES
+                || m.agents.len() > shared::vocabulary::MAX_AGENTS
             {
                 bail!(
                     "a mission with {} obstacles and {} agents, beyond the capacity",

@@ -1,5 +1,5 @@
 //! One formation agent: it waits for its turn, reads the world, computes its slot, best
-//! point and path with [`shared::turn::AgentPlanner`], and publishes its move.
+//! point and path with [`shared::turn::BestPointPlanner`], and publishes its move.
 //!
 //! The turn loop, [`serve`], talks to the world only through the [`Transport`] trait, so
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.
@@ -14,7 +14,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::Parser;
-use shared::turn::{Body, Move, TurnPlanner};
+use shared::turn::TurnPlanner;
+use shared::vocabulary::{Body, Move};
 
 use crate::ipc::Tamper;
 pub use crate::misbehave::Misbehave;
@@ -212,7 +213,7 @@ mod tests {
 
     use shared::scenario::Scenario;
     use shared::simulate::{agent_planners, plan_centre_path};
-    use shared::turn::Move;
+    use shared::vocabulary::Move;
 
     use super::*;
     use crate::transport::MissionView;

@@ -3,7 +3,7 @@
 
 use shared::geometry::{Disk, Point, Vector};
 pub use shared::misbehave::Misbehave;
-use shared::turn::{Move, MoveStatus};
+use shared::vocabulary::{Move, MoveStatus};
 
 /// `argv[0]` of the children [`Misbehave::Fork`] starts for run `prefix`, so that tests
 /// can find them: `formation-stray-<prefix>`.

@@ -107,7 +107,7 @@ fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> any
 fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
     let node = rogue_node(prefix, held)?;
     let mut ports = 0usize;
-    for victim in (0..shared::scenario::MAX_AGENTS).filter(|&v| v != me) {
+    for victim in (0..shared::vocabulary::MAX_AGENTS).filter(|&v| v != me) {
         let names = AgentServiceNames::new(victim, 0);
         let Ok(mission) = node
             .service_builder(&service_name(&names.mission)?)

@@ -3,8 +3,7 @@
 use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Pose};
-use shared::scenario::{AgentSpec, PlannerSpec};
-use shared::turn::Move;
+use shared::vocabulary::{AgentSpec, Move, PlannerSpec};
 
 /// The static scenario as an agent sees it.
 #[derive(Clone, Debug, PartialEq)]

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 use shared::misbehave::Misbehave;
-use shared::scenario::PlannerKind;
+use shared::vocabulary::PlannerKind;
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
 /// talking over iceoryx2 shared memory.

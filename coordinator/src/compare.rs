@@ -6,8 +6,8 @@ use std::path::Path;
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::run::Run;
-use shared::scenario::PlannerKind;
+use shared::record::Run;
+use shared::vocabulary::PlannerKind;
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;

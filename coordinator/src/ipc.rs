@@ -20,7 +20,7 @@ use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
-use shared::turn::Body;
+use shared::vocabulary::Body;
 use shared::wire::{
     self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState,
     Mission, Role, StateKind, StateMsg, World,

@@ -9,7 +9,7 @@ use parry2d_f64::query;
 use parry2d_f64::shape::{Ball, Segment};
 use shared::geometry::{Disk, Field, Point};
 use shared::safety::SAFETY_TOLERANCE_M;
-use shared::turn::Body;
+use shared::vocabulary::Body;
 
 /// Why the monitor refused a move.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use serde::Serialize;
 use shared::geometry::Pose;
-use shared::run::{Run, Summary};
+use shared::record::{Run, Summary};
 use shared::scenario::Scenario;
 
 use crate::error::CliError;

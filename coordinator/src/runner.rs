@@ -31,9 +31,9 @@ use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::geometry::{Point, Pose};
 use shared::misbehave::Misbehave;
-use shared::run::{Recorder, Run};
+use shared::record::{Recorder, Run};
 use shared::scenario::Scenario;
-use shared::turn::{MAX_WAYPOINTS, Move, MoveStatus};
+use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 use shared::wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};

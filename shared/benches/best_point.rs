@@ -21,10 +21,11 @@ use rand_chacha::ChaCha8Rng;
 use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
 use shared::disk_path::{PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
-use shared::run::Recorder;
+use shared::record::Recorder;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::turn::{AgentPlanner, Body, PLANNING_MARGIN_M};
+use shared::turn::{BestPointPlanner, PLANNING_MARGIN_M};
+use shared::vocabulary::Body;
 
 /// Radius of every (inflated) disk, in metres.
 const DISK_RADIUS_M: f64 = 1.3;
@@ -128,7 +129,7 @@ fn packed_scenario() -> Scenario {
     text += "]\n[path]\n\
              start = { x_m = 15.0, y_m = 15.0, heading_deg = 0.0 }\n\
              goal = { x_m = 85.0, y_m = 45.0, heading_deg = 23.0 }\n\
-             turning_radius_m = 8.0\nstep_m = 0.3\ncenter_clearance_m = 1.0\n\
+             turning_radius_m = 8.0\nstep_m = 0.3\ncentre_clearance_m = 1.0\n\
              allow_reverse = false\n";
     Scenario::parse(&text, "packed-200").expect("a valid scenario")
 }
@@ -138,12 +139,12 @@ type Turn = (usize, Pose, Point, Vec<Body>);
 
 /// Every turn of the steps `sampled` of the reference simulation of `scenario` (the same
 /// turns as `simulate`), run up to the last of them.
-fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<AgentPlanner>, Vec<Turn>) {
+fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointPlanner>, Vec<Turn>) {
     let path = plan_centre_path(scenario).expect("a centre path");
-    let planners: Vec<AgentPlanner> = scenario
+    let planners: Vec<BestPointPlanner> = scenario
         .agents
         .iter()
-        .map(|spec| AgentPlanner::new(scenario.field, &scenario.obstacles, spec))
+        .map(|spec| BestPointPlanner::new(scenario.field, &scenario.obstacles, spec))
         .collect();
     let mut recorder = Recorder::new(scenario, &path);
     let mut turns = Vec::new();

@@ -51,23 +51,15 @@ use std::ops::ControlFlow;
 
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
-use crate::scenario::AgentSpec;
-use crate::turn::{Body, Move, MoveStatus};
-
-/// Extra inflation of every barrier, in metres: the CBF keeps each body at least this
-/// much (minus rounding) away from every other body and from the field edges, so that
-/// floating-point rounding never breaks the true invariant.
-pub const CBF_MARGIN_M: f64 = 1e-6;
+use crate::vocabulary::{
+    AgentSpec, Body, CBF_MARGIN_M, CbfSettings, CbfSettingsError, Move, MoveStatus,
+};
 
 /// An agent within this distance of its slot, in metres, is at its slot.
 pub const AT_SLOT_TOLERANCE_M: f64 = 1e-9;
 
 /// A move shorter than this, in metres, counts as no motion for [`is_deadlocked`].
 pub const DEADLOCK_STEP_M: f64 = 1e-9;
-
-/// Default sharpness of the LogSumExp smooth max, in 1/m: with `n` terms the smooth max
-/// over-approximates the max by at most `ln(n) / k` metres (0.069 m for two terms).
-pub const DEFAULT_LSE_SHARPNESS_PER_M: f64 = 10.0;
 
 /// Relative slack of the QP's feasibility tests (times `1 + |b| + |u_nom|`, rows
 /// normalised to unit normals). It absorbs rounding, about a thousand times
@@ -208,111 +200,8 @@ pub fn solve_qp_2d(u_nom: &Vector, constraints: &[HalfPlane]) -> Result<Vector, 
     Ok(u)
 }
 
-/// Why CBF settings (or a planner built from them) are unusable.
-#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
-pub enum CbfSettingsError {
-    /// A setting is NaN, infinite, zero or negative.
-    #[error("{name} must be finite and positive, got {value}")]
-    NotPositive {
-        /// Name of the setting.
-        name: &'static str,
-        /// Its value.
-        value: f64,
-    },
-    /// `gamma_per_s * dt_s > 1`: a straight step could cross the barrier.
-    #[error("gamma_per_s * dt_s = {product} exceeds 1: a straight step could cross the barrier")]
-    GammaDtAboveOne {
-        /// The product `gamma_per_s * dt_s`.
-        product: f64,
-    },
-    /// The sensing radius is shorter than the agent's radius plus one step at maximum
-    /// speed: a body could be hit before it is sensed.
-    #[error(
-        "sensing_radius_m = {sensing_radius_m} is shorter than the agent radius plus one step at maximum speed ({required_m} m)"
-    )]
-    SensingTooShort {
-        /// The sensing radius, in metres.
-        sensing_radius_m: f64,
-        /// The least sensing radius that is safe for this agent, in metres.
-        required_m: f64,
-    },
-}
-
-/// Settings of the CBF-QP planners (shared by [`CbfPlanner`] and
-/// [`ZcbfLogSumExpPlanner`] so that the comparison is like for like).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CbfSettings {
-    /// Class-K gain of the barrier condition `h' >= -gamma h`, in 1/s.
-    pub gamma_per_s: f64,
-    /// Duration of one move (one turn), in seconds.
-    pub dt_s: f64,
-    /// Proportional gain of the nominal controller `u_nom = gain (slot - x)`, in 1/s.
-    pub gain_per_s: f64,
-    /// Saturation of the nominal velocity (and cap of the chosen one), in m/s.
-    pub max_speed_m_per_s: f64,
-    /// A neighbour is sensed (gets a constraint) when some point of its body lies within
-    /// this distance of the agent's centre, in metres. Must be at least the agent's
-    /// radius plus one step at maximum speed.
-    pub sensing_radius_m: f64,
-}
-
-impl Default for CbfSettings {
-    /// `gamma = 1 /s`, `dt = 1 s` (`gamma * dt = 1`, the largest safe value: the barrier
-    /// may be approached as fast as the whole-segment guarantee allows),
-    /// `gain = 1 /s` (`gain * dt = 1`: an unobstructed slot within one step's reach is
-    /// reached in one turn), maximum speed 1 m/s (one metre per turn, four times the
-    /// example scenario's centre step of 0.25 m, so agents catch up after a detour), and a
-    /// sensing radius of 5 m (safe for agent radii up to 4 m).
-    fn default() -> Self {
-        Self {
-            gamma_per_s: 1.0,
-            dt_s: 1.0,
-            gain_per_s: 1.0,
-            max_speed_m_per_s: 1.0,
-            sensing_radius_m: 5.0,
-        }
-    }
-}
-
+// The nominal controller of the barrier planners, private to them.
 impl CbfSettings {
-    /// Check that every setting is finite and positive and that `gamma * dt <= 1`.
-    pub fn validate(&self) -> Result<(), CbfSettingsError> {
-        for (name, value) in [
-            ("gamma_per_s", self.gamma_per_s),
-            ("dt_s", self.dt_s),
-            ("gain_per_s", self.gain_per_s),
-            ("max_speed_m_per_s", self.max_speed_m_per_s),
-            ("sensing_radius_m", self.sensing_radius_m),
-        ] {
-            positive(name, value)?;
-        }
-        let product = self.gamma_per_s * self.dt_s;
-        if product > 1.0 {
-            return Err(CbfSettingsError::GammaDtAboveOne { product });
-        }
-        Ok(())
-    }
-
-    /// Longest move of one turn, in metres (`max_speed * dt`).
-    pub fn max_step_m(&self) -> f64 {
-        self.max_speed_m_per_s * self.dt_s
-    }
-
-    /// Check these settings for an agent of radius `radius_m`: [`CbfSettings::validate`]
-    /// plus a sensing radius of at least `radius_m + max_step_m()`.
-    pub fn validate_for_agent(&self, radius_m: f64) -> Result<(), CbfSettingsError> {
-        self.validate()?;
-        positive("agent radius_m", radius_m)?;
-        let required_m = radius_m + self.max_step_m() + CBF_MARGIN_M;
-        if self.sensing_radius_m < required_m {
-            return Err(CbfSettingsError::SensingTooShort {
-                sensing_radius_m: self.sensing_radius_m,
-                required_m,
-            });
-        }
-        Ok(())
-    }
-
     /// The nominal velocity towards `slot` from `me`, saturated at the maximum speed.
     fn nominal(&self, slot: &Point, me: &Point) -> Vector {
         let u = self.gain_per_s * (slot - me);
@@ -332,14 +221,6 @@ impl CbfSettings {
         } else {
             u
         }
-    }
-}
-
-fn positive(name: &'static str, value: f64) -> Result<(), CbfSettingsError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(CbfSettingsError::NotPositive { name, value })
     }
 }
 
@@ -402,7 +283,7 @@ fn sensed(
 
 /// The CBF-QP planner of one agent: one barrier constraint per sensed neighbour and per
 /// field edge, an exact QP, one straight step of `dt` (see the module documentation for
-/// the safety argument). Same turn interface as [`crate::turn::AgentPlanner`].
+/// the safety argument). Same turn interface as [`crate::turn::BestPointPlanner`].
 #[derive(Clone, Debug)]
 pub struct CbfPlanner {
     field: Field,
@@ -529,7 +410,8 @@ pub struct ZcbfLogSumExpPlanner {
 
 impl ZcbfLogSumExpPlanner {
     /// The planner of agent `spec` in `field` among `obstacles` (true radii), with the
-    /// LogSumExp sharpness `sharpness_per_m` (see [`DEFAULT_LSE_SHARPNESS_PER_M`]).
+    /// LogSumExp sharpness `sharpness_per_m` (see
+    /// [`DEFAULT_LSE_SHARPNESS_PER_M`](crate::vocabulary::DEFAULT_LSE_SHARPNESS_PER_M)).
     /// The settings are checked as for [`CbfPlanner`]: it fails even with settings that
     /// make the CBF safe.
     pub fn new(
@@ -540,7 +422,12 @@ impl ZcbfLogSumExpPlanner {
         sharpness_per_m: f64,
     ) -> Result<Self, CbfSettingsError> {
         settings.validate_for_agent(spec.radius_m)?;
-        positive("sharpness_per_m", sharpness_per_m)?;
+        if !(sharpness_per_m.is_finite() && sharpness_per_m > 0.0) {
+            return Err(CbfSettingsError::NotPositive {
+                name: "sharpness_per_m",
+                value: sharpness_per_m,
+            });
+        }
         Ok(Self {
             field,
             slot: spec.slot,
@@ -653,34 +540,5 @@ mod tests {
             HalfPlane::new(Vector::new(-1.0, 0.0), -1.5),
         ];
         assert_eq!(solve_qp_2d(&u, &empty), Err(QpError::Infeasible));
-    }
-
-    #[test]
-    fn settings_validation() {
-        assert_eq!(CbfSettings::default().validate(), Ok(()));
-        let fast = CbfSettings {
-            gamma_per_s: 3.0,
-            ..CbfSettings::default()
-        };
-        assert!(matches!(
-            fast.validate(),
-            Err(CbfSettingsError::GammaDtAboveOne { .. })
-        ));
-        let blind = CbfSettings {
-            sensing_radius_m: 1.0,
-            ..CbfSettings::default()
-        };
-        assert!(matches!(
-            blind.validate_for_agent(0.3),
-            Err(CbfSettingsError::SensingTooShort { .. })
-        ));
-        let nan = CbfSettings {
-            dt_s: f64::NAN,
-            ..CbfSettings::default()
-        };
-        assert!(matches!(
-            nan.validate(),
-            Err(CbfSettingsError::NotPositive { name: "dt_s", .. })
-        ));
     }
 }

@@ -3,15 +3,19 @@
 //! One concept per module:
 //! - [`geometry`]: points, poses, disks, the field, the disk grid index, free space;
 //! - [`formation`]: ideal slots (the paper's equation 2);
+//! - [`vocabulary`]: the words every other part speaks (bodies, moves, agents, planners
+//!   and their settings, capacities); a leaf, so the modules form no import cycle;
 //! - [`best_point`]: the exact best point (Theorem 1) with reachability;
 //! - [`disk_path`]: shortest collision-free path for a point among disks;
 //! - [`curve`]: curvature-bounded paths (arcs and lines) between poses;
 //! - [`reeds_shepp`] and [`dubins`]: the shortest such paths;
 //! - [`hybrid_astar`]: the formation centre's planner;
+//! - [`cbf`]: the control-barrier-function planners and their exact 2-D QP;
 //! - [`scenario`]: the TOML scenario model and its validation;
-//! - [`turn`]: one agent's turn (slot, best point, path), shared by simulation and agents;
+//! - [`turn`]: one agent's turn: the paper's best-point planner, and every planner behind
+//!   one interface, shared by simulation and agents;
 //! - [`safety`]: the safety invariant checked with plain geometry;
-//! - [`run`]: the record of a run and its figures;
+//! - [`record`]: the record of a run and its figures;
 //! - [`simulate`]: the in-process reference simulation;
 //! - [`wire`]: the zero-copy messages between coordinator and agents.
 #![warn(missing_docs)]
@@ -27,10 +31,11 @@ pub mod geometry;
 pub mod hybrid_astar;
 pub mod misbehave;
 mod ordered;
+pub mod record;
 pub mod reeds_shepp;
-pub mod run;
 pub mod safety;
 pub mod scenario;
 pub mod simulate;
 pub mod turn;
+pub mod vocabulary;
 pub mod wire;

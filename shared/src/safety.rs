@@ -8,7 +8,7 @@
 use std::ops::ControlFlow;
 
 use crate::geometry::{DiskGrid, Field, Point, Vector, distance_point_segment};
-use crate::turn::Body;
+use crate::vocabulary::Body;
 
 /// How far a body may overlap another before it counts as a collision, in metres.
 pub const SAFETY_TOLERANCE_M: f64 = 1e-9;

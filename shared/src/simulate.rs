@@ -1,22 +1,22 @@
 //! The reference simulation: the paper's solution flow (Fig. 5) in one process.
 //!
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
-//! plans its move while the others stand still ([`AgentPlanner::plan_move`]), and the
+//! plans its move while the others stand still ([`TurnPlanner::plan_move`]), and the
 //! move is checked against the safety invariant before it is taken. The multi-process
 //! run must reproduce this trajectory to the bit.
 
-use crate::cbf::CbfSettingsError;
 use crate::geometry::Pose;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
-use crate::run::{Recorder, Run};
+use crate::record::{Recorder, Run};
 use crate::scenario::Scenario;
 use crate::turn::TurnPlanner;
+use crate::vocabulary::CbfSettingsError;
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
     let p = &scenario.path;
     let settings =
-        HybridAStarSettings::new(p.turning_radius_m, p.center_clearance_m, p.allow_reverse);
+        HybridAStarSettings::new(p.turning_radius_m, p.centre_clearance_m, p.allow_reverse);
     let dense = hybrid_astar::plan(
         &scenario.field,
         &scenario.obstacles,
@@ -49,6 +49,19 @@ pub enum SimulateError {
 }
 
 /// Plan the centre path and run the whole scenario.
+///
+/// ```
+/// use shared::scenario::Scenario;
+/// use shared::simulate::simulate;
+/// // The paper's example (section III): six agents through the obstacle field.
+/// let run = simulate(&Scenario::paper()).unwrap();
+/// let summary = run.summary();
+/// assert_eq!(summary.agents, 6);
+/// assert!(summary.completed);
+/// assert_eq!(summary.collisions, 0);
+/// assert!(summary.max_deviation_m > 0.0, "the obstacles disturb the formation");
+/// assert!(summary.final_mean_deviation_m < 0.05, "and it recovers");
+/// ```
 pub fn simulate(scenario: &Scenario) -> Result<Run, SimulateError> {
     let path = plan_centre_path(scenario)?;
     simulate_along(scenario, &path)

@@ -2,102 +2,25 @@
 //! point, shortest collision-free path to it, as a polyline the agent then follows.
 //!
 //! This is the one place the decision is made: the reference simulation and the agent
-//! process both call [`AgentPlanner::plan_move`], so their trajectories agree to the bit.
+//! process both call [`TurnPlanner::plan_move`] (the paper's [`BestPointPlanner`] or a
+//! barrier planner), so their trajectories agree to the bit.
 
 use crate::best_point::{self, BestPointError};
-use crate::cbf::{CbfPlanner, CbfSettingsError, ZcbfLogSumExpPlanner};
+use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
-use crate::scenario::{AgentSpec, PlannerKind, PlannerSpec};
+use crate::vocabulary::{
+    AgentSpec, Body, CbfSettingsError, MAX_WAYPOINTS, Move, MoveStatus, PlannerKind, PlannerSpec,
+};
 
 /// Extra inflation of every disk when choosing the best point and planning the path, in
 /// metres. It absorbs rounding and the chords of arcs: the followed polyline stays at
 /// least half of it away from every true body.
 pub const PLANNING_MARGIN_M: f64 = 1e-3;
 
-/// Most waypoints one move may have (the wire message's capacity).
-pub const MAX_WAYPOINTS: usize = 512;
-
-/// What an agent did in its turn.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum MoveStatus {
-    /// Reached its ideal slot.
-    AtSlot = 0,
-    /// The slot is blocked or unreachable: moved to the nearest reachable free point.
-    Deviated = 1,
-    /// Nothing nearer the slot is reachable: stayed where it was.
-    Stayed = 2,
-    /// No point of the field is free for this agent: stayed where it was.
-    NoFreePoint = 3,
-    /// The path to the best point needs more than [`MAX_WAYPOINTS`] waypoints: stayed.
-    PathTooLong = 4,
-    /// The safety monitor rejected the published move: the agent stayed where it was.
-    Rejected = 5,
-    /// The agent missed its turn deadline (dead or hung): frozen where it was.
-    Missed = 6,
-    /// The agent is out of the formation (its process died): a static obstacle.
-    Dead = 7,
-}
-
-impl MoveStatus {
-    /// Every status, in code order.
-    pub const ALL: [MoveStatus; 8] = [
-        Self::AtSlot,
-        Self::Deviated,
-        Self::Stayed,
-        Self::NoFreePoint,
-        Self::PathTooLong,
-        Self::Rejected,
-        Self::Missed,
-        Self::Dead,
-    ];
-
-    /// The status with wire code `code`, if any.
-    pub fn from_code(code: u8) -> Option<Self> {
-        Self::ALL.get(code as usize).copied()
-    }
-
-    /// A short lowercase name for tables and CSV files.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::AtSlot => "at_slot",
-            Self::Deviated => "deviated",
-            Self::Stayed => "stayed",
-            Self::NoFreePoint => "no_free_point",
-            Self::PathTooLong => "path_too_long",
-            Self::Rejected => "rejected",
-            Self::Missed => "missed",
-            Self::Dead => "dead",
-        }
-    }
-}
-
-/// A body in the plane: a disk at a position.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Body {
-    /// Centre of the body.
-    pub position: Point,
-    /// Radius of the body, in metres.
-    pub radius_m: f64,
-}
-
-/// The outcome of a turn.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Move {
-    /// The ideal slot at this step.
-    pub slot: Point,
-    /// The point the agent goes to (its current position when it stays).
-    pub best: Point,
-    /// What happened.
-    pub status: MoveStatus,
-    /// The polyline followed, from the current position to `best` (a single point when
-    /// the agent stays).
-    pub waypoints: Vec<Point>,
-}
-
-/// Everything an agent needs to take its turns; built once, reused every step.
+/// The paper's planner for one agent (exact best point, then the shortest path to it):
+/// everything the agent needs to take its turns; built once, reused every step.
 ///
 /// The agent is planned as a point: every other body is inflated by the agent's radius
 /// plus [`PLANNING_MARGIN_M`], and the field is shrunk by the same amount on every side.
@@ -105,7 +28,7 @@ pub struct Move {
 /// shifted by that inset; results are mapped back (exactly for the slot and the agent's
 /// own position).
 #[derive(Clone, Debug)]
-pub struct AgentPlanner {
+pub struct BestPointPlanner {
     /// The field the agent's centre may use, in the planning frame.
     field: Field,
     /// Planning frame origin in world coordinates (the inset on both axes).
@@ -117,7 +40,7 @@ pub struct AgentPlanner {
     obstacles: DiskGrid,
 }
 
-impl AgentPlanner {
+impl BestPointPlanner {
     /// The planner of agent `spec` in `field` among `obstacles` (true radii).
     pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
         let grow_m = spec.radius_m + PLANNING_MARGIN_M;
@@ -252,8 +175,8 @@ impl AgentPlanner {
 /// agent processes call.
 #[derive(Clone, Debug)]
 pub enum TurnPlanner {
-    /// The paper's method, exact ([`AgentPlanner`]).
-    BestPoint(AgentPlanner),
+    /// The paper's method, exact ([`BestPointPlanner`]).
+    BestPoint(BestPointPlanner),
     /// The control-barrier-function QP.
     Cbf(CbfPlanner),
     /// The paper's failed LogSumExp barrier, for comparison.
@@ -270,7 +193,9 @@ impl TurnPlanner {
         spec: &AgentSpec,
     ) -> Result<Self, CbfSettingsError> {
         Ok(match planner.kind {
-            PlannerKind::BestPoint => Self::BestPoint(AgentPlanner::new(field, obstacles, spec)),
+            PlannerKind::BestPoint => {
+                Self::BestPoint(BestPointPlanner::new(field, obstacles, spec))
+            }
             PlannerKind::Cbf => Self::Cbf(CbfPlanner::new(field, obstacles, spec, planner.cbf)?),
             PlannerKind::ZcbfLogsumexp => Self::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
                 field,

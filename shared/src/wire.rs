@@ -26,11 +26,13 @@
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
 
-use crate::cbf::CbfSettings;
 use crate::formation::Slot;
 use crate::geometry::{Disk, Field, Point, Pose};
-use crate::scenario::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec, Scenario};
-use crate::turn::{Body, MAX_WAYPOINTS, MoveStatus};
+use crate::scenario::Scenario;
+use crate::vocabulary::{
+    AgentSpec, Body, CbfSettings, MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS, MoveStatus,
+    PlannerKind, PlannerSpec,
+};
 
 /// The names of the five services of one agent's channel (see the module documentation).
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -4,15 +4,13 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{
-    CbfPlanner, CbfSettings, DEFAULT_LSE_SHARPNESS_PER_M, ZcbfLogSumExpPlanner, is_deadlocked,
-    solve_qp_2d,
-};
+use shared::cbf::{CbfPlanner, ZcbfLogSumExpPlanner, is_deadlocked, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::safety::check_move;
-use shared::scenario::AgentSpec;
-use shared::turn::{Body, MAX_WAYPOINTS, Move, MoveStatus};
+use shared::vocabulary::{
+    AgentSpec, Body, CbfSettings, DEFAULT_LSE_SHARPNESS_PER_M, MAX_WAYPOINTS, Move, MoveStatus,
+};
 
 /// An agent whose slot is the formation centre itself, so the centre pose is the slot.
 fn spec(radius_m: f64) -> AgentSpec {

@@ -11,12 +11,11 @@
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{CbfPlanner, CbfSettings, HalfPlane, QpError, solve_qp_2d};
+use shared::cbf::{CbfPlanner, HalfPlane, QpError, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::safety::check_move;
-use shared::scenario::AgentSpec;
-use shared::turn::{Body, MAX_WAYPOINTS};
+use shared::vocabulary::{AgentSpec, Body, CbfSettings, MAX_WAYPOINTS};
 
 /// The returned point must satisfy every row, normalised to a unit normal, to this, in
 /// the units of `u`.

@@ -11,15 +11,15 @@
 //!   likewise with KEY's value, `none` may be left out;
 //! - every `float` key refuses NaN naming itself, a `> 0` key refuses 0, a `≥ 0` key
 //!   refuses -1;
-//! - the limits table gives the values of the constants in `shared::scenario`.
+//! - the limits table gives the values of the constants in `shared::scenario` and
+//!   `shared::vocabulary`.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use shared::scenario::{
-    MAX_AGENTS, MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_OBSTACLES, MAX_STEPS, Scenario,
-};
+use shared::scenario::{MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_STEPS, Scenario};
 use shared::simulate::plan_centre_path;
+use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 use toml::{Table, Value};
 
 fn repo_root() -> PathBuf {

@@ -5,11 +5,11 @@
 use std::path::PathBuf;
 
 use shared::geometry::DiskGrid;
-use shared::run::Run;
+use shared::record::Run;
 use shared::safety::{self, SAFETY_TOLERANCE_M};
-use shared::scenario::{PlannerKind, Scenario};
+use shared::scenario::Scenario;
 use shared::simulate::simulate;
-use shared::turn::{Body, MAX_WAYPOINTS, MoveStatus};
+use shared::vocabulary::{Body, MAX_WAYPOINTS, MoveStatus, PlannerKind};
 
 fn scenario_files() -> Vec<PathBuf> {
     let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios"));

@@ -31,7 +31,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::Context;
-use shared::scenario::MAX_AGENTS;
+use shared::vocabulary::MAX_AGENTS;
 
 use crate::agents::locate_agent_binary;
 use crate::cli::BenchArgs;

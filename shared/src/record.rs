@@ -9,7 +9,7 @@ use serde::Serialize;
 use crate::geometry::{DiskGrid, Point, Pose};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
-use crate::turn::{Body, MAX_WAYPOINTS, Move, MoveStatus};
+use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
 
 /// One agent at the end of one step.
 #[derive(Clone, Debug, PartialEq)]

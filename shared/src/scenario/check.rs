@@ -1,0 +1,506 @@
+//! Validation: the raw file structures checked, field by field, into a [`Scenario`]
+//! every other part can trust, and the limits the checks enforce.
+
+use super::file::{CbfFile, FormationFile, ObstaclesFile, PoseFile, ScenarioFile};
+use super::random::{Crowded, random_obstacles};
+use super::{PathSpec, Scenario, ScenarioError};
+use crate::formation::Slot;
+use crate::geometry::{Disk, Field, Point, Pose};
+use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec};
+
+/// Largest field side accepted, in metres: beyond this the numbers stop being a field.
+pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
+/// Bound on the number of centre steps: `step_m` may not cut the field's diagonal into
+/// more than a quarter of this many steps. It also bounds how finely the centre path
+/// planner samples the path: every `turning_radius_m / 16` and `centre_clearance_m / 2`
+/// at most, so neither may cut the diagonal into more than this many samples.
+pub const MAX_STEPS: usize = 200_000;
+/// Largest magnitude of an angle in degrees (headings and slot angles): beyond it an
+/// angle is a typo, and far beyond it a double has no precision left for the angle.
+pub const MAX_ANGLE_DEG: f64 = 360.0;
+
+/// A number for a message: plain when short, in exponent form when huge or tiny (a
+/// 1e308 m field should not print 309 digits).
+fn num(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Validation of the raw file structures of the file `file` (named in every error).
+pub(super) struct Checker<'a> {
+    /// The file as given.
+    pub(super) file: &'a str,
+}
+
+impl Checker<'_> {
+    fn invalid(&self, field: impl Into<String>, reason: impl Into<String>) -> ScenarioError {
+        ScenarioError::Invalid {
+            file: self.file.to_string(),
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+
+    fn finite(&self, field: &str, v: f64) -> Result<f64, ScenarioError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.invalid(field, format!("must be a finite number, got {v}")))
+        }
+    }
+
+    fn angle_deg(&self, field: &str, v: f64) -> Result<f64, ScenarioError> {
+        self.finite(field, v)?;
+        if v.abs() > MAX_ANGLE_DEG {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "{} degrees is outside -{MAX_ANGLE_DEG}..={MAX_ANGLE_DEG}",
+                    num(v)
+                ),
+            ));
+        }
+        Ok(v)
+    }
+
+    fn positive(&self, field: &str, v: f64, max: f64) -> Result<f64, ScenarioError> {
+        self.finite(field, v)?;
+        if v <= 0.0 {
+            return Err(self.invalid(field, format!("must be positive, got {}", num(v))));
+        }
+        if v > max {
+            return Err(self.invalid(
+                field,
+                format!("{} is larger than the limit {}", num(v), num(max)),
+            ));
+        }
+        Ok(v)
+    }
+
+    fn non_negative(&self, field: &str, v: f64, max: f64) -> Result<f64, ScenarioError> {
+        self.finite(field, v)?;
+        if v < 0.0 {
+            return Err(self.invalid(field, format!("must not be negative, got {}", num(v))));
+        }
+        if v > max {
+            return Err(self.invalid(
+                field,
+                format!("{} is larger than the limit {}", num(v), num(max)),
+            ));
+        }
+        Ok(v)
+    }
+
+    fn pose(&self, field: &str, p: &PoseFile, area: &Field) -> Result<Pose, ScenarioError> {
+        self.finite(&format!("{field}.x_m"), p.x_m)?;
+        self.finite(&format!("{field}.y_m"), p.y_m)?;
+        self.angle_deg(&format!("{field}.heading_deg"), p.heading_deg)?;
+        if !area.contains(&Point::new(p.x_m, p.y_m), 0.0) {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "({}, {}) is outside the {} x {} m field",
+                    num(p.x_m),
+                    num(p.y_m),
+                    area.width_m,
+                    area.height_m
+                ),
+            ));
+        }
+        Ok(p.pose())
+    }
+
+    /// The scenario `raw` describes, or the first rule it breaks.
+    pub(super) fn check(&self, raw: ScenarioFile) -> Result<Scenario, ScenarioError> {
+        if raw.name.trim().is_empty() {
+            return Err(self.invalid("name", "must not be empty"));
+        }
+        let width_m = self.positive("field.width_m", raw.field.width_m, MAX_FIELD_SIDE_M)?;
+        let height_m = self.positive("field.height_m", raw.field.height_m, MAX_FIELD_SIDE_M)?;
+        let field = Field::new(width_m, height_m);
+        let side_m = width_m.max(height_m);
+
+        // Path settings first: random obstacles keep clear of the start and goal.
+        let p = &raw.path;
+        let start = self.pose("path.start", &p.start, &field)?;
+        let goal = self.pose("path.goal", &p.goal, &field)?;
+        let path = PathSpec {
+            start,
+            goal,
+            turning_radius_m: self.positive("path.turning_radius_m", p.turning_radius_m, side_m)?,
+            step_m: self.positive("path.step_m", p.step_m, side_m)?,
+            centre_clearance_m: self.non_negative(
+                "path.centre_clearance_m",
+                p.centre_clearance_m,
+                0.5 * width_m.min(height_m),
+            )?,
+            allow_reverse: p.allow_reverse,
+        };
+        let diagonal_m = width_m.hypot(height_m);
+        if diagonal_m / path.step_m > MAX_STEPS as f64 / 4.0 {
+            return Err(self.invalid(
+                "path.step_m",
+                format!(
+                    "{} m is too small for a {width_m} x {height_m} m field (more than {MAX_STEPS} steps)",
+                    num(path.step_m)
+                ),
+            ));
+        }
+        // The planner samples the centre path every turning_radius_m / 16 and
+        // centre_clearance_m / 2 at most: bound the samples as the steps are bounded.
+        let finest_m = diagonal_m / MAX_STEPS as f64;
+        if path.turning_radius_m / 16.0 < finest_m {
+            return Err(self.invalid(
+                "path.turning_radius_m",
+                format!(
+                    "{} m is too small for a {width_m} x {height_m} m field (the planner would sample the path more than {MAX_STEPS} times across it; at least {} m)",
+                    num(path.turning_radius_m),
+                    num(16.0 * finest_m)
+                ),
+            ));
+        }
+        if path.centre_clearance_m > 0.0 && path.centre_clearance_m / 2.0 < finest_m {
+            return Err(self.invalid(
+                "path.centre_clearance_m",
+                format!(
+                    "{} m is too small for a {width_m} x {height_m} m field (the planner would sample the path more than {MAX_STEPS} times across it; 0 or at least {} m)",
+                    num(path.centre_clearance_m),
+                    num(2.0 * finest_m)
+                ),
+            ));
+        }
+
+        let obstacles = self.obstacles(&raw.obstacles, &field, &path, raw.seed)?;
+        let agents = self.agents(&raw.formation, &field)?;
+        self.start_and_goal_clear(&obstacles, &field, &path)?;
+        self.formation_fits_at_start(&agents, &obstacles, &field, &path)?;
+        let planner = self.planner(raw.planner, raw.cbf.as_ref(), &agents, side_m)?;
+
+        Ok(Scenario {
+            name: raw.name,
+            seed: raw.seed,
+            field,
+            obstacles,
+            agents,
+            path,
+            planner,
+        })
+    }
+
+    fn planner(
+        &self,
+        kind: PlannerKind,
+        raw: Option<&CbfFile>,
+        agents: &[AgentSpec],
+        side_m: f64,
+    ) -> Result<PlannerSpec, ScenarioError> {
+        let mut spec = PlannerSpec {
+            kind,
+            ..PlannerSpec::default()
+        };
+        if let Some(c) = raw {
+            let set = |name: &str, v: Option<f64>, slot: &mut f64| -> Result<(), ScenarioError> {
+                if let Some(v) = v {
+                    *slot = self.positive(&format!("cbf.{name}"), v, side_m.max(1e3))?;
+                }
+                Ok(())
+            };
+            set("gamma_per_s", c.gamma_per_s, &mut spec.cbf.gamma_per_s)?;
+            set("dt_s", c.dt_s, &mut spec.cbf.dt_s)?;
+            set("gain_per_s", c.gain_per_s, &mut spec.cbf.gain_per_s)?;
+            set(
+                "max_speed_m_per_s",
+                c.max_speed_m_per_s,
+                &mut spec.cbf.max_speed_m_per_s,
+            )?;
+            set(
+                "sensing_radius_m",
+                c.sensing_radius_m,
+                &mut spec.cbf.sensing_radius_m,
+            )?;
+            set(
+                "lse_sharpness_per_m",
+                c.lse_sharpness_per_m,
+                &mut spec.lse_sharpness_per_m,
+            )?;
+        }
+        spec.check(agents)
+            .map_err(|e| self.invalid("cbf", e.to_string()))?;
+        Ok(spec)
+    }
+
+    fn obstacles(
+        &self,
+        raw: &ObstaclesFile,
+        field: &Field,
+        path: &PathSpec,
+        seed: u64,
+    ) -> Result<Vec<Disk>, ScenarioError> {
+        let side_m = field.width_m.max(field.height_m);
+        let default_radius_m = self.positive("obstacles.radius_m", raw.radius_m, side_m)?;
+        let explicit = raw.positions_m.len() + raw.disk.len();
+        if explicit > MAX_OBSTACLES {
+            return Err(self.invalid(
+                "obstacles",
+                format!(
+                    "{} explicit obstacles ({} in positions_m, {} in disk) exceed the capacity of {MAX_OBSTACLES}",
+                    explicit,
+                    raw.positions_m.len(),
+                    raw.disk.len()
+                ),
+            ));
+        }
+        let mut obstacles = Vec::with_capacity(explicit);
+        // `name` is the obstacle's path, `x` and `y` those of its coordinates.
+        let mut place = |name: String, x: (String, f64), y: (String, f64), radius_m: f64| {
+            let x_m = self.finite(&x.0, x.1)?;
+            let y_m = self.finite(&y.0, y.1)?;
+            if !field.contains(&Point::new(x_m, y_m), 0.0) {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "obstacle centre ({}, {}) is outside the {} x {} m field",
+                        num(x_m),
+                        num(y_m),
+                        field.width_m,
+                        field.height_m
+                    ),
+                ));
+            }
+            obstacles.push(Disk::new(x_m, y_m, radius_m));
+            Ok(())
+        };
+        for (i, xy) in raw.positions_m.iter().enumerate() {
+            let name = format!("obstacles.positions_m[{i}]");
+            let &[x_m, y_m] = xy.as_slice() else {
+                return Err(self.invalid(
+                    name,
+                    format!("must be a pair [x_m, y_m], got {} value(s)", xy.len()),
+                ));
+            };
+            place(
+                name.clone(),
+                (format!("{name}[0]"), x_m),
+                (format!("{name}[1]"), y_m),
+                default_radius_m,
+            )?;
+        }
+        for (i, d) in raw.disk.iter().enumerate() {
+            let name = format!("obstacles.disk[{i}]");
+            let x = (format!("{name}.x_m"), d.x_m);
+            let y = (format!("{name}.y_m"), d.y_m);
+            let radius_m = match d.radius_m {
+                Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
+                None => default_radius_m,
+            };
+            place(name, x, y, radius_m)?;
+        }
+        if let Some(random) = &raw.random {
+            if random.count > MAX_OBSTACLES - explicit {
+                return Err(self.invalid(
+                    "obstacles.random.count",
+                    format!(
+                        "{} random obstacles and {explicit} explicit ones exceed the capacity of {MAX_OBSTACLES}",
+                        random.count
+                    ),
+                ));
+            }
+            let radius_m = match random.radius_m {
+                Some(r) => self.positive("obstacles.random.radius_m", r, side_m)?,
+                None => default_radius_m,
+            };
+            let keep_clear_m =
+                self.non_negative("obstacles.random.keep_clear_m", random.keep_clear_m, side_m)?;
+            let drawn = random_obstacles(random.count, radius_m, keep_clear_m, field, path, seed)
+                .map_err(|Crowded { placed }| {
+                self.invalid(
+                    "obstacles.random",
+                    format!(
+                        "could place only {placed} of {} obstacles clear of the start and goal",
+                        random.count
+                    ),
+                )
+            })?;
+            obstacles.extend(drawn);
+        }
+        if obstacles.len() > MAX_OBSTACLES {
+            return Err(self.invalid(
+                "obstacles",
+                format!(
+                    "{} obstacles exceed the capacity of {MAX_OBSTACLES}",
+                    obstacles.len()
+                ),
+            ));
+        }
+        Ok(obstacles)
+    }
+
+    fn agents(&self, raw: &FormationFile, field: &Field) -> Result<Vec<AgentSpec>, ScenarioError> {
+        let hold_m = 0.5 * field.width_m.min(field.height_m);
+        let default_radius_m =
+            self.positive("formation.agent_radius_m", raw.agent_radius_m, hold_m)?;
+        if raw.slots.is_empty() {
+            return Err(self.invalid("formation.slots", "the formation has no agents"));
+        }
+        if raw.slots.len() > MAX_AGENTS {
+            return Err(self.invalid(
+                "formation.slots",
+                format!(
+                    "{} agents exceed the capacity of {MAX_AGENTS}",
+                    raw.slots.len()
+                ),
+            ));
+        }
+        let mut agents = Vec::with_capacity(raw.slots.len());
+        for (i, s) in raw.slots.iter().enumerate() {
+            let name = format!("formation.slots[{i}]");
+            let r_m = self.non_negative(
+                &format!("{name}.r_m"),
+                s.r_m,
+                field.width_m.hypot(field.height_m),
+            )?;
+            let theta_deg = self.angle_deg(&format!("{name}.theta_deg"), s.theta_deg)?;
+            let radius_m = match s.radius_m {
+                Some(r) => self.positive(&format!("{name}.radius_m"), r, hold_m)?,
+                None => default_radius_m,
+            };
+            agents.push(AgentSpec {
+                slot: Slot::new(r_m, theta_deg.to_radians()),
+                radius_m,
+            });
+        }
+        // The paper's Assumption 2: the nominal formation is itself collision-free.
+        let origin = Pose::new(0.0, 0.0, 0.0);
+        for i in 0..agents.len() {
+            for j in 0..i {
+                let d = (agents[i].slot.ideal_position(&origin)
+                    - agents[j].slot.ideal_position(&origin))
+                .norm();
+                let need = agents[i].radius_m + agents[j].radius_m;
+                if d < need {
+                    return Err(self.invalid(
+                        format!("formation.slots[{i}]"),
+                        format!(
+                            "slot is {d:.4} m from slot {j}, closer than their radii sum {need:.4} m (Assumption 2)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(agents)
+    }
+
+    fn start_and_goal_clear(
+        &self,
+        obstacles: &[Disk],
+        field: &Field,
+        path: &PathSpec,
+    ) -> Result<(), ScenarioError> {
+        for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
+            let p = pose.position();
+            if field.signed_inset_m(&p) < path.centre_clearance_m {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "({}, {}) is closer to the field's edge than the centre clearance {} m",
+                        p.x, p.y, path.centre_clearance_m
+                    ),
+                ));
+            }
+            if let Some((k, o)) = obstacles
+                .iter()
+                .enumerate()
+                .find(|(_, o)| o.signed_distance_m(&p) < path.centre_clearance_m)
+            {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "({}, {}) is within the centre clearance {} m of obstacle {k} at ({}, {}) radius {} m",
+                        p.x, p.y, path.centre_clearance_m, o.center.x, o.center.y, o.radius_m
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn formation_fits_at_start(
+        &self,
+        agents: &[AgentSpec],
+        obstacles: &[Disk],
+        field: &Field,
+        path: &PathSpec,
+    ) -> Result<(), ScenarioError> {
+        for (i, a) in agents.iter().enumerate() {
+            let name = format!("formation.slots[{i}]");
+            let p = a.slot.ideal_position(&path.start);
+            if field.signed_inset_m(&p) < a.radius_m {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "at the start pose the agent at ({:.3}, {:.3}) does not fit inside the field",
+                        p.x, p.y
+                    ),
+                ));
+            }
+            if let Some((k, o)) = obstacles
+                .iter()
+                .enumerate()
+                .find(|(_, o)| o.signed_distance_m(&p) < a.radius_m)
+            {
+                return Err(self.invalid(
+                    name,
+                    format!(
+                        "at the start pose the agent at ({:.3}, {:.3}) overlaps obstacle {k} at ({}, {})",
+                        p.x, p.y, o.center.x, o.center.y
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scenario::{MINIMAL, Scenario};
+
+    #[test]
+    fn errors_name_the_file_and_the_field() {
+        let cases = [
+            (
+                MINIMAL.replace("width_m = 20.0", "width_m = -1.0"),
+                "field.width_m",
+            ),
+            (
+                MINIMAL.replace("width_m = 20.0", "width_m = nan"),
+                "field.width_m",
+            ),
+            (
+                MINIMAL.replace("step_m = 0.5", "step_m = inf"),
+                "path.step_m",
+            ),
+            (MINIMAL.replace("[path]", "[path]\nspeed = 1"), "path.speed"),
+            (
+                MINIMAL.replace("r_m = 1.0", "r_m = 0.5"),
+                "formation.slots[1]",
+            ),
+            (
+                MINIMAL.replace("r_m = 1.0", "r_m = \"far\""),
+                "formation.slots[1].r_m",
+            ),
+            (MINIMAL.replace("x_m = 3.0", "x_m = 30.0"), "path.start"),
+        ];
+        for (text, field) in cases {
+            let e = Scenario::parse(&text, "bad.toml").unwrap_err();
+            assert_eq!(e.field(), field, "{e}");
+            let line = e.to_string();
+            assert!(line.starts_with("bad.toml: "), "{line}");
+            assert!(!line.contains('\n'), "one line: {line}");
+        }
+    }
+}

@@ -1,0 +1,385 @@
+//! The file side of a scenario: reading the TOML text, the raw serde structures of the
+//! format (units in the names, unknown fields refused), the errors that name the line or
+//! the field, and the embedded paper scenario.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use super::check::Checker;
+use super::{Scenario, ScenarioError};
+use crate::geometry::Pose;
+use crate::vocabulary::PlannerKind;
+
+/// The paper's example (section III), embedded so `coordinator run` works with no file.
+pub const PAPER_SCENARIO_TOML: &str = include_str!("../../../scenarios/paper.toml");
+/// The name shown for the embedded paper scenario in messages.
+pub const PAPER_SCENARIO_NAME: &str = "<embedded paper.toml>";
+
+impl Scenario {
+    /// Read and validate the scenario file at `path`.
+    pub fn load(path: &Path) -> Result<Self, ScenarioError> {
+        Self::parse(&Self::read(path)?, &path.display().to_string())
+    }
+
+    /// The text of the scenario file at `path` (a directory, a missing file or a file
+    /// that is not UTF-8 is a [`ScenarioError::Read`]).
+    pub fn read(path: &Path) -> Result<String, ScenarioError> {
+        let file = path.display().to_string();
+        if path.is_dir() {
+            return Err(ScenarioError::Read {
+                file,
+                reason: "is a directory, not a scenario file".into(),
+            });
+        }
+        std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
+            file,
+            reason: e.to_string(),
+        })
+    }
+
+    /// The paper's example, embedded in the library.
+    pub fn paper() -> Self {
+        match Self::parse(PAPER_SCENARIO_TOML, PAPER_SCENARIO_NAME) {
+            Ok(s) => s,
+            // The embedded file is checked by the test suite; reaching this is a build bug.
+            Err(e) => panic!("embedded paper scenario is invalid: {e}"),
+        }
+    }
+
+    /// Parse and validate scenario text; `file` names it in errors.
+    ///
+    /// ```
+    /// use shared::scenario::Scenario;
+    /// let text = r#"
+    /// name = "two"
+    /// [field]
+    /// width_m = 20.0
+    /// height_m = 10.0
+    /// [formation]
+    /// slots = [ { r_m = 0.0, theta_deg = 0.0 }, { r_m = 1.0, theta_deg = 90.0 } ]
+    /// [path]
+    /// start = { x_m = 3.0, y_m = 5.0, heading_deg = 0.0 }
+    /// goal = { x_m = 17.0, y_m = 5.0, heading_deg = 0.0 }
+    /// turning_radius_m = 2.0
+    /// step_m = 0.5
+    /// centre_clearance_m = 0.3
+    /// "#;
+    /// let s = Scenario::parse(text, "two.toml").unwrap();
+    /// assert_eq!(s.agents.len(), 2);
+    /// assert_eq!(s.agents[1].radius_m, 0.3, "the paper's default agent radius");
+    /// assert_eq!(s.path.step_m, 0.5);
+    /// // A value out of range is refused, naming the file and the field.
+    /// let bad = text.replace("step_m = 0.5", "step_m = -1.0");
+    /// let e = Scenario::parse(&bad, "two.toml").unwrap_err();
+    /// assert_eq!(e.to_string(), "two.toml: path.step_m: must be positive, got -1");
+    /// ```
+    pub fn parse(text: &str, file: &str) -> Result<Self, ScenarioError> {
+        let raw = parse_file(text, file)?;
+        Checker { file }.check(raw)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// The file format (serde side). Units are in the names; unknown fields are errors.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ScenarioFile {
+    pub(super) name: String,
+    #[serde(default)]
+    pub(super) seed: u64,
+    pub(super) field: FieldFile,
+    #[serde(default)]
+    pub(super) obstacles: ObstaclesFile,
+    pub(super) formation: FormationFile,
+    pub(super) path: PathFile,
+    #[serde(default)]
+    pub(super) planner: PlannerKind,
+    pub(super) cbf: Option<CbfFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CbfFile {
+    pub(super) gamma_per_s: Option<f64>,
+    pub(super) dt_s: Option<f64>,
+    pub(super) gain_per_s: Option<f64>,
+    pub(super) max_speed_m_per_s: Option<f64>,
+    pub(super) sensing_radius_m: Option<f64>,
+    pub(super) lse_sharpness_per_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FieldFile {
+    pub(super) width_m: f64,
+    pub(super) height_m: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ObstaclesFile {
+    #[serde(default = "default_obstacle_radius_m")]
+    pub(super) radius_m: f64,
+    /// `[x_m, y_m]` pairs; the length is checked by the [`Checker`] (serde would take the
+    /// first two numbers of a longer array without a word).
+    #[serde(default)]
+    pub(super) positions_m: Vec<Vec<f64>>,
+    #[serde(default)]
+    pub(super) disk: Vec<DiskFile>,
+    pub(super) random: Option<RandomFile>,
+}
+
+impl Default for ObstaclesFile {
+    fn default() -> Self {
+        Self {
+            radius_m: default_obstacle_radius_m(),
+            positions_m: Vec::new(),
+            disk: Vec::new(),
+            random: None,
+        }
+    }
+}
+
+/// The paper's Assumption 4: one obstacle radius for all, 1 m unless the file says.
+pub(super) fn default_obstacle_radius_m() -> f64 {
+    1.0
+}
+
+/// The paper's Assumption 3: one agent radius for all, 0.3 m unless the file says.
+pub(super) fn default_agent_radius_m() -> f64 {
+    0.3
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct DiskFile {
+    pub(super) x_m: f64,
+    pub(super) y_m: f64,
+    pub(super) radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RandomFile {
+    pub(super) count: usize,
+    #[serde(default)]
+    pub(super) keep_clear_m: f64,
+    pub(super) radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FormationFile {
+    #[serde(default = "default_agent_radius_m")]
+    pub(super) agent_radius_m: f64,
+    pub(super) slots: Vec<SlotFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SlotFile {
+    pub(super) r_m: f64,
+    pub(super) theta_deg: f64,
+    pub(super) radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PathFile {
+    pub(super) start: PoseFile,
+    pub(super) goal: PoseFile,
+    pub(super) turning_radius_m: f64,
+    pub(super) step_m: f64,
+    /// Also read under its older spelling, `center_clearance_m`, so older files load.
+    #[serde(alias = "center_clearance_m")]
+    pub(super) centre_clearance_m: f64,
+    #[serde(default)]
+    pub(super) allow_reverse: bool,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PoseFile {
+    pub(super) x_m: f64,
+    pub(super) y_m: f64,
+    pub(super) heading_deg: f64,
+}
+
+impl PoseFile {
+    pub(super) fn pose(&self) -> Pose {
+        Pose::new(self.x_m, self.y_m, self.heading_deg.to_radians())
+    }
+}
+
+fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
+    let syntax = |e: toml::de::Error| ScenarioError::Parse {
+        file: file.to_string(),
+        field: e
+            .span()
+            .map(|s| line_column(text, s.start))
+            .unwrap_or_else(|| "(syntax)".into()),
+        reason: one_line(e.message()),
+    };
+    let deserializer = toml::Deserializer::parse(text).map_err(syntax)?;
+    let raw = serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        let top = path == "." || path.is_empty();
+        // A missing field is reported at the table that lacks it: name the field itself.
+        let missing = inner
+            .message()
+            .strip_prefix("missing field `")
+            .and_then(|rest| rest.strip_suffix('`'))
+            .map(str::to_owned);
+        let field = match missing {
+            Some(name) if top => name,
+            Some(name) => format!("{path}.{name}"),
+            None if top => inner
+                .span()
+                .map(|s| line_column(text, s.start))
+                .unwrap_or_else(|| "(top level)".into()),
+            None => path,
+        };
+        ScenarioError::Parse {
+            file: file.to_string(),
+            field,
+            reason: one_line(inner.message()),
+        }
+    })?;
+    let document: toml::Table = toml::from_str(text).map_err(syntax)?;
+    if let Some(field) = table_given_as_array(&document) {
+        return Err(ScenarioError::Parse {
+            file: file.to_string(),
+            field,
+            reason:
+                "invalid type: array, expected a table of named values (units are in the names)"
+                    .into(),
+        });
+    }
+    Ok(raw)
+}
+
+/// The first table of the format written as an array (`start = [3.0, 5.0, 0.0]`), if
+/// any. Serde fills a struct from an array by position, silently dropping extra items;
+/// the format wants every value named with its unit.
+fn table_given_as_array(document: &toml::Table) -> Option<String> {
+    const TABLES: [&str; 7] = [
+        "field",
+        "obstacles",
+        "obstacles.random",
+        "formation",
+        "path",
+        "path.start",
+        "path.goal",
+    ];
+    const ARRAYS_OF_TABLES: [&str; 2] = ["obstacles.disk", "formation.slots"];
+    let lookup = |path: &str| {
+        let mut parts = path.split('.');
+        let mut value = document.get(parts.next()?)?;
+        for part in parts {
+            value = value.as_table()?.get(part)?;
+        }
+        Some(value)
+    };
+    if let Some(path) = TABLES
+        .into_iter()
+        .find(|path| lookup(path).is_some_and(toml::Value::is_array))
+    {
+        return Some(path.to_string());
+    }
+    ARRAYS_OF_TABLES.into_iter().find_map(|path| {
+        let items = lookup(path)?.as_array()?;
+        let i = items.iter().position(toml::Value::is_array)?;
+        Some(format!("{path}[{i}]"))
+    })
+}
+
+/// `line L, column C` of a byte offset (both from 1, the column in characters). An
+/// offset past the end or inside a character is taken back to the character's start.
+fn line_column(text: &str, offset: usize) -> String {
+    let mut end = offset.min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let before = &text[..end];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = before[line_start..].chars().count() + 1;
+    format!("line {line}, column {column}")
+}
+
+fn one_line(message: &str) -> String {
+    message.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::geometry::Pose;
+    use crate::scenario::{MINIMAL, Scenario};
+
+    #[test]
+    fn a_minimal_file_gets_the_papers_default_radii() {
+        let s = Scenario::parse(MINIMAL, "min.toml").unwrap();
+        assert_eq!(s.agents.len(), 2);
+        assert!(s.agents.iter().all(|a| a.radius_m == 0.3));
+        assert!(s.obstacles.is_empty());
+    }
+
+    #[test]
+    fn the_embedded_paper_scenario_is_valid_and_has_the_papers_formation() {
+        let s = Scenario::paper();
+        let want = [
+            (1.0, 0.0),
+            (0.0, 0.0),
+            (1.5, 45.0),
+            (1.0, 120.0),
+            (1.5, 180.0),
+            (2.0, -120.0),
+        ];
+        assert_eq!(s.agents.len(), want.len());
+        for (a, (r, th)) in s.agents.iter().zip(want) {
+            assert_eq!(a.slot.r_m, r);
+            assert!((a.slot.theta_rad - f64::to_radians(th)).abs() < 1e-15);
+        }
+        assert_eq!(s.path.start, Pose::new(2.0, 2.0, 0.0));
+    }
+
+    #[test]
+    fn both_spellings_of_the_centre_clearance_load_the_same_scenario() {
+        assert!(MINIMAL.contains("\ncentre_clearance_m = 0.3\n"));
+        let old = MINIMAL.replace("centre_clearance_m", "center_clearance_m");
+        let new = Scenario::parse(MINIMAL, "new.toml").unwrap_or_else(|e| panic!("{e}"));
+        let old = Scenario::parse(&old, "old.toml").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(old, new);
+        assert_eq!(new.path.centre_clearance_m, 0.3);
+        // Written back, the old spelling becomes the new one.
+        let resolved = old
+            .to_resolved_toml("old.toml")
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            resolved.contains("\ncentre_clearance_m = 0.3\n"),
+            "{resolved}"
+        );
+        assert!(!resolved.contains("center"), "{resolved}");
+        // One key under two names: giving both is an error naming it.
+        let both = MINIMAL.replace(
+            "centre_clearance_m = 0.3",
+            "centre_clearance_m = 0.3\ncenter_clearance_m = 0.3",
+        );
+        let e = Scenario::parse(&both, "both.toml").unwrap_err();
+        assert!(e.to_string().starts_with("both.toml: "), "{e}");
+        assert!(e.to_string().contains("centre_clearance_m"), "{e}");
+        // Errors name the field by its new spelling, whichever the file used.
+        let negative = MINIMAL.replace("centre_clearance_m = 0.3", "center_clearance_m = -1.0");
+        let e = Scenario::parse(&negative, "neg.toml").unwrap_err();
+        assert_eq!(e.field(), "path.centre_clearance_m", "{e}");
+    }
+
+    #[test]
+    fn syntax_errors_point_at_the_line() {
+        let e = Scenario::parse("name = \"x\"\n[field\n", "s.toml").unwrap_err();
+        assert!(e.field().starts_with("line 2"), "{e}");
+    }
+}

@@ -1,0 +1,29 @@
+//! The shared vocabulary: the words the planners, the scenario model, the record of a run
+//! and the wire types all speak.
+//!
+//! This module is a leaf of the library's module graph: it uses only
+//! [`geometry`](crate::geometry) and [`formation`](crate::formation), so anything may use
+//! it without an import cycle (the test `shared/tests/module_graph.rs` keeps it so).
+//!
+//! - [`Body`]: a disk at a position, as the planners see the other agents;
+//! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
+//! - [`AgentSpec`]: one agent of a scenario (its slot and radius);
+//! - [`PlannerKind`] and [`PlannerSpec`]: which controller moves the agents, with which
+//!   settings;
+//! - [`CbfSettings`]: the barrier-function planners' settings and their validation;
+//! - [`MAX_AGENTS`], [`MAX_OBSTACLES`], [`MAX_WAYPOINTS`]: the fixed capacities every
+//!   part agrees on (the wire messages hold no more).
+
+mod agent;
+mod body;
+mod capacity;
+mod cbf_settings;
+mod moves;
+mod planner;
+
+pub use agent::AgentSpec;
+pub use body::Body;
+pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
+pub use cbf_settings::{CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
+pub use moves::{Move, MoveStatus};
+pub use planner::{PlannerKind, PlannerSpec};
