@@ -16,7 +16,7 @@ use coordinator::runner::{BetweenSteps, RunOptions, run_scenario_with};
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::wire::{RUN_ENV, effective_uid, run_root};
+use wire::{RUN_ENV, effective_uid, run_root};
 
 /// `argv[0]` of the processes a `fork` agent starts (`agent::misbehave::stray_marker`).
 fn stray_marker(prefix: &str) -> String {

@@ -1,4 +1,4 @@
-//! The agent's side of the iceoryx2 protocol (see [`shared::wire`]).
+//! The agent's side of the iceoryx2 protocol (see [`wire`]).
 
 use std::time::{Duration, Instant};
 
@@ -13,9 +13,9 @@ use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::turn::Move;
-use shared::wire::{
-    self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role,
-    StateKind, World,
+use wire::{
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role, StateKind,
+    World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};

@@ -25,9 +25,9 @@ use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::getppid;
-use shared::wire::{
-    self, BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
-    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+use wire::{
+    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
+    BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
 };
 
 /// Serve the ping-pong of run `prefix` (and the socket at `uds`, if given).

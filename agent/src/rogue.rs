@@ -8,7 +8,7 @@ use std::any::Any;
 
 use anyhow::anyhow;
 use iceoryx2::prelude::*;
-use shared::wire::{self, AgentServiceNames, AgentState, Mission, Role, StateKind, World};
+use wire::{AgentServiceNames, AgentState, Mission, Role, StateKind, World};
 
 use crate::misbehave::Misbehave;
 

@@ -37,7 +37,6 @@ use nix::fcntl::{FcntlArg, FdFlag, fcntl};
 use nix::sys::signal::{Signal, kill, killpg};
 use nix::sys::wait::{Id, WaitPidFlag, WaitStatus, waitid, waitpid};
 use nix::unistd::Pid;
-use shared::wire;
 
 /// Find the `agent` executable: `explicit` if given, else `FORMATION_AGENT_BIN`, else
 /// the `agent` file beside the running coordinator.

@@ -1,4 +1,4 @@
-//! The coordinator's side of the iceoryx2 protocol (see [`shared::wire`]): it creates
+//! The coordinator's side of the iceoryx2 protocol (see [`wire`]): it creates
 //! every agent's channel with one port on each side, publishes the mission and the
 //! worlds, rings turns, and takes the agents' states in, each checked and tagged with the
 //! process that published it.
@@ -21,13 +21,13 @@ use rand_chacha::ChaCha20Rng;
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::turn::Body;
-use shared::wire::{
-    self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState,
-    Mission, Role, StateKind, StateMsg, World,
+use wire::{
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState, Mission,
+    Role, StateKind, StateMsg, World,
 };
 
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
-/// [`shared::wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
+/// [`wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TurnSplit {
     /// From ringing the turn to the agent awake: the wake-up of the agent's process.

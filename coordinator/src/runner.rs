@@ -8,7 +8,7 @@
 //! `respawn`, a replacement process takes its place from there.
 //!
 //! Trust: every agent is another process, so what arrives on its channel is checked
-//! before use ([`shared::wire::AgentState::read_checked`]) and judged here:
+//! before use ([`wire::AgentState::read_checked`]) and judged here:
 //! - a sample published by any process but the agent's own is `impersonation`: the
 //!   process that sent it, if it is one of the run's agents, is killed and frozen;
 //! - a sample that fails the checks is `malformed`; during a turn it ends the turn (the
@@ -30,11 +30,11 @@ use std::time::{Duration, Instant};
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::geometry::{Point, Pose};
-use shared::misbehave::Misbehave;
 use shared::run::{Recorder, Run};
 use shared::scenario::Scenario;
 use shared::turn::{MAX_WAYPOINTS, Move, MoveStatus};
-use shared::wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
+use wire::misbehave::Misbehave;
+use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
@@ -150,9 +150,9 @@ pub struct BetweenSteps<'a> {
 }
 
 /// A new run's prefix: no other run on this machine uses it, and no one can predict it
-/// (see [`shared::wire::RunPrefix`]).
+/// (see [`wire::RunPrefix`]).
 pub fn unique_prefix() -> anyhow::Result<String> {
-    Ok(shared::wire::RunPrefix::new_random()?.as_str().to_string())
+    Ok(wire::RunPrefix::new_random()?.as_str().to_string())
 }
 
 fn rss_kib(pid: u32) -> Option<f64> {
@@ -231,7 +231,7 @@ pub fn run_scenario_with(
     };
     // The run's private folder, made before anything else of the run (a folder already
     // there is refused); dropped last: after the agents and the node.
-    let _root = match shared::wire::RunRoot::create(&prefix) {
+    let _root = match wire::RunRoot::create(&prefix) {
         Ok(root) => root,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };

@@ -23,9 +23,9 @@ use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use shared::wire::{
-    self, BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
-    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+use wire::{
+    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
+    BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
 };
 
 use crate::agents::{AgentProcesses, Exit};

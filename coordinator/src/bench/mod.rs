@@ -7,7 +7,7 @@
 //!    overhead `latency - compute` per turn. Before the first turn the agents are held
 //!    idle and their CPU time is measured ([`IdleCpu`]).
 //! 2. between steps, every agent of that run answers empty turns in turn order (the
-//!    echo, [`shared::wire::EVENT_ECHO`]): the round trip of waking a process that last
+//!    echo, [`wire::EVENT_ECHO`]): the round trip of waking a process that last
 //!    ran N turns ago, with no world, planning or move. The two-process floor below
 //!    wakes the same warm process every time; the echo shows what waking N processes in
 //!    turn costs by itself, so the turn's overhead can be read against both.
@@ -46,12 +46,12 @@ pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
 
 /// Fixed part of a serialized world (seq, step, token, turn agent, centre pose), bytes:
 /// the wire header, so the socket carries what a turn carries.
-const WORLD_HEADER_BYTES: usize = std::mem::offset_of!(shared::wire::World, bodies);
+const WORLD_HEADER_BYTES: usize = std::mem::offset_of!(wire::World, bodies);
 /// A serialized agent position, bytes.
 const BYTES_PER_AGENT: usize = 16;
 /// Fixed part of a serialized move (seq, step, token, times, ids, status, slot, best):
 /// the wire header.
-const MOVE_HEADER_BYTES: usize = std::mem::offset_of!(shared::wire::AgentState, waypoints);
+const MOVE_HEADER_BYTES: usize = std::mem::offset_of!(wire::AgentState, waypoints);
 /// A serialized waypoint, bytes.
 const BYTES_PER_WAYPOINT: usize = 16;
 /// Waypoints in the socket reply ("a few": a move on the straight path has two).
