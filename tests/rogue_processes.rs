@@ -175,7 +175,7 @@ fn what_a_rogue_agent_starts_dies_with_the_run_from_the_command_line() {
         .spawn()
         .expect("start coordinator");
     // The run's prefix, from the strays' names, while it goes.
-    let stem = format!("formation-stray-fc{}x", child.id());
+    let stem = stray_marker(&wire::RunPrefix::head(child.id()));
     let deadline = Instant::now() + Duration::from_secs(60);
     let started = loop {
         let found: Vec<(String, Proc)> = all_pids()

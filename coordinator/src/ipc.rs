@@ -23,7 +23,7 @@ use shared::scenario::Scenario;
 use shared::turn::Body;
 use wire::{
     AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState, Mission,
-    Role, StateKind, StateMsg, World,
+    Role, RunPrefix, StateKind, StateMsg, World,
 };
 
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
@@ -533,7 +533,7 @@ pub fn clean_stale_runs() -> Vec<String> {
                 .metadata()
                 .is_ok_and(|m| m.uid() == euid && !m.file_type().is_symlink());
             if ours && let Some(prefix) = stale_prefix(&name) {
-                prefixes.insert(prefix);
+                prefixes.insert(prefix.to_string());
                 files.push(e.path());
             }
         }
@@ -576,8 +576,8 @@ pub fn clean_stale_runs() -> Vec<String> {
 }
 
 /// The run prefix file `name` starts with, if its coordinator process is gone.
-fn stale_prefix(name: &str) -> Option<String> {
-    let prefix = wire::RunPrefix::parse(name)?;
+fn stale_prefix(name: &str) -> Option<RunPrefix> {
+    let prefix = RunPrefix::parse(name)?;
     if std::path::Path::new(&format!("/proc/{}", prefix.pid())).exists() {
         return None;
     }
@@ -585,7 +585,7 @@ fn stale_prefix(name: &str) -> Option<String> {
     if processes_serving(prefix.as_str()) {
         return None;
     }
-    Some(prefix.as_str().to_string())
+    Some(prefix)
 }
 
 /// Whether a process was started for run `prefix` (its command line holds

@@ -34,7 +34,7 @@ use shared::run::{Recorder, Run};
 use shared::scenario::Scenario;
 use shared::turn::{MAX_WAYPOINTS, Move, MoveStatus};
 use wire::misbehave::Misbehave;
-use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
+use wire::{MalformedState, RunPrefix, RunRoot, StateKind, StateMsg, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
@@ -149,12 +149,6 @@ pub struct BetweenSteps<'a> {
     pub pids: &'a [Option<u32>],
 }
 
-/// A new run's prefix: no other run on this machine uses it, and no one can predict it
-/// (see [`wire::RunPrefix`]).
-pub fn unique_prefix() -> anyhow::Result<String> {
-    Ok(wire::RunPrefix::new_random()?.as_str().to_string())
-}
-
 fn rss_kib(pid: u32) -> Option<f64> {
     let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
     let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
@@ -225,13 +219,14 @@ pub fn run_scenario_with(
     };
     agents::raise_fd_limit();
     crate::ipc::clean_stale_runs();
-    let prefix = match unique_prefix() {
-        Ok(prefix) => prefix,
-        Err(e) => return Err(fail(e, &recorder, progress)),
+    // No other run on this machine uses it, and no one can predict it.
+    let prefix = match RunPrefix::new_random() {
+        Ok(prefix) => prefix.to_string(),
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
     // The run's private folder, made before anything else of the run (a folder already
     // there is refused); dropped last: after the agents and the node.
-    let _root = match wire::RunRoot::create(&prefix) {
+    let _root = match RunRoot::create(&prefix) {
         Ok(root) => root,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };

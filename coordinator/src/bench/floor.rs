@@ -29,7 +29,6 @@ use wire::{
 };
 
 use crate::agents::{AgentProcesses, Exit};
-use crate::runner::unique_prefix;
 
 /// Longest a single round trip may take before the measurement is abandoned.
 const ROUND_TRIP_DEADLINE: Duration = Duration::from_secs(2);
@@ -139,7 +138,7 @@ pub struct PingPongSession {
 impl PingPongSession {
     /// Start the ping-pong process from `bin` and shake hands over both channels.
     pub fn start(bin: &Path) -> anyhow::Result<Self> {
-        let prefix = unique_prefix()?;
+        let prefix = wire::RunPrefix::new_random()?.to_string();
         let config = wire::ipc_config(&prefix, Role::Coordinator)?;
         let root = wire::RunRoot::create(&prefix)?;
         // In the private folder: no other user can connect to the socket.

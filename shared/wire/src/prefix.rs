@@ -42,7 +42,7 @@ pub struct RunPrefix {
 
 impl RunPrefix {
     /// Start of every run prefix.
-    pub const STEM: &'static str = "fc";
+    const STEM: &'static str = "fc";
     /// Most hex digits in the random part (64 bits); fewer when the pid is long, so that
     /// the prefix fits in [`MAX_PREFIX_LEN`]: at least 10 (40 bits) for any `u32` pid,
     /// 13 or more for the usual pids of up to 7 digits.
@@ -63,8 +63,14 @@ impl RunPrefix {
         ))
     }
 
+    /// The start of every prefix of the runs coordinated by process `pid`,
+    /// `fc<pid>x`: it finds their files and their processes.
+    pub fn head(pid: u32) -> String {
+        format!("{}{pid}x", Self::STEM)
+    }
+
     fn with_random(pid: u32, random: u64) -> Self {
-        let head = format!("{}{pid}x", Self::STEM);
+        let head = Self::head(pid);
         let digits = (MAX_PREFIX_LEN - 1 - head.len()).min(Self::MAX_RANDOM_DIGITS);
         let hex = format!("{random:016x}");
         Self {
@@ -127,6 +133,7 @@ mod tests {
         let a = RunPrefix::new_random().expect("OS random source");
         let b = RunPrefix::new_random().expect("OS random source");
         let head = format!("fc{}x", std::process::id());
+        assert_eq!(RunPrefix::head(std::process::id()), head);
         let random_part = |p: &RunPrefix| {
             let s = p.as_str();
             s[head.len()..s.len() - 1].to_string()
