@@ -17,7 +17,7 @@ use clap::Parser;
 use shared::turn::{Body, Move, TurnPlanner};
 
 use crate::ipc::Tamper;
-pub use crate::misbehave::Misbehave;
+use wire::misbehave::Misbehave;
 
 pub use transport::{Command, Transport, TurnInput};
 

@@ -3,7 +3,7 @@
 
 use shared::geometry::{Disk, Point, Vector};
 use shared::turn::{Move, MoveStatus};
-pub use wire::misbehave::Misbehave;
+use wire::misbehave::Misbehave;
 
 /// `argv[0]` of the children [`Misbehave::Fork`] starts for run `prefix`, so that tests
 /// can find them: `formation-stray-<prefix>`.

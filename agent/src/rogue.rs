@@ -10,7 +10,7 @@ use anyhow::anyhow;
 use iceoryx2::prelude::*;
 use wire::{AgentServiceNames, AgentState, Mission, Role, StateKind, World};
 
-use crate::misbehave::Misbehave;
+use wire::misbehave::Misbehave;
 
 /// Most ports of one kind a hoarding agent opens on one service.
 const HOARD_PER_SERVICE: usize = 4;

@@ -126,7 +126,7 @@ fn parse_kill(s: &str) -> Result<(usize, usize), String> {
     Ok((agent, step))
 }
 
-/// `AGENT=MODE`, the mode one of [`wire::misbehave::MISBEHAVE_NAMES`].
+/// `AGENT=MODE`, the mode one of [`Misbehave::ALL`] by name.
 fn parse_misbehave(s: &str) -> Result<(usize, Misbehave), String> {
     let (a, m) = s
         .split_once('=')
