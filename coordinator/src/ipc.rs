@@ -26,6 +26,8 @@ use wire::{
     Role, RunPrefix, StateKind, StateMsg, World,
 };
 
+use crate::procfs;
+
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
 /// [`wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -578,7 +580,7 @@ pub fn clean_stale_runs() -> Vec<String> {
 /// The run prefix file `name` starts with, if its coordinator process is gone.
 fn stale_prefix(name: &str) -> Option<RunPrefix> {
     let prefix = RunPrefix::parse(name)?;
-    if std::path::Path::new(&format!("/proc/{}", prefix.pid())).exists() {
+    if procfs::process_exists(prefix.pid()) {
         return None;
     }
     // Its agents may still be on their way out (they leave within a second).
@@ -591,13 +593,6 @@ fn stale_prefix(name: &str) -> Option<RunPrefix> {
 /// Whether a process was started for run `prefix` (its command line holds
 /// `--run <prefix>`).
 fn processes_serving(prefix: &str) -> bool {
-    let Ok(entries) = std::fs::read_dir("/proc") else {
-        return false;
-    };
     let needle: Vec<u8> = [b"--run\0".as_slice(), prefix.as_bytes(), b"\0"].concat();
-    entries.flatten().any(|e| {
-        std::fs::read(e.path().join("cmdline"))
-            .map(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
-            .unwrap_or(false)
-    })
+    procfs::any_command_line_holds(&needle)
 }

@@ -11,6 +11,7 @@ pub mod logging;
 pub mod monitor;
 pub mod output;
 pub mod plan;
+mod procfs;
 pub mod render;
 pub mod run_cmd;
 pub mod runner;

@@ -40,6 +40,7 @@ use crate::agents::{self, AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
 use crate::monitor::SafetyMonitor;
 use crate::output::Timing;
+use crate::procfs::{self, IdleCpu};
 use crate::stats::Distribution;
 
 /// How often the coordinator checks an agent's process while it waits for its move.
@@ -101,7 +102,7 @@ pub struct RunOutcome {
     /// Every answered turn, in order (for benchmarks: per-turn latency and compute).
     pub turn_samples: Vec<TurnSample>,
     /// The agents' CPU time while held idle ([`RunOptions::idle_probe`]).
-    pub idle_cpu: Option<crate::bench::IdleCpu>,
+    pub idle_cpu: Option<IdleCpu>,
 }
 
 /// A run the coordinator could not finish: what went wrong, and what it recorded up to
@@ -149,12 +150,6 @@ pub struct BetweenSteps<'a> {
     pub pids: &'a [Option<u32>],
 }
 
-fn rss_kib(pid: u32) -> Option<f64> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
-}
-
 fn progress_bar(steps: usize, name: &str, enabled: bool) -> ProgressBar {
     if !enabled {
         return ProgressBar::hidden();
@@ -186,7 +181,7 @@ struct Progress {
     latency_us: Vec<f64>,
     compute_us: Vec<f64>,
     turn_samples: Vec<TurnSample>,
-    idle_cpu: Option<crate::bench::IdleCpu>,
+    idle_cpu: Option<IdleCpu>,
     rss_kib: Vec<f64>,
     interrupted: bool,
     completed: bool,
@@ -361,7 +356,7 @@ impl Driver<'_, '_> {
         self.progress.startup_s = started.elapsed().as_secs_f64();
         self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
             let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
-            crate::bench::IdleCpu::measure(&pids, hold)
+            IdleCpu::measure(&pids, hold)
         });
         self.progress.turn_samples.reserve(n * centre_path.len());
 
@@ -407,7 +402,7 @@ impl Driver<'_, '_> {
             .pids()
             .into_iter()
             .flatten()
-            .filter_map(rss_kib)
+            .filter_map(procfs::rss_kib)
             .collect();
         self.progress.completed = !self.progress.interrupted;
         Ok(())

@@ -5,7 +5,7 @@
 //! 1. a generated scenario ([`scenario`]) runs through the real [`run_scenario`]; every
 //!    answered turn gives its latency and the agent's compute time, hence the IPC
 //!    overhead `latency - compute` per turn. Before the first turn the agents are held
-//!    idle and their CPU time is measured ([`IdleCpu`]).
+//!    idle and their CPU time is measured ([`IdleCpu`](crate::procfs::IdleCpu)).
 //! 2. between steps, every agent of that run answers empty turns in turn order (the
 //!    echo, [`wire::EVENT_ECHO`]): the round trip of waking a process that last
 //!    ran N turns ago, with no world, planning or move. The two-process floor below
@@ -23,7 +23,6 @@
 
 pub mod floor;
 pub mod plot;
-pub mod procfs;
 pub mod report;
 pub mod scenario;
 
@@ -38,10 +37,10 @@ use crate::cli::BenchArgs;
 use crate::error::CliError;
 use crate::ipc::TurnSplit;
 use crate::output::write_atomically;
+use crate::procfs;
 use crate::runner::{BetweenSteps, RunOptions, run_scenario_with};
 use crate::stats::Distribution;
 
-pub use procfs::IdleCpu;
 pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
 
 /// Fixed part of a serialized world (seq, step, token, turn agent, centre pose), bytes:
@@ -94,7 +93,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             "release"
         },
         cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
-        load_average_1m: load_average(),
+        load_average_1m: procfs::load_average(),
         round_trips: args.round_trips,
         warmup_round_trips: 0,
         histogram_svg: None,
@@ -362,15 +361,6 @@ fn bench_one(
 /// `a / b`, or 0 when `b` is not a positive number.
 fn ratio(a: f64, b: f64) -> f64 {
     if b > 0.0 && a.is_finite() { a / b } else { 0.0 }
-}
-
-fn load_average() -> Option<f64> {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()?
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()
 }
 
 /// `runs/bench-<UTC timestamp>.json`.
