@@ -127,7 +127,7 @@ fn what_a_rogue_agent_starts_dies_with_the_run_in_process() {
         &options(&[(2, "fork")]),
         &mut |b: BetweenSteps<'_>| {
             if seen.is_none() {
-                let prefix = b.ipc.prefix().to_string();
+                let prefix = b.prefix.to_string();
                 // The strays start before the agent's handshake: by step 1 both run.
                 let found = strays(&stray_marker(&prefix));
                 seen = Some((prefix, found));
@@ -229,7 +229,7 @@ fn while_a_run_goes_its_files_are_private() {
             if checked.is_some() {
                 return Ok(());
             }
-            let prefix = b.ipc.prefix().to_string();
+            let prefix = b.prefix.to_string();
             let root = run_root(&prefix).expect("/dev/shm");
             let meta = std::fs::symlink_metadata(&root).expect("the run folder");
             assert!(meta.is_dir(), "{}", root.display());

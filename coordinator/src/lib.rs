@@ -1,21 +1,21 @@
 //! The coordinator: validates and plans a scenario, runs it over agent processes, and
 //! writes the outputs. The binary's `main` calls [`run_cli`].
 
-pub mod agents;
-pub mod bench;
+mod agents;
+mod bench;
 pub mod cli;
-pub mod compare;
-pub mod error;
-pub mod ipc;
+mod compare;
+mod error;
+mod ipc;
 pub mod logging;
-pub mod monitor;
+mod monitor;
 pub mod output;
-pub mod plan;
+mod plan;
 mod procfs;
 pub mod render;
-pub mod run_cmd;
+mod run_cmd;
 pub mod runner;
-pub mod stats;
+mod stats;
 pub mod validate;
 
 pub use error::CliError;

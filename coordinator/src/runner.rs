@@ -44,7 +44,7 @@ use crate::procfs::{self, IdleCpu};
 use crate::stats::Distribution;
 
 /// How often the coordinator checks an agent's process while it waits for its move.
-pub const LIVENESS_SLICE: Duration = Duration::from_millis(10);
+const LIVENESS_SLICE: Duration = Duration::from_millis(10);
 
 /// How a run is carried out.
 #[derive(Clone, Debug)]
@@ -100,9 +100,9 @@ pub struct RunOutcome {
     /// The run's iceoryx2 prefix (every resource of the run starts with it).
     pub prefix: String,
     /// Every answered turn, in order (for benchmarks: per-turn latency and compute).
-    pub turn_samples: Vec<TurnSample>,
+    pub(crate) turn_samples: Vec<TurnSample>,
     /// The agents' CPU time while held idle ([`RunOptions::idle_probe`]).
-    pub idle_cpu: Option<IdleCpu>,
+    pub(crate) idle_cpu: Option<IdleCpu>,
 }
 
 /// A run the coordinator could not finish: what went wrong, and what it recorded up to
@@ -125,7 +125,7 @@ impl std::error::Error for RunFailure {}
 
 /// One answered turn.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TurnSample {
+pub(crate) struct TurnSample {
     /// The step.
     pub step: usize,
     /// The agent.
@@ -142,8 +142,10 @@ pub struct TurnSample {
 pub struct BetweenSteps<'a> {
     /// The step just finished.
     pub step: usize,
+    /// The run's prefix (every resource of the run starts with it).
+    pub prefix: &'a str,
     /// The run's ports (benchmarks ring the agents' echo through them).
-    pub ipc: &'a CoordinatorIpc,
+    pub(crate) ipc: &'a CoordinatorIpc,
     /// Which agents are alive.
     pub alive: &'a [bool],
     /// Each agent's process id, if it has a process.
@@ -388,6 +390,7 @@ impl Driver<'_, '_> {
             let pids = self.pids();
             (self.between_steps)(BetweenSteps {
                 step,
+                prefix: self.ipc.prefix(),
                 ipc: self.ipc,
                 alive: self.recorder.alive(),
                 pids: &pids,
