@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, anyhow};
+use anyhow::Context;
 use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
@@ -119,7 +119,7 @@ pub struct CoordinatorIpc {
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
-    ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
+    ServiceName::new(s).with_context(|| format!("service name {s}"))
 }
 
 /// A coordinator-to-agent publish-subscribe service: one publisher, one subscriber,
@@ -137,7 +137,7 @@ fn downlink<T: std::fmt::Debug + ZeroCopySend>(
         .subscriber_max_buffer_size(1)
         .subscriber_max_borrowed_samples(1)
         .create()
-        .map_err(|e| anyhow!("creating {name}: {e:?}"))
+        .with_context(|| format!("creating {name}"))
 }
 
 /// An event service with one notifier and one listener.
@@ -151,7 +151,7 @@ fn event_service(
         .max_listeners(1)
         .max_nodes(CHANNEL_MAX_NODES)
         .create()
-        .map_err(|e| anyhow!("creating {name}: {e:?}"))
+        .with_context(|| format!("creating {name}"))
 }
 
 /// The process id embedded in an iceoryx2 unique id.
@@ -162,7 +162,7 @@ fn pid_of_id(id: u128) -> u32 {
 /// A seed from the OS random source.
 fn os_seed() -> anyhow::Result<[u8; 32]> {
     let mut seed = [0u8; 32];
-    getrandom::fill(&mut seed).map_err(|e| anyhow!("reading the OS random source: {e}"))?;
+    getrandom::fill(&mut seed).context("reading the OS random source")?;
     Ok(seed)
 }
 
@@ -181,7 +181,7 @@ impl Channel {
             .subscriber_max_buffer_size(STATE_BUFFER)
             .subscriber_max_borrowed_samples(1)
             .create()
-            .map_err(|e| anyhow!("creating {}: {e:?}", names.state))?;
+            .with_context(|| format!("creating {}", names.state))?;
         let turn_service = event_service(node, &names.turn)?;
         let done_service = event_service(node, &names.done)?;
         Ok(Self {
@@ -190,25 +190,25 @@ impl Channel {
                 .publisher_builder()
                 .max_loaned_samples(1)
                 .create()
-                .map_err(|e| anyhow!("mission publisher of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("mission publisher of agent {agent}"))?,
             world_pub: world_service
                 .publisher_builder()
                 .max_loaned_samples(1)
                 .create()
-                .map_err(|e| anyhow!("world publisher of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("world publisher of agent {agent}"))?,
             state_sub: state_service
                 .subscriber_builder()
                 .create()
-                .map_err(|e| anyhow!("state subscriber of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("state subscriber of agent {agent}"))?,
             turn_notifier: turn_service
                 .notifier_builder()
                 .default_event_id(EventId::new(EVENT_TURN))
                 .create()
-                .map_err(|e| anyhow!("turn notifier of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("turn notifier of agent {agent}"))?,
             done_listener: done_service
                 .listener_builder()
                 .create()
-                .map_err(|e| anyhow!("done listener of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("done listener of agent {agent}"))?,
             mission_service,
             world_service,
             state_service,
@@ -244,10 +244,10 @@ impl CoordinatorIpc {
         let agents = scenario.agents.len();
         let config = wire::ipc_config(prefix, Role::Coordinator)?;
         let node = NodeBuilder::new()
-            .name(&NodeName::new("coordinator").map_err(|e| anyhow!("{e:?}"))?)
+            .name(&NodeName::new("coordinator").context("the node's name")?)
             .config(&config)
             .create::<ipc::Service>()
-            .map_err(|e| anyhow!("creating the coordinator node: {e:?}"))?;
+            .context("creating the coordinator node")?;
         // The node made the run's management segment in /dev/shm, open to everyone:
         // private before any other process of the run starts (see the function).
         wire::make_run_files_private(prefix)?;
@@ -280,12 +280,11 @@ impl CoordinatorIpc {
         *slot += 1;
         self.channels[agent] = None;
         let channel = Channel::open(&self.node, agent, generation)?;
-        let mut sample = wire::loan_default(&channel.mission_pub)
-            .map_err(|e| anyhow!("loaning the mission: {e:?}"))?;
+        let mut sample = wire::loan_default(&channel.mission_pub).context("loaning the mission")?;
         sample.payload_mut().fill(scenario)?;
         sample
             .send()
-            .map_err(|e| anyhow!("sending the mission to agent {agent}: {e:?}"))?;
+            .with_context(|| format!("sending the mission to agent {agent}"))?;
         self.channels[agent] = Some(channel);
         Ok(generation)
     }
@@ -322,10 +321,10 @@ impl CoordinatorIpc {
         let c = self.channel(agent)?;
         c.mission_pub
             .update_connections()
-            .map_err(|e| anyhow!("mission connections of agent {agent}: {e:?}"))?;
+            .with_context(|| format!("mission connections of agent {agent}"))?;
         c.world_pub
             .update_connections()
-            .map_err(|e| anyhow!("world connections of agent {agent}: {e:?}"))?;
+            .with_context(|| format!("world connections of agent {agent}"))?;
         Ok(())
     }
 
@@ -344,8 +343,7 @@ impl CoordinatorIpc {
             token: self.tokens.next_u64(),
         };
         let c = self.channel(agent)?;
-        let mut sample = wire::loan_default(&c.world_pub)
-            .map_err(|e| anyhow!("loaning a world sample: {e:?}"))?;
+        let mut sample = wire::loan_default(&c.world_pub).context("loaning a world sample")?;
         let w = sample.payload_mut();
         w.seq = grant.seq;
         w.step = step as u64;
@@ -353,9 +351,7 @@ impl CoordinatorIpc {
         w.turn_agent = agent as u32;
         w.centre = (*centre).into();
         w.set_bodies(bodies, alive)?;
-        sample
-            .send()
-            .map_err(|e| anyhow!("sending the world: {e:?}"))?;
+        sample.send().context("sending the world")?;
         Ok(grant)
     }
 
@@ -364,7 +360,7 @@ impl CoordinatorIpc {
         self.channel(agent)?
             .turn_notifier
             .notify()
-            .map_err(|e| anyhow!("ringing agent {agent}'s turn: {e:?}"))?;
+            .with_context(|| format!("ringing agent {agent}'s turn"))?;
         Ok(())
     }
 
@@ -381,7 +377,7 @@ impl CoordinatorIpc {
         self.channel(agent)?
             .turn_notifier
             .notify_with_custom_event_id(EventId::new(EVENT_ECHO))
-            .map_err(|e| anyhow!("ringing agent {agent}'s echo: {e:?}"))?;
+            .with_context(|| format!("ringing agent {agent}'s echo"))?;
         loop {
             while let Some(incoming) = self.receive(agent) {
                 // An answer sent before the ring is a late one from an earlier echo.
@@ -408,7 +404,7 @@ impl CoordinatorIpc {
         self.channel(agent)?
             .turn_notifier
             .notify_with_custom_event_id(EventId::new(EVENT_QUIT))
-            .map_err(|e| anyhow!("asking agent {agent} to quit: {e:?}"))?;
+            .with_context(|| format!("asking agent {agent} to quit"))?;
         Ok(())
     }
 
@@ -491,7 +487,7 @@ impl CoordinatorIpc {
         // SAFETY: every process of this run has exited (the caller's contract), so no one
         // else uses the run's global management segment.
         unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&config) }
-            .map_err(|e| anyhow!("removing the run's management segment: {e:?}"))
+            .context("removing the run's management segment")
             .context("cleaning up shared memory")?;
         wire::remove_run_root(&self_prefix).with_context(|| {
             format!(
