@@ -16,18 +16,18 @@
 
 pub mod animation;
 pub mod canvas;
-pub mod data;
+mod data;
 pub mod field;
-pub mod font;
+pub(crate) mod font;
 pub mod formation;
-pub mod geom;
-pub mod gif_writer;
+mod geom;
+mod gif_writer;
 pub mod layout;
 pub mod metrics;
-pub mod palette;
-pub mod scene;
+mod palette;
+mod scene;
 pub mod series;
-pub mod text;
+mod text;
 
 use std::path::{Path, PathBuf};
 
