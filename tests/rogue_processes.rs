@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use coordinator::runner::{BetweenSteps, RunOptions, run_scenario_with};
+use coordinator::turns::{BetweenSteps, RunOptions, run_scenario_with};
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;

@@ -38,8 +38,8 @@ use crate::error::CliError;
 use crate::ipc::TurnSplit;
 use crate::output::write_atomically;
 use crate::procfs;
-use crate::runner::{BetweenSteps, RunOptions, run_scenario_with};
 use crate::stats::Distribution;
+use crate::turns::{BetweenSteps, RunOptions, run_scenario_with};
 
 pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
 
@@ -64,8 +64,8 @@ const ECHO_DEADLINE: Duration = Duration::from_secs(2);
 /// Most steps: the generated field must stay within the largest field accepted.
 pub const MAX_BENCH_STEPS: usize = 20_000;
 
-/// Run `bench`.
-pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+/// Carry out `bench`.
+pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
     if let Some(&n) = args.agents.iter().find(|&&n| n == 0 || n > MAX_AGENTS) {
         return Err(CliError::Usage(format!(
             "--agents {n}: a formation has 1 to {MAX_AGENTS} agents"

@@ -1,5 +1,6 @@
-//! `coordinator run`: one agent process per agent, turns granted over iceoryx2, every
-//! move checked by the safety monitor, faults survived, the run recorded.
+//! The turns of a run over agent processes ([`run_scenario`], used by `coordinator run`,
+//! `compare` and `bench`): one agent process per agent, turns granted over iceoryx2,
+//! every move checked by the safety monitor, faults survived, the run recorded.
 //!
 //! Liveness: while it waits for a move, the coordinator wakes every
 //! [`LIVENESS_SLICE`] to ask the kernel whether the agent's process still exists, so a
