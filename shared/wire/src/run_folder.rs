@@ -193,8 +193,9 @@ fn run_files_in_shm(prefix: &str) -> Vec<(std::path::PathBuf, std::fs::Metadata)
         .collect()
 }
 
-/// Take group and other permissions off every file of run `prefix` in /dev/shm
-/// ([`run_files_in_shm`]); returns how many were changed. iceoryx2 0.10 makes the
+/// Take group and other permissions off every file of run `prefix` directly in /dev/shm
+/// (not in its folder: the segments `shm_open` puts there); returns how many were
+/// changed. iceoryx2 0.10 makes the
 /// management segment (`<prefix>node.<version>.global_mgmt`) there readable and writable
 /// by everyone (`enable_global_access`, 0666); its other segments are 0600 already. Call
 /// it right after the coordinator's node is made (that makes the segment), before any
