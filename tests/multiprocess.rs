@@ -4,7 +4,7 @@
 
 mod support;
 
-use coordinator::runner::{RunOptions, run_scenario};
+use coordinator::turns::{RunOptions, run_scenario};
 use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
@@ -99,7 +99,7 @@ fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
 
 #[test]
 fn a_failing_coordinator_stops_its_agents_cleans_up_and_keeps_the_steps_done() {
-    use coordinator::runner::run_scenario_with;
+    use coordinator::turns::run_scenario_with;
     let scenario = Scenario::paper();
     let path = plan_centre_path(&scenario).expect("centre path");
     let reference = simulate_along(&scenario, &path).expect("reference simulation");

@@ -12,11 +12,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use coordinator::runner::{BetweenSteps, RunOptions, run_scenario_with};
+use coordinator::turns::{BetweenSteps, RunOptions, run_scenario_with};
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::wire::{RUN_ENV, effective_uid, run_root};
+use wire::{RUN_ENV, effective_uid, run_root};
 
 /// `argv[0]` of the processes a `fork` agent starts (`agent::misbehave::stray_marker`).
 fn stray_marker(prefix: &str) -> String {
@@ -127,7 +127,7 @@ fn what_a_rogue_agent_starts_dies_with_the_run_in_process() {
         &options(&[(2, "fork")]),
         &mut |b: BetweenSteps<'_>| {
             if seen.is_none() {
-                let prefix = b.ipc.prefix().to_string();
+                let prefix = b.prefix.to_string();
                 // The strays start before the agent's handshake: by step 1 both run.
                 let found = strays(&stray_marker(&prefix));
                 seen = Some((prefix, found));
@@ -175,7 +175,7 @@ fn what_a_rogue_agent_starts_dies_with_the_run_from_the_command_line() {
         .spawn()
         .expect("start coordinator");
     // The run's prefix, from the strays' names, while it goes.
-    let stem = format!("formation-stray-fc{}x", child.id());
+    let stem = stray_marker(&wire::RunPrefix::head(child.id()));
     let deadline = Instant::now() + Duration::from_secs(60);
     let started = loop {
         let found: Vec<(String, Proc)> = all_pids()
@@ -229,7 +229,7 @@ fn while_a_run_goes_its_files_are_private() {
             if checked.is_some() {
                 return Ok(());
             }
-            let prefix = b.ipc.prefix().to_string();
+            let prefix = b.prefix.to_string();
             let root = run_root(&prefix).expect("/dev/shm");
             let meta = std::fs::symlink_metadata(&root).expect("the run folder");
             assert!(meta.is_dir(), "{}", root.display());

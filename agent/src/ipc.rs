@@ -1,8 +1,8 @@
-//! The agent's side of the iceoryx2 protocol (see [`shared::wire`]).
+//! The agent's side of the iceoryx2 protocol (see [`wire`]).
 
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, anyhow, bail};
+use anyhow::{Context, bail};
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
@@ -13,9 +13,9 @@ use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::vocabulary::Move;
-use shared::wire::{
-    self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role,
-    StateKind, World,
+use wire::{
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role, StateKind,
+    World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
@@ -85,41 +85,41 @@ impl IpcTransport {
         let parent = getppid();
         let config = wire::ipc_config(prefix, Role::Agent)?;
         let node = NodeBuilder::new()
-            .name(&NodeName::new(&format!("agent-{agent}")).map_err(|e| anyhow!("{e:?}"))?)
+            .name(&NodeName::new(&format!("agent-{agent}")).context("the node's name")?)
             .config(&config)
             .create::<ipc::Service>()
-            .map_err(|e| anyhow!("creating the node: {e:?}"))?;
+            .context("creating the node")?;
         // The first wait installs iceoryx2's signal handlers: from now on SIGTERM and
         // SIGINT interrupt a blocking wait instead of killing the process mid-write.
         let _ = node.wait(Duration::ZERO);
 
         let names = AgentServiceNames::new(agent, generation);
-        let name = |s: &str| ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"));
+        let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
         let mission = node
             .service_builder(&name(&names.mission)?)
             .publish_subscribe::<Mission>()
             .open()
-            .map_err(|e| anyhow!("opening {}: {e:?}", names.mission))?;
+            .with_context(|| format!("opening {}", names.mission))?;
         let world = node
             .service_builder(&name(&names.world)?)
             .publish_subscribe::<World>()
             .open()
-            .map_err(|e| anyhow!("opening {}: {e:?}", names.world))?;
+            .with_context(|| format!("opening {}", names.world))?;
         let state = node
             .service_builder(&name(&names.state)?)
             .publish_subscribe::<AgentState>()
             .open()
-            .map_err(|e| anyhow!("opening {}: {e:?}", names.state))?;
+            .with_context(|| format!("opening {}", names.state))?;
         let turn = node
             .service_builder(&name(&names.turn)?)
             .event()
             .open()
-            .map_err(|e| anyhow!("opening {}: {e:?}", names.turn))?;
+            .with_context(|| format!("opening {}", names.turn))?;
         let done = node
             .service_builder(&name(&names.done)?)
             .event()
             .open()
-            .map_err(|e| anyhow!("opening {}: {e:?}", names.done))?;
+            .with_context(|| format!("opening {}", names.done))?;
 
         Ok(Self {
             agent,
@@ -128,11 +128,11 @@ impl IpcTransport {
             mission_sub: mission
                 .subscriber_builder()
                 .create()
-                .map_err(|e| anyhow!("mission subscriber: {e:?}"))?,
+                .context("mission subscriber")?,
             world_sub: world
                 .subscriber_builder()
                 .create()
-                .map_err(|e| anyhow!("world subscriber: {e:?}"))?,
+                .context("world subscriber")?,
             // The coordinator's buffer refuses samples once full (no overflow), so the
             // first answer to a turn is the one it reads; an honest agent never fills it.
             state_pub: state
@@ -140,15 +140,9 @@ impl IpcTransport {
                 .max_loaned_samples(1)
                 .backpressure_strategy(BackpressureStrategy::DiscardData)
                 .create()
-                .map_err(|e| anyhow!("state publisher: {e:?}"))?,
-            turn_listener: turn
-                .listener_builder()
-                .create()
-                .map_err(|e| anyhow!("turn listener: {e:?}"))?,
-            done_notifier: done
-                .notifier_builder()
-                .create()
-                .map_err(|e| anyhow!("done notifier: {e:?}"))?,
+                .context("state publisher")?,
+            turn_listener: turn.listener_builder().create().context("turn listener")?,
+            done_notifier: done.notifier_builder().create().context("done notifier")?,
             node,
             mission: None,
             woke_ns: 0,
@@ -164,8 +158,7 @@ impl IpcTransport {
     ) -> anyhow::Result<()> {
         // The ~8 kB state is initialised in place in shared memory (the waypoint array
         // stays uninitialised behind its length), not on the stack and then copied.
-        let mut sample = wire::loan_default(&self.state_pub)
-            .map_err(|e| anyhow!("loaning a state sample: {e:?}"))?;
+        let mut sample = wire::loan_default(&self.state_pub).context("loaning a state sample")?;
         let state = sample.payload_mut();
         state.agent = self.agent as u32;
         state.pid = std::process::id();
@@ -177,13 +170,9 @@ impl IpcTransport {
         if tampered {
             write_raw_waypoint_count(state, RAW_COUNTS[self.sent % RAW_COUNTS.len()]);
         }
-        sample
-            .send()
-            .map_err(|e| anyhow!("sending the state: {e:?}"))?;
+        sample.send().context("sending the state")?;
         self.sent += 1;
-        self.done_notifier
-            .notify()
-            .map_err(|e| anyhow!("notifying done: {e:?}"))?;
+        self.done_notifier.notify().context("notifying done")?;
         Ok(())
     }
 
@@ -194,11 +183,7 @@ impl IpcTransport {
     /// The newest world sample as a turn, if it is this agent's turn.
     fn read_world(&mut self) -> anyhow::Result<Option<TurnInput>> {
         let mut turn = None;
-        while let Some(w) = self
-            .world_sub
-            .receive()
-            .map_err(|e| anyhow!("receiving the world: {e:?}"))?
-        {
+        while let Some(w) = self.world_sub.receive().context("receiving the world")? {
             if w.turn_agent as usize != self.agent {
                 continue;
             }
@@ -284,7 +269,7 @@ impl Transport for IpcTransport {
                         return Ok(Command::Quit);
                     }
                 }
-                Err(e) => bail!("waiting for a turn: {e:?}"),
+                Err(e) => return Err(e).context("waiting for a turn"),
             }
         }
     }
@@ -293,7 +278,7 @@ impl Transport for IpcTransport {
         while let Some(m) = self
             .mission_sub
             .receive()
-            .map_err(|e| anyhow!("receiving the mission: {e:?}"))?
+            .context("receiving the mission")?
         {
             if m.obstacles.len() > shared::vocabulary::MAX_OBSTACLES
                 || m.agents.len() > shared::vocabulary::MAX_AGENTS

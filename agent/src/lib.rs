@@ -18,7 +18,7 @@ use shared::turn::TurnPlanner;
 use shared::vocabulary::{Body, Move};
 
 use crate::ipc::Tamper;
-pub use crate::misbehave::Misbehave;
+use wire::misbehave::Misbehave;
 
 pub use transport::{Command, Transport, TurnInput};
 
@@ -74,8 +74,8 @@ pub fn init_logging() {
 pub fn run(args: &Args) -> anyhow::Result<()> {
     // Join only a run that exists (a node opened for no run would leave files behind),
     // and only through a folder no other user can reach (ours, 0700, not a link).
-    if let Some(root) = shared::wire::run_root(&args.run) {
-        shared::wire::check_run_root(&root).with_context(|| format!("opening run {}", args.run))?;
+    if let Some(root) = wire::run_root(&args.run) {
+        wire::check_run_root(&root).with_context(|| format!("opening run {}", args.run))?;
     }
     if args.misbehave == Some(Misbehave::Fork) {
         misbehave::start_strays(&args.run)?;

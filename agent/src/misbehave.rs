@@ -2,8 +2,8 @@
 //! the coordinator's safety monitor refuses every one of them.
 
 use shared::geometry::{Disk, Point, Vector};
-pub use shared::misbehave::Misbehave;
 use shared::vocabulary::{Move, MoveStatus};
+use wire::misbehave::Misbehave;
 
 /// `argv[0]` of the children [`Misbehave::Fork`] starts for run `prefix`, so that tests
 /// can find them: `formation-stray-<prefix>`.

@@ -19,15 +19,15 @@ use std::os::unix::net::UnixStream;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, anyhow, bail};
+use anyhow::Context;
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::getppid;
-use shared::wire::{
-    self, BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
-    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+use wire::{
+    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
+    BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
 };
 
 /// Serve the ping-pong of run `prefix` (and the socket at `uds`, if given).
@@ -43,46 +43,46 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
 
     let config = wire::ipc_config(prefix, Role::Agent)?;
     let node = NodeBuilder::new()
-        .name(&NodeName::new("pingpong").map_err(|e| anyhow!("{e:?}"))?)
+        .name(&NodeName::new("pingpong").context("the node's name")?)
         .config(&config)
         .create::<ipc::Service>()
-        .map_err(|e| anyhow!("creating the node: {e:?}"))?;
+        .context("creating the node")?;
     // Install iceoryx2's signal handlers: SIGTERM interrupts the waits below.
     let _ = node.wait(Duration::ZERO);
-    let name = |s: &str| ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"));
+    let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
     let ping_sub = node
         .service_builder(&name(BENCH_PING_SERVICE)?)
         .publish_subscribe::<BenchPing>()
         .open()
-        .map_err(|e| anyhow!("opening {BENCH_PING_SERVICE}: {e:?}"))?
+        .with_context(|| format!("opening {BENCH_PING_SERVICE}"))?
         .subscriber_builder()
         .create()
-        .map_err(|e| anyhow!("ping subscriber: {e:?}"))?;
+        .context("ping subscriber")?;
     let pong_pub = node
         .service_builder(&name(BENCH_PONG_SERVICE)?)
         .publish_subscribe::<BenchPing>()
         .open()
-        .map_err(|e| anyhow!("opening {BENCH_PONG_SERVICE}: {e:?}"))?
+        .with_context(|| format!("opening {BENCH_PONG_SERVICE}"))?
         .publisher_builder()
         .max_loaned_samples(1)
         .create()
-        .map_err(|e| anyhow!("pong publisher: {e:?}"))?;
+        .context("pong publisher")?;
     let ping_listener = node
         .service_builder(&name(BENCH_PING_EVENT)?)
         .event()
         .open()
-        .map_err(|e| anyhow!("opening {BENCH_PING_EVENT}: {e:?}"))?
+        .with_context(|| format!("opening {BENCH_PING_EVENT}"))?
         .listener_builder()
         .create()
-        .map_err(|e| anyhow!("ping listener: {e:?}"))?;
+        .context("ping listener")?;
     let pong_notifier = node
         .service_builder(&name(BENCH_PONG_EVENT)?)
         .event()
         .open()
-        .map_err(|e| anyhow!("opening {BENCH_PONG_EVENT}: {e:?}"))?
+        .with_context(|| format!("opening {BENCH_PONG_EVENT}"))?
         .notifier_builder()
         .create()
-        .map_err(|e| anyhow!("pong notifier: {e:?}"))?;
+        .context("pong notifier")?;
 
     let pong = |seq: u64| -> anyhow::Result<()> {
         pong_pub
@@ -90,10 +90,8 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
                 seq,
                 payload: [seq; 3],
             })
-            .map_err(|e| anyhow!("sending a pong: {e:?}"))?;
-        pong_notifier
-            .notify()
-            .map_err(|e| anyhow!("notifying the pong: {e:?}"))?;
+            .context("sending a pong")?;
+        pong_notifier.notify().context("notifying the pong")?;
         Ok(())
     };
     pong(0)?; // ready
@@ -125,10 +123,7 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
             }
             Ok(_) if ping => {
                 let mut last = None;
-                while let Some(s) = ping_sub
-                    .receive()
-                    .map_err(|e| anyhow!("receiving a ping: {e:?}"))?
-                {
+                while let Some(s) = ping_sub.receive().context("receiving a ping")? {
                     last = Some(s.seq);
                 }
                 if let Some(seq) = last {
@@ -146,7 +141,7 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
                     return Ok(());
                 }
             }
-            Err(e) => bail!("waiting for a ping: {e:?}"),
+            Err(e) => return Err(e).context("waiting for a ping"),
         }
     }
 }

@@ -6,11 +6,11 @@
 
 use std::any::Any;
 
-use anyhow::anyhow;
+use anyhow::Context;
 use iceoryx2::prelude::*;
-use shared::wire::{self, AgentServiceNames, AgentState, Mission, Role, StateKind, World};
+use wire::{AgentServiceNames, AgentState, Mission, Role, StateKind, World};
 
-use crate::misbehave::Misbehave;
+use wire::misbehave::Misbehave;
 
 /// Most ports of one kind a hoarding agent opens on one service.
 const HOARD_PER_SERVICE: usize = 4;
@@ -33,16 +33,16 @@ pub fn before_opening(prefix: &str, me: usize, mode: Option<Misbehave>) -> Vec<B
 fn rogue_node(prefix: &str, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<Node<ipc::Service>> {
     let config = wire::ipc_config(prefix, Role::Agent)?;
     let node = NodeBuilder::new()
-        .name(&NodeName::new("intruder").map_err(|e| anyhow!("{e:?}"))?)
+        .name(&NodeName::new("intruder").context("the node's name")?)
         .config(&config)
         .create::<ipc::Service>()
-        .map_err(|e| anyhow!("creating the intruder node: {e:?}"))?;
+        .context("creating the intruder node")?;
     held.push(Box::new(config));
     Ok(node)
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
-    ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
+    ServiceName::new(s).with_context(|| format!("service name {s}"))
 }
 
 /// The process id of agent `victim` of run `prefix`, found the way any local process
@@ -67,30 +67,26 @@ fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> any
         .service_builder(&service_name(&names.state)?)
         .publish_subscribe::<AgentState>()
         .open()
-        .map_err(|e| anyhow!("opening {}: {e:?}", names.state))?;
+        .with_context(|| format!("opening {}", names.state))?;
     let done = node
         .service_builder(&service_name(&names.done)?)
         .event()
         .open()
-        .map_err(|e| anyhow!("opening {}: {e:?}", names.done))?;
+        .with_context(|| format!("opening {}", names.done))?;
     let publisher = state.publisher_builder().create();
     let notifier = done.notifier_builder().create();
     // Keep the services open even if no port could be had: the victim got there first.
     held.push(Box::new(state));
     held.push(Box::new(done));
-    let publisher = publisher.map_err(|e| anyhow!("publisher on {}: {e:?}", names.state))?;
+    let publisher = publisher.with_context(|| format!("publisher on {}", names.state))?;
     let claimed_pid = victim_pid(prefix, victim).unwrap_or(0);
     for kind in [StateKind::Ready, StateKind::Move] {
-        let mut sample = publisher
-            .loan()
-            .map_err(|e| anyhow!("loaning a forged state: {e:?}"))?;
+        let mut sample = publisher.loan().context("loaning a forged state")?;
         let s = sample.payload_mut();
         s.kind = kind as u32;
         s.agent = victim as u32;
         s.pid = claimed_pid;
-        sample
-            .send()
-            .map_err(|e| anyhow!("sending a forged state: {e:?}"))?;
+        sample.send().context("sending a forged state")?;
     }
     if let Ok(n) = &notifier {
         let _ = n.notify();

@@ -78,7 +78,7 @@ fn an_invalid_run_prefix_is_refused() {
 fn a_run_folder_other_users_could_reach_is_refused_before_anything_is_opened() {
     use std::os::unix::fs::{DirBuilderExt, PermissionsExt};
     let prefix = format!("openrun{}_", std::process::id());
-    let Some(root) = shared::wire::run_root(&prefix) else {
+    let Some(root) = wire::run_root(&prefix) else {
         return; // no /dev/shm: no run folder to check
     };
     std::fs::DirBuilder::new()

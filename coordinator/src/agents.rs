@@ -37,7 +37,8 @@ use nix::fcntl::{FcntlArg, FdFlag, fcntl};
 use nix::sys::signal::{Signal, kill, killpg};
 use nix::sys::wait::{Id, WaitPidFlag, WaitStatus, waitid, waitpid};
 use nix::unistd::Pid;
-use shared::wire;
+
+use crate::procfs::{self, ProcStat, all_processes, environment_has};
 
 /// Find the `agent` executable: `explicit` if given, else `FORMATION_AGENT_BIN`, else
 /// the `agent` file beside the running coordinator.
@@ -75,15 +76,7 @@ pub fn raise_fd_limit() {
 /// Mark every open descriptor above stderr close-on-exec, so agents do not inherit the
 /// coordinator's iceoryx2 files (iceoryx2 opens them without `O_CLOEXEC`).
 fn set_cloexec_on_all_fds() {
-    let Ok(dir) = std::fs::read_dir("/proc/self/fd") else {
-        return;
-    };
-    let fds: Vec<i32> = dir
-        .flatten()
-        .filter_map(|e| e.file_name().to_string_lossy().parse().ok())
-        .filter(|fd| *fd > 2)
-        .collect();
-    for fd in fds {
+    for fd in procfs::open_fds().into_iter().filter(|fd| *fd > 2) {
         // SAFETY: `fd` was listed as open a moment ago; a descriptor closed since then
         // only makes fcntl fail, which is harmless here.
         let borrowed = unsafe { BorrowedFd::borrow_raw(fd) };
@@ -98,57 +91,6 @@ pub enum Exit {
     Running,
     /// Exited (code or signal as text in the log).
     Exited,
-}
-
-/// What `/proc/PID/stat` says about a process.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct ProcStat {
-    pid: u32,
-    /// `R`, `S`, `D`, `Z` (zombie), ...
-    state: u8,
-    ppid: u32,
-    pgid: u32,
-    /// Start time since boot, in clock ticks: with the pid, names one process for good.
-    start: u64,
-}
-
-impl ProcStat {
-    fn read(pid: u32) -> Option<Self> {
-        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-        // pid (comm) state ppid pgrp ...: fields from `state` (field 3) on; the command
-        // may hold spaces and parentheses, the last `)` ends it.
-        let rest: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
-        Some(Self {
-            pid,
-            state: *rest.first()?.as_bytes().first()?,
-            ppid: rest.get(1)?.parse().ok()?,
-            pgid: rest.get(2)?.parse().ok()?,
-            start: rest.get(19)?.parse().ok()?,
-        })
-    }
-
-    fn zombie(&self) -> bool {
-        matches!(self.state, b'Z' | b'X')
-    }
-}
-
-/// Every process in `/proc` now.
-fn all_processes() -> Vec<ProcStat> {
-    let Ok(entries) = std::fs::read_dir("/proc") else {
-        return Vec::new();
-    };
-    entries
-        .flatten()
-        .filter_map(|e| e.file_name().to_str()?.parse().ok())
-        .filter_map(ProcStat::read)
-        .collect()
-}
-
-/// Whether process `pid`'s environment holds exactly `entry` (`NAME=value`). False if it
-/// cannot be read: a zombie's, another user's.
-fn environment_has(pid: u32, entry: &[u8]) -> bool {
-    std::fs::read(format!("/proc/{pid}/environ"))
-        .is_ok_and(|env| env.split(|&b| b == 0).any(|e| e == entry))
 }
 
 /// How long the end-of-run sweep may take before it gives up on what it cannot reap.

@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use shared::misbehave::Misbehave;
 use shared::vocabulary::PlannerKind;
+use wire::misbehave::Misbehave;
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
 /// talking over iceoryx2 shared memory.
@@ -126,7 +126,7 @@ fn parse_kill(s: &str) -> Result<(usize, usize), String> {
     Ok((agent, step))
 }
 
-/// `AGENT=MODE`, the mode one of [`shared::misbehave::MISBEHAVE_NAMES`].
+/// `AGENT=MODE`, the mode one of [`Misbehave::ALL`] by name.
 fn parse_misbehave(s: &str) -> Result<(usize, Misbehave), String> {
     let (a, m) = s
         .split_once('=')

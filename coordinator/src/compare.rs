@@ -12,8 +12,8 @@ use shared::vocabulary::PlannerKind;
 use crate::cli::CompareArgs;
 use crate::error::CliError;
 use crate::output;
-use crate::runner::{RunOptions, run_scenario};
 use crate::stats::Distribution;
+use crate::turns::{RunOptions, run_scenario};
 use crate::validate::load_and_plan;
 
 /// One row of the comparison table.
@@ -135,11 +135,11 @@ fn run_folder_name(scenario: &str, planner: PlannerKind, taken: &mut Vec<String>
     name
 }
 
-/// Run `compare`: every scenario is validated and the output folder checked before any
+/// Carry out `compare`: every scenario is validated and the output folder checked before any
 /// agent starts. One line per run on stderr, then the table; each run's files (its
 /// `summary.json` with the refused moves in `faults`, its resolved `scenario.toml`, ...)
 /// go to a folder of their own inside the output folder.
-pub fn run(args: &CompareArgs) -> Result<(), CliError> {
+pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
     let planners = if args.planners.is_empty() {
         PlannerKind::ALL.to_vec()
     } else {

@@ -1,11 +1,11 @@
-//! The coordinator's side of the iceoryx2 protocol (see [`shared::wire`]): it creates
+//! The coordinator's side of the iceoryx2 protocol (see [`wire`]): it creates
 //! every agent's channel with one port on each side, publishes the mission and the
 //! worlds, rings turns, and takes the agents' states in, each checked and tagged with the
 //! process that published it.
 
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, anyhow};
+use anyhow::Context;
 use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
@@ -21,13 +21,15 @@ use rand_chacha::ChaCha20Rng;
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::vocabulary::Body;
-use shared::wire::{
-    self, AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState,
-    Mission, Role, StateKind, StateMsg, World,
+use wire::{
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState, Mission,
+    Role, RunPrefix, StateKind, StateMsg, World,
 };
 
+use crate::procfs;
+
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
-/// [`shared::wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
+/// [`wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TurnSplit {
     /// From ringing the turn to the agent awake: the wake-up of the agent's process.
@@ -117,7 +119,7 @@ pub struct CoordinatorIpc {
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
-    ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
+    ServiceName::new(s).with_context(|| format!("service name {s}"))
 }
 
 /// A coordinator-to-agent publish-subscribe service: one publisher, one subscriber,
@@ -135,7 +137,7 @@ fn downlink<T: std::fmt::Debug + ZeroCopySend>(
         .subscriber_max_buffer_size(1)
         .subscriber_max_borrowed_samples(1)
         .create()
-        .map_err(|e| anyhow!("creating {name}: {e:?}"))
+        .with_context(|| format!("creating {name}"))
 }
 
 /// An event service with one notifier and one listener.
@@ -149,7 +151,7 @@ fn event_service(
         .max_listeners(1)
         .max_nodes(CHANNEL_MAX_NODES)
         .create()
-        .map_err(|e| anyhow!("creating {name}: {e:?}"))
+        .with_context(|| format!("creating {name}"))
 }
 
 /// The process id embedded in an iceoryx2 unique id.
@@ -160,7 +162,7 @@ fn pid_of_id(id: u128) -> u32 {
 /// A seed from the OS random source.
 fn os_seed() -> anyhow::Result<[u8; 32]> {
     let mut seed = [0u8; 32];
-    getrandom::fill(&mut seed).map_err(|e| anyhow!("reading the OS random source: {e}"))?;
+    getrandom::fill(&mut seed).context("reading the OS random source")?;
     Ok(seed)
 }
 
@@ -179,7 +181,7 @@ impl Channel {
             .subscriber_max_buffer_size(STATE_BUFFER)
             .subscriber_max_borrowed_samples(1)
             .create()
-            .map_err(|e| anyhow!("creating {}: {e:?}", names.state))?;
+            .with_context(|| format!("creating {}", names.state))?;
         let turn_service = event_service(node, &names.turn)?;
         let done_service = event_service(node, &names.done)?;
         Ok(Self {
@@ -188,25 +190,25 @@ impl Channel {
                 .publisher_builder()
                 .max_loaned_samples(1)
                 .create()
-                .map_err(|e| anyhow!("mission publisher of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("mission publisher of agent {agent}"))?,
             world_pub: world_service
                 .publisher_builder()
                 .max_loaned_samples(1)
                 .create()
-                .map_err(|e| anyhow!("world publisher of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("world publisher of agent {agent}"))?,
             state_sub: state_service
                 .subscriber_builder()
                 .create()
-                .map_err(|e| anyhow!("state subscriber of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("state subscriber of agent {agent}"))?,
             turn_notifier: turn_service
                 .notifier_builder()
                 .default_event_id(EventId::new(EVENT_TURN))
                 .create()
-                .map_err(|e| anyhow!("turn notifier of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("turn notifier of agent {agent}"))?,
             done_listener: done_service
                 .listener_builder()
                 .create()
-                .map_err(|e| anyhow!("done listener of agent {agent}: {e:?}"))?,
+                .with_context(|| format!("done listener of agent {agent}"))?,
             mission_service,
             world_service,
             state_service,
@@ -242,10 +244,10 @@ impl CoordinatorIpc {
         let agents = scenario.agents.len();
         let config = wire::ipc_config(prefix, Role::Coordinator)?;
         let node = NodeBuilder::new()
-            .name(&NodeName::new("coordinator").map_err(|e| anyhow!("{e:?}"))?)
+            .name(&NodeName::new("coordinator").context("the node's name")?)
             .config(&config)
             .create::<ipc::Service>()
-            .map_err(|e| anyhow!("creating the coordinator node: {e:?}"))?;
+            .context("creating the coordinator node")?;
         // The node made the run's management segment in /dev/shm, open to everyone:
         // private before any other process of the run starts (see the function).
         wire::make_run_files_private(prefix)?;
@@ -278,12 +280,11 @@ impl CoordinatorIpc {
         *slot += 1;
         self.channels[agent] = None;
         let channel = Channel::open(&self.node, agent, generation)?;
-        let mut sample = wire::loan_default(&channel.mission_pub)
-            .map_err(|e| anyhow!("loaning the mission: {e:?}"))?;
+        let mut sample = wire::loan_default(&channel.mission_pub).context("loaning the mission")?;
         sample.payload_mut().fill(scenario)?;
         sample
             .send()
-            .map_err(|e| anyhow!("sending the mission to agent {agent}: {e:?}"))?;
+            .with_context(|| format!("sending the mission to agent {agent}"))?;
         self.channels[agent] = Some(channel);
         Ok(generation)
     }
@@ -320,10 +321,10 @@ impl CoordinatorIpc {
         let c = self.channel(agent)?;
         c.mission_pub
             .update_connections()
-            .map_err(|e| anyhow!("mission connections of agent {agent}: {e:?}"))?;
+            .with_context(|| format!("mission connections of agent {agent}"))?;
         c.world_pub
             .update_connections()
-            .map_err(|e| anyhow!("world connections of agent {agent}: {e:?}"))?;
+            .with_context(|| format!("world connections of agent {agent}"))?;
         Ok(())
     }
 
@@ -342,8 +343,7 @@ impl CoordinatorIpc {
             token: self.tokens.next_u64(),
         };
         let c = self.channel(agent)?;
-        let mut sample = wire::loan_default(&c.world_pub)
-            .map_err(|e| anyhow!("loaning a world sample: {e:?}"))?;
+        let mut sample = wire::loan_default(&c.world_pub).context("loaning a world sample")?;
         let w = sample.payload_mut();
         w.seq = grant.seq;
         w.step = step as u64;
@@ -351,9 +351,7 @@ impl CoordinatorIpc {
         w.turn_agent = agent as u32;
         w.centre = (*centre).into();
         w.set_bodies(bodies, alive)?;
-        sample
-            .send()
-            .map_err(|e| anyhow!("sending the world: {e:?}"))?;
+        sample.send().context("sending the world")?;
         Ok(grant)
     }
 
@@ -362,7 +360,7 @@ impl CoordinatorIpc {
         self.channel(agent)?
             .turn_notifier
             .notify()
-            .map_err(|e| anyhow!("ringing agent {agent}'s turn: {e:?}"))?;
+            .with_context(|| format!("ringing agent {agent}'s turn"))?;
         Ok(())
     }
 
@@ -379,7 +377,7 @@ impl CoordinatorIpc {
         self.channel(agent)?
             .turn_notifier
             .notify_with_custom_event_id(EventId::new(EVENT_ECHO))
-            .map_err(|e| anyhow!("ringing agent {agent}'s echo: {e:?}"))?;
+            .with_context(|| format!("ringing agent {agent}'s echo"))?;
         loop {
             while let Some(incoming) = self.receive(agent) {
                 // An answer sent before the ring is a late one from an earlier echo.
@@ -406,7 +404,7 @@ impl CoordinatorIpc {
         self.channel(agent)?
             .turn_notifier
             .notify_with_custom_event_id(EventId::new(EVENT_QUIT))
-            .map_err(|e| anyhow!("asking agent {agent} to quit: {e:?}"))?;
+            .with_context(|| format!("asking agent {agent} to quit"))?;
         Ok(())
     }
 
@@ -489,7 +487,7 @@ impl CoordinatorIpc {
         // SAFETY: every process of this run has exited (the caller's contract), so no one
         // else uses the run's global management segment.
         unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&config) }
-            .map_err(|e| anyhow!("removing the run's management segment: {e:?}"))
+            .context("removing the run's management segment")
             .context("cleaning up shared memory")?;
         wire::remove_run_root(&self_prefix).with_context(|| {
             format!(
@@ -533,7 +531,7 @@ pub fn clean_stale_runs() -> Vec<String> {
                 .metadata()
                 .is_ok_and(|m| m.uid() == euid && !m.file_type().is_symlink());
             if ours && let Some(prefix) = stale_prefix(&name) {
-                prefixes.insert(prefix);
+                prefixes.insert(prefix.to_string());
                 files.push(e.path());
             }
         }
@@ -576,28 +574,21 @@ pub fn clean_stale_runs() -> Vec<String> {
 }
 
 /// The run prefix file `name` starts with, if its coordinator process is gone.
-fn stale_prefix(name: &str) -> Option<String> {
-    let prefix = wire::RunPrefix::parse(name)?;
-    if std::path::Path::new(&format!("/proc/{}", prefix.pid())).exists() {
+fn stale_prefix(name: &str) -> Option<RunPrefix> {
+    let prefix = RunPrefix::parse(name)?;
+    if procfs::process_exists(prefix.pid()) {
         return None;
     }
     // Its agents may still be on their way out (they leave within a second).
     if processes_serving(prefix.as_str()) {
         return None;
     }
-    Some(prefix.as_str().to_string())
+    Some(prefix)
 }
 
 /// Whether a process was started for run `prefix` (its command line holds
 /// `--run <prefix>`).
 fn processes_serving(prefix: &str) -> bool {
-    let Ok(entries) = std::fs::read_dir("/proc") else {
-        return false;
-    };
     let needle: Vec<u8> = [b"--run\0".as_slice(), prefix.as_bytes(), b"\0"].concat();
-    entries.flatten().any(|e| {
-        std::fs::read(e.path().join("cmdline"))
-            .map(|c| c.windows(needle.len()).any(|w| w == needle.as_slice()))
-            .unwrap_or(false)
-    })
+    procfs::any_command_line_holds(&needle)
 }

@@ -1,20 +1,21 @@
 //! The coordinator: validates and plans a scenario, runs it over agent processes, and
 //! writes the outputs. The binary's `main` calls [`run_cli`].
 
-pub mod agents;
-pub mod bench;
+mod agents;
+mod bench;
 pub mod cli;
-pub mod compare;
-pub mod error;
-pub mod ipc;
+mod compare;
+mod error;
+mod ipc;
 pub mod logging;
-pub mod monitor;
+mod monitor;
 pub mod output;
-pub mod plan;
+mod plan;
+mod procfs;
 pub mod render;
-pub mod run_cmd;
-pub mod runner;
-pub mod stats;
+mod run_command;
+mod stats;
+pub mod turns;
 pub mod validate;
 
 pub use error::CliError;
@@ -22,11 +23,11 @@ pub use error::CliError;
 /// Carry out one command line.
 pub fn run_cli(cli: cli::Cli) -> Result<(), CliError> {
     match cli.command {
-        cli::Command::Validate(args) => validate::run(&args),
-        cli::Command::Plan(args) => plan::run(&args),
-        cli::Command::Run(args) => run_cmd::run(&args),
-        cli::Command::Compare(args) => compare::run(&args),
-        cli::Command::Render(args) => render::run(&args),
-        cli::Command::Bench(args) => bench::run(&args),
+        cli::Command::Validate(args) => validate::execute(&args),
+        cli::Command::Plan(args) => plan::execute(&args),
+        cli::Command::Run(args) => run_command::execute(&args),
+        cli::Command::Compare(args) => compare::execute(&args),
+        cli::Command::Render(args) => render::execute(&args),
+        cli::Command::Bench(args) => bench::execute(&args),
     }
 }

@@ -9,8 +9,8 @@ use crate::error::CliError;
 use crate::output;
 use crate::validate::load_and_plan;
 
-/// Run `plan`.
-pub fn run(args: &PlanArgs) -> Result<(), CliError> {
+/// Carry out `plan`.
+pub fn execute(args: &PlanArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let csv = output::path_csv(&loaded.centre_path).context("formatting the path")?;
     match &args.out {

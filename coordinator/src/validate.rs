@@ -48,8 +48,8 @@ pub fn load_and_plan(file: Option<&std::path::Path>) -> Result<Loaded, ScenarioE
     })
 }
 
-/// Run `validate`.
-pub fn run(args: &ValidateArgs) -> Result<(), CliError> {
+/// Carry out `validate`.
+pub fn execute(args: &ValidateArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(Some(&args.scenario))?;
     eprintln!(
         "{}: valid: {} agents, {} obstacles, centre path of {} steps",

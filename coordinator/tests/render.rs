@@ -38,7 +38,7 @@ start = { x_m = 2.0, y_m = 3.0, heading_deg = 0.0 }
 goal = { x_m = 10.0, y_m = 3.0, heading_deg = 0.0 }
 turning_radius_m = 1.0
 step_m = 1.0
-center_clearance_m = 0.3
+centre_clearance_m = 0.3
 allow_reverse = false
 "#;
 
@@ -276,7 +276,7 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
     let dir = scratch("bad");
     write_tiny_run(&dir);
     std::fs::remove_file(dir.join("trajectory.csv")).expect("remove");
-    let err = coordinator::render::run(&RenderArgs {
+    let err = coordinator::render::execute(&RenderArgs {
         run_dir: dir.clone(),
     })
     .expect_err("missing file");
@@ -294,7 +294,7 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
          0,0,2,3,2,3,2,3,0,0.4,at_slot,1\n0,1,oops,4.2,2,4.2,2,4.2,0,0.4,at_slot,1\n",
     )
     .expect("write");
-    let msg = coordinator::render::run(&RenderArgs {
+    let msg = coordinator::render::execute(&RenderArgs {
         run_dir: dir.clone(),
     })
     .expect_err("malformed file")
@@ -305,7 +305,8 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
     );
 
     let missing = dir.join("no-such-run");
-    let err = coordinator::render::run(&RenderArgs { run_dir: missing }).expect_err("no directory");
+    let err =
+        coordinator::render::execute(&RenderArgs { run_dir: missing }).expect_err("no directory");
     assert_eq!(err.exit_code(), 2);
     assert!(
         !dir.join("plots").exists(),

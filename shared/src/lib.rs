@@ -1,4 +1,5 @@
-//! The formation controller's library: every algorithm and every message type, no I/O loop.
+//! The formation controller's library: every algorithm, no I/O loop and no transport
+//! (the messages between processes are in the `wire` crate, `shared/wire`).
 //!
 //! One concept per module:
 //! - [`geometry`]: points, poses, disks, the field, the disk grid index, free space;
@@ -16,8 +17,7 @@
 //!   one interface, shared by simulation and agents;
 //! - [`safety`]: the safety invariant checked with plain geometry;
 //! - [`record`]: the record of a run and its figures;
-//! - [`simulate`]: the in-process reference simulation;
-//! - [`wire`]: the zero-copy messages between coordinator and agents.
+//! - [`simulate`]: the in-process reference simulation.
 #![warn(missing_docs)]
 
 pub mod best_point;
@@ -29,7 +29,6 @@ pub mod dubins;
 pub mod formation;
 pub mod geometry;
 pub mod hybrid_astar;
-pub mod misbehave;
 mod ordered;
 pub mod record;
 pub mod reeds_shepp;
@@ -38,4 +37,3 @@ pub mod scenario;
 pub mod simulate;
 pub mod turn;
 pub mod vocabulary;
-pub mod wire;

@@ -139,7 +139,7 @@ pub fn processes_mentioning(needle: &str) -> Vec<u32> {
 
 /// The run prefixes a coordinator process uses start with this.
 pub fn prefix_stem(coordinator_pid: u32) -> String {
-    format!("fc{coordinator_pid}x")
+    wire::RunPrefix::head(coordinator_pid)
 }
 
 pub fn coordinator(args: &[&str], out: &Path) -> Command {

@@ -17,19 +17,18 @@ use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, anyhow, bail};
+use anyhow::{Context, bail};
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use shared::wire::{
-    self, BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
-    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+use wire::{
+    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
+    BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
 };
 
 use crate::agents::{AgentProcesses, Exit};
-use crate::runner::unique_prefix;
 
 /// Longest a single round trip may take before the measurement is abandoned.
 const ROUND_TRIP_DEADLINE: Duration = Duration::from_secs(2);
@@ -45,7 +44,7 @@ struct Ports {
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
-    ServiceName::new(s).map_err(|e| anyhow!("service name {s}: {e:?}"))
+    ServiceName::new(s).with_context(|| format!("service name {s}"))
 }
 
 impl Ports {
@@ -59,7 +58,7 @@ impl Ports {
                 .subscriber_max_buffer_size(buffer)
                 .subscriber_max_borrowed_samples(1)
                 .create()
-                .map_err(|e| anyhow!("creating {name}: {e:?}"))
+                .with_context(|| format!("creating {name}"))
         };
         let event = |name: &str| {
             node.service_builder(&service_name(name)?)
@@ -68,39 +67,35 @@ impl Ports {
                 .max_listeners(1)
                 .max_nodes(2)
                 .create()
-                .map_err(|e| anyhow!("creating {name}: {e:?}"))
+                .with_context(|| format!("creating {name}"))
         };
         Ok(Self {
             ping_pub: pubsub(BENCH_PING_SERVICE, 1)?
                 .publisher_builder()
                 .max_loaned_samples(1)
                 .create()
-                .map_err(|e| anyhow!("ping publisher: {e:?}"))?,
+                .context("ping publisher")?,
             // The ready handshake and one pong.
             pong_sub: pubsub(BENCH_PONG_SERVICE, 2)?
                 .subscriber_builder()
                 .create()
-                .map_err(|e| anyhow!("pong subscriber: {e:?}"))?,
+                .context("pong subscriber")?,
             ping: event(BENCH_PING_EVENT)?
                 .notifier_builder()
                 .default_event_id(EventId::new(EVENT_TURN))
                 .create()
-                .map_err(|e| anyhow!("ping notifier: {e:?}"))?,
+                .context("ping notifier")?,
             pong: event(BENCH_PONG_EVENT)?
                 .listener_builder()
                 .create()
-                .map_err(|e| anyhow!("pong listener: {e:?}"))?,
+                .context("pong listener")?,
         })
     }
 
     /// Wait, as a turn does, until pong `seq` has arrived or `deadline` passes.
     fn wait_pong(&self, seq: u64, deadline: Instant) -> anyhow::Result<()> {
         loop {
-            while let Some(s) = self
-                .pong_sub
-                .receive()
-                .map_err(|e| anyhow!("receiving a pong: {e:?}"))?
-            {
+            while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
                 if s.seq == seq {
                     return Ok(());
                 }
@@ -112,7 +107,7 @@ impl Ports {
             match self.pong.timed_wait(|_| {}, deadline - now) {
                 Ok(_) => {}
                 Err(ListenerWaitError::InterruptSignal) => bail!("interrupted"),
-                Err(e) => bail!("waiting for a pong: {e:?}"),
+                Err(e) => return Err(e).context("waiting for a pong"),
             }
         }
     }
@@ -139,7 +134,7 @@ pub struct PingPongSession {
 impl PingPongSession {
     /// Start the ping-pong process from `bin` and shake hands over both channels.
     pub fn start(bin: &Path) -> anyhow::Result<Self> {
-        let prefix = unique_prefix()?;
+        let prefix = wire::RunPrefix::new_random()?.to_string();
         let config = wire::ipc_config(&prefix, Role::Coordinator)?;
         let root = wire::RunRoot::create(&prefix)?;
         // In the private folder: no other user can connect to the socket.
@@ -170,10 +165,10 @@ impl PingPongSession {
 
     fn connect(&mut self) -> anyhow::Result<()> {
         let node = NodeBuilder::new()
-            .name(&NodeName::new("coordinator").map_err(|e| anyhow!("{e:?}"))?)
+            .name(&NodeName::new("coordinator").context("the node's name")?)
             .config(&self.config)
             .create::<ipc::Service>()
-            .map_err(|e| anyhow!("creating the floor's node: {e:?}"))?;
+            .context("creating the floor's node")?;
         // The management segment it made in /dev/shm is open to everyone: make it private.
         wire::make_run_files_private(&self.prefix)?;
         // iceoryx2's signal handlers: Ctrl-C interrupts the waits below.
@@ -210,12 +205,9 @@ impl PingPongSession {
                     seq,
                     payload: [seq; 3],
                 })
-                .map_err(|e| anyhow!("sending a ping: {e:?}"))?;
+                .context("sending a ping")?;
             let t0 = Instant::now();
-            ports
-                .ping
-                .notify()
-                .map_err(|e| anyhow!("ringing the ping: {e:?}"))?;
+            ports.ping.notify().context("ringing the ping")?;
             ports.wait_pong(seq, t0 + ROUND_TRIP_DEADLINE)?;
             let us = t0.elapsed().as_secs_f64() * 1e6;
             if k >= warmup {
@@ -251,7 +243,7 @@ impl PingPongSession {
         ports
             .ping
             .notify_with_custom_event_id(EventId::new(BENCH_EVENT_SOCKET))
-            .map_err(|e| anyhow!("switching to the socket: {e:?}"))?;
+            .context("switching to the socket")?;
         let mut out = Vec::with_capacity(count);
         for k in 0..warmup + count {
             let t0 = Instant::now();
@@ -295,7 +287,7 @@ impl PingPongSession {
         // SAFETY: the only other process of this prefix has exited and been reaped, and
         // the coordinator's node is dropped.
         unsafe { iceoryx2::testing::remove_global_mgmt_segment::<ipc::Service>(&self.config) }
-            .map_err(|e| anyhow!("removing the floor's management segment: {e:?}"))?;
+            .context("removing the floor's management segment")?;
         wire::remove_run_root(&self.prefix).with_context(|| {
             format!(
                 "removing the floor's folder {:?}",

@@ -5,9 +5,9 @@
 //! 1. a generated scenario ([`scenario`]) runs through the real [`run_scenario`]; every
 //!    answered turn gives its latency and the agent's compute time, hence the IPC
 //!    overhead `latency - compute` per turn. Before the first turn the agents are held
-//!    idle and their CPU time is measured ([`IdleCpu`]).
+//!    idle and their CPU time is measured ([`IdleCpu`](crate::procfs::IdleCpu)).
 //! 2. between steps, every agent of that run answers empty turns in turn order (the
-//!    echo, [`shared::wire::EVENT_ECHO`]): the round trip of waking a process that last
+//!    echo, [`wire::EVENT_ECHO`]): the round trip of waking a process that last
 //!    ran N turns ago, with no world, planning or move. The two-process floor below
 //!    wakes the same warm process every time; the echo shows what waking N processes in
 //!    turn costs by itself, so the turn's overhead can be read against both.
@@ -23,7 +23,6 @@
 
 pub mod floor;
 pub mod plot;
-pub mod procfs;
 pub mod report;
 pub mod scenario;
 
@@ -38,20 +37,20 @@ use crate::cli::BenchArgs;
 use crate::error::CliError;
 use crate::ipc::TurnSplit;
 use crate::output::write_atomically;
-use crate::runner::{BetweenSteps, RunOptions, run_scenario_with};
+use crate::procfs;
 use crate::stats::Distribution;
+use crate::turns::{BetweenSteps, RunOptions, run_scenario_with};
 
-pub use procfs::IdleCpu;
 pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
 
 /// Fixed part of a serialized world (seq, step, token, turn agent, centre pose), bytes:
 /// the wire header, so the socket carries what a turn carries.
-const WORLD_HEADER_BYTES: usize = std::mem::offset_of!(shared::wire::World, bodies);
+const WORLD_HEADER_BYTES: usize = std::mem::offset_of!(wire::World, bodies);
 /// A serialized agent position, bytes.
 const BYTES_PER_AGENT: usize = 16;
 /// Fixed part of a serialized move (seq, step, token, times, ids, status, slot, best):
 /// the wire header.
-const MOVE_HEADER_BYTES: usize = std::mem::offset_of!(shared::wire::AgentState, waypoints);
+const MOVE_HEADER_BYTES: usize = std::mem::offset_of!(wire::AgentState, waypoints);
 /// A serialized waypoint, bytes.
 const BYTES_PER_WAYPOINT: usize = 16;
 /// Waypoints in the socket reply ("a few": a move on the straight path has two).
@@ -65,8 +64,8 @@ const ECHO_DEADLINE: Duration = Duration::from_secs(2);
 /// Most steps: the generated field must stay within the largest field accepted.
 pub const MAX_BENCH_STEPS: usize = 20_000;
 
-/// Run `bench`.
-pub fn run(args: &BenchArgs) -> Result<(), CliError> {
+/// Carry out `bench`.
+pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
     if let Some(&n) = args.agents.iter().find(|&&n| n == 0 || n > MAX_AGENTS) {
         return Err(CliError::Usage(format!(
             "--agents {n}: a formation has 1 to {MAX_AGENTS} agents"
@@ -94,7 +93,7 @@ pub fn run(args: &BenchArgs) -> Result<(), CliError> {
             "release"
         },
         cpus: std::thread::available_parallelism().map_or(1, |n| n.get()),
-        load_average_1m: load_average(),
+        load_average_1m: procfs::load_average(),
         round_trips: args.round_trips,
         warmup_round_trips: 0,
         histogram_svg: None,
@@ -362,15 +361,6 @@ fn bench_one(
 /// `a / b`, or 0 when `b` is not a positive number.
 fn ratio(a: f64, b: f64) -> f64 {
     if b > 0.0 && a.is_finite() { a / b } else { 0.0 }
-}
-
-fn load_average() -> Option<f64> {
-    std::fs::read_to_string("/proc/loadavg")
-        .ok()?
-        .split_whitespace()
-        .next()?
-        .parse()
-        .ok()
 }
 
 /// `runs/bench-<UTC timestamp>.json`.

@@ -2,7 +2,7 @@
 //! bins, each series normalised to a fraction of its own samples so that a few thousand
 //! turns and a few thousand round trips compare at a glance.
 
-use anyhow::anyhow;
+use anyhow::Context;
 use plotters::prelude::{
     ChartBuilder, IntoDrawingArea, IntoLogRange, LineSeries, PathElement, SVGBackend,
     SeriesLabelPosition,
@@ -52,12 +52,12 @@ pub fn histogram_svg(panels: &[Panel<'_>]) -> anyhow::Result<String> {
     {
         let height = PANEL_H * panels.len().max(1) as u32;
         let root = SVGBackend::with_string(&mut svg, (PANEL_W, height)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow!("{e:?}"))?;
+        root.fill(&WHITE).context("filling the background")?;
         let areas = root.split_evenly((panels.len().max(1), 1));
         for (panel, area) in panels.iter().zip(&areas) {
             draw_panel(panel, area)?;
         }
-        root.present().map_err(|e| anyhow!("{e:?}"))?;
+        root.present().context("finishing the SVG")?;
     }
     Ok(svg)
 }
@@ -69,7 +69,6 @@ fn draw_panel<DB: plotters::prelude::DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let err = |e: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| anyhow!("{e:?}");
     // Range: from the smallest sample to the largest p99.9 (the far tail is cut off;
     // the table and the JSON give the maximum).
     let lo = panel
@@ -108,7 +107,7 @@ where
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d((lo..hi).log_scale(), 0.0..ymax)
-        .map_err(err)?;
+        .context("laying out the chart")?;
     chart
         .configure_mesh()
         .x_labels(16)
@@ -119,12 +118,12 @@ where
         .axis_desc_style((font::FAMILY, 14).into_font())
         .light_line_style(WHITE)
         .draw()
-        .map_err(err)?;
+        .context("drawing the axes")?;
     for (s, points) in panel.series.iter().zip(histograms) {
         let color = s.color;
         chart
             .draw_series(LineSeries::new(points, color.stroke_width(2)))
-            .map_err(err)?
+            .with_context(|| format!("drawing {}", s.label))?
             .label(&s.label)
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
@@ -137,7 +136,7 @@ where
         .background_style(WHITE.mix(0.85))
         .border_style(GREY)
         .draw()
-        .map_err(err)?;
+        .context("drawing the legend")?;
     Ok(())
 }
 

@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::IdleCpu;
+use crate::procfs::IdleCpu;
 use crate::stats::Distribution;
 
 /// The whole report (`{"runs": [...], ...}`).

@@ -80,7 +80,7 @@ start = {{ x_m = {x0:.3}, y_m = {y0:.3}, heading_deg = 0.0 }}
 goal = {{ x_m = {gx:.3}, y_m = {y0:.3}, heading_deg = 0.0 }}
 turning_radius_m = 2.0
 step_m = {STEP_M}
-center_clearance_m = 0.5
+centre_clearance_m = 0.5
 ",
         gx = x0 + travel,
     );

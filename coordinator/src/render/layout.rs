@@ -91,11 +91,6 @@ impl MapLayout {
             (self.margins.top + self.plot_height_px - 1) as i32 - (h * fy + 1e-3).floor() as i32;
         (px, py)
     }
-
-    /// A length of `px` pixels, in metres.
-    pub fn px_to_m(&self, px: f64) -> f64 {
-        px / self.px_per_m
-    }
 }
 
 #[cfg(test)]

@@ -16,18 +16,18 @@
 
 pub mod animation;
 pub mod canvas;
-pub mod data;
+mod data;
 pub mod field;
-pub mod font;
+pub(crate) mod font;
 pub mod formation;
-pub mod geom;
-pub mod gif_writer;
+mod geom;
+mod gif_writer;
 pub mod layout;
 pub mod metrics;
-pub mod palette;
-pub mod scene;
+mod palette;
+mod scene;
 pub mod series;
-pub mod text;
+mod text;
 
 use std::path::{Path, PathBuf};
 
@@ -87,7 +87,7 @@ pub fn render_data(data: &RunData, out: &Path) -> anyhow::Result<Vec<PathBuf>> {
 
 /// `coordinator render`: a bad run directory is a usage error (exit code 2) naming the
 /// file; a failure to draw or write is exit code 1.
-pub fn run(args: &RenderArgs) -> Result<(), CliError> {
+pub fn execute(args: &RenderArgs) -> Result<(), CliError> {
     let data = RunData::load(&args.run_dir).map_err(|e| CliError::Usage(e.to_string()))?;
     let out = args.run_dir.join(PLOTS_DIR);
     let written = render_data(&data, &out)?;

@@ -1,5 +1,6 @@
-//! `coordinator run`: one agent process per agent, turns granted over iceoryx2, every
-//! move checked by the safety monitor, faults survived, the run recorded.
+//! The turns of a run over agent processes ([`run_scenario`], used by `coordinator run`,
+//! `compare` and `bench`): one agent process per agent, turns granted over iceoryx2,
+//! every move checked by the safety monitor, faults survived, the run recorded.
 //!
 //! Liveness: while it waits for a move, the coordinator wakes every
 //! [`LIVENESS_SLICE`] to ask the kernel whether the agent's process still exists, so a
@@ -8,7 +9,7 @@
 //! `respawn`, a replacement process takes its place from there.
 //!
 //! Trust: every agent is another process, so what arrives on its channel is checked
-//! before use ([`shared::wire::AgentState::read_checked`]) and judged here:
+//! before use ([`wire::AgentState::read_checked`]) and judged here:
 //! - a sample published by any process but the agent's own is `impersonation`: the
 //!   process that sent it, if it is one of the run's agents, is killed and frozen;
 //! - a sample that fails the checks is `malformed`; during a turn it ends the turn (the
@@ -30,20 +31,21 @@ use std::time::{Duration, Instant};
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::geometry::{Point, Pose};
-use shared::misbehave::Misbehave;
 use shared::record::{Recorder, Run};
 use shared::scenario::Scenario;
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
-use shared::wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
+use wire::misbehave::Misbehave;
+use wire::{MalformedState, RunPrefix, RunRoot, StateKind, StateMsg, monotonic_ns};
 
 use crate::agents::{self, AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
 use crate::monitor::SafetyMonitor;
 use crate::output::Timing;
+use crate::procfs::{self, IdleCpu};
 use crate::stats::Distribution;
 
 /// How often the coordinator checks an agent's process while it waits for its move.
-pub const LIVENESS_SLICE: Duration = Duration::from_millis(10);
+const LIVENESS_SLICE: Duration = Duration::from_millis(10);
 
 /// How a run is carried out.
 #[derive(Clone, Debug)]
@@ -99,9 +101,9 @@ pub struct RunOutcome {
     /// The run's iceoryx2 prefix (every resource of the run starts with it).
     pub prefix: String,
     /// Every answered turn, in order (for benchmarks: per-turn latency and compute).
-    pub turn_samples: Vec<TurnSample>,
+    pub(crate) turn_samples: Vec<TurnSample>,
     /// The agents' CPU time while held idle ([`RunOptions::idle_probe`]).
-    pub idle_cpu: Option<crate::bench::IdleCpu>,
+    pub(crate) idle_cpu: Option<IdleCpu>,
 }
 
 /// A run the coordinator could not finish: what went wrong, and what it recorded up to
@@ -124,7 +126,7 @@ impl std::error::Error for RunFailure {}
 
 /// One answered turn.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TurnSample {
+pub(crate) struct TurnSample {
     /// The step.
     pub step: usize,
     /// The agent.
@@ -141,24 +143,14 @@ pub struct TurnSample {
 pub struct BetweenSteps<'a> {
     /// The step just finished.
     pub step: usize,
+    /// The run's prefix (every resource of the run starts with it).
+    pub prefix: &'a str,
     /// The run's ports (benchmarks ring the agents' echo through them).
-    pub ipc: &'a CoordinatorIpc,
+    pub(crate) ipc: &'a CoordinatorIpc,
     /// Which agents are alive.
     pub alive: &'a [bool],
     /// Each agent's process id, if it has a process.
     pub pids: &'a [Option<u32>],
-}
-
-/// A new run's prefix: no other run on this machine uses it, and no one can predict it
-/// (see [`shared::wire::RunPrefix`]).
-pub fn unique_prefix() -> anyhow::Result<String> {
-    Ok(shared::wire::RunPrefix::new_random()?.as_str().to_string())
-}
-
-fn rss_kib(pid: u32) -> Option<f64> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 fn progress_bar(steps: usize, name: &str, enabled: bool) -> ProgressBar {
@@ -192,7 +184,7 @@ struct Progress {
     latency_us: Vec<f64>,
     compute_us: Vec<f64>,
     turn_samples: Vec<TurnSample>,
-    idle_cpu: Option<crate::bench::IdleCpu>,
+    idle_cpu: Option<IdleCpu>,
     rss_kib: Vec<f64>,
     interrupted: bool,
     completed: bool,
@@ -225,13 +217,14 @@ pub fn run_scenario_with(
     };
     agents::raise_fd_limit();
     crate::ipc::clean_stale_runs();
-    let prefix = match unique_prefix() {
-        Ok(prefix) => prefix,
-        Err(e) => return Err(fail(e, &recorder, progress)),
+    // No other run on this machine uses it, and no one can predict it.
+    let prefix = match RunPrefix::new_random() {
+        Ok(prefix) => prefix.to_string(),
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
     // The run's private folder, made before anything else of the run (a folder already
     // there is refused); dropped last: after the agents and the node.
-    let _root = match shared::wire::RunRoot::create(&prefix) {
+    let _root = match RunRoot::create(&prefix) {
         Ok(root) => root,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
@@ -366,7 +359,7 @@ impl Driver<'_, '_> {
         self.progress.startup_s = started.elapsed().as_secs_f64();
         self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
             let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
-            crate::bench::IdleCpu::measure(&pids, hold)
+            IdleCpu::measure(&pids, hold)
         });
         self.progress.turn_samples.reserve(n * centre_path.len());
 
@@ -398,6 +391,7 @@ impl Driver<'_, '_> {
             let pids = self.pids();
             (self.between_steps)(BetweenSteps {
                 step,
+                prefix: self.ipc.prefix(),
                 ipc: self.ipc,
                 alive: self.recorder.alive(),
                 pids: &pids,
@@ -412,7 +406,7 @@ impl Driver<'_, '_> {
             .pids()
             .into_iter()
             .flatten()
-            .filter_map(rss_kib)
+            .filter_map(procfs::rss_kib)
             .collect();
         self.progress.completed = !self.progress.interrupted;
         Ok(())

@@ -1,17 +1,18 @@
-//! `coordinator run [SCENARIO] [--out DIR [--force]]`.
+//! The `run` subcommand, `coordinator run [SCENARIO] [--out DIR [--force]]`: its
+//! arguments checked, the run taken by [`crate::turns`], its outputs written.
 
 use std::time::Duration;
 
 use crate::cli::RunArgs;
 use crate::error::CliError;
 use crate::output;
-use crate::runner::{RunOptions, run_scenario};
+use crate::turns::{RunOptions, run_scenario};
 use crate::validate::load_and_plan;
 
-/// Run `run`: validate and plan (bad input exits 2 before anything is created), run the
-/// agents, write the outputs. An interrupted run still writes its outputs, marked not
+/// Carry out `run`: validate and plan (bad input exits 2 before anything is created),
+/// take the run over agent processes ([`run_scenario`]), write the outputs. An interrupted run still writes its outputs, marked not
 /// completed, and exits 1.
-pub fn run(args: &RunArgs) -> Result<(), CliError> {
+pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let scenario = &match args.planner {
         Some(kind) => loaded.scenario.with_planner(kind),

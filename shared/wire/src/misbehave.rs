@@ -51,81 +51,39 @@ pub enum Misbehave {
     ExitBeforeReady,
 }
 
-/// The mode names, as written on the command line (`impersonate` and `spoof-ready`
-/// take `=AGENT`).
-pub const MISBEHAVE_NAMES: [&str; 15] = [
-    "nan",
-    "teleport",
-    "through-obstacle",
-    "silent",
-    "garbage",
-    "raw-length",
-    "raw-length-ready",
-    "replay",
-    "early",
-    "flood",
-    "impersonate=AGENT",
-    "spoof-ready=AGENT",
-    "hoard",
-    "fork",
-    "exit-before-ready",
-];
-
-/// A mode name that is none of [`MISBEHAVE_NAMES`].
+/// A mode name that is none of [`Misbehave::ALL`]'s.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{given:?} is not a misbehave mode: one of {}", MISBEHAVE_NAMES.join(", "))]
+#[error("{given:?} is not a misbehave mode: one of {}", Misbehave::usage().join(", "))]
 pub struct UnknownMisbehave {
     /// What was given.
     pub given: String,
 }
 
 impl Misbehave {
-    /// The agent this mode attacks, if it names one.
-    pub fn victim(&self) -> Option<usize> {
+    /// Every mode, in the order of the documentation; the modes that name a victim name
+    /// agent 0.
+    pub const ALL: [Self; 15] = [
+        Self::Nan,
+        Self::Teleport,
+        Self::ThroughObstacle,
+        Self::Silent,
+        Self::Garbage,
+        Self::RawLength,
+        Self::RawLengthReady,
+        Self::Replay,
+        Self::Early,
+        Self::Flood,
+        Self::Impersonate { victim: 0 },
+        Self::SpoofReady { victim: 0 },
+        Self::Hoard,
+        Self::Fork,
+        Self::ExitBeforeReady,
+    ];
+
+    /// The mode's name on the command line, without the victim (`impersonate` and
+    /// `spoof-ready` are written `NAME=AGENT`). The one place the names are written.
+    pub fn name(&self) -> &'static str {
         match self {
-            Self::Impersonate { victim } | Self::SpoofReady { victim } => Some(*victim),
-            _ => None,
-        }
-    }
-}
-
-impl FromStr for Misbehave {
-    type Err = UnknownMisbehave;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let unknown = || UnknownMisbehave {
-            given: s.to_string(),
-        };
-        if let Some((mode, victim)) = s.split_once('=') {
-            let victim = victim.parse().map_err(|_| unknown())?;
-            return match mode {
-                "impersonate" => Ok(Self::Impersonate { victim }),
-                "spoof-ready" => Ok(Self::SpoofReady { victim }),
-                _ => Err(unknown()),
-            };
-        }
-        Ok(match s {
-            "nan" => Self::Nan,
-            "teleport" => Self::Teleport,
-            "through-obstacle" => Self::ThroughObstacle,
-            "silent" => Self::Silent,
-            "garbage" => Self::Garbage,
-            "raw-length" => Self::RawLength,
-            "raw-length-ready" => Self::RawLengthReady,
-            "replay" => Self::Replay,
-            "early" => Self::Early,
-            "flood" => Self::Flood,
-            "hoard" => Self::Hoard,
-            "fork" => Self::Fork,
-            "exit-before-ready" => Self::ExitBeforeReady,
-            _ => return Err(unknown()),
-        })
-    }
-}
-
-impl fmt::Display for Misbehave {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let name = match self {
             Self::Nan => "nan",
             Self::Teleport => "teleport",
             Self::ThroughObstacle => "through-obstacle",
@@ -136,13 +94,65 @@ impl fmt::Display for Misbehave {
             Self::Replay => "replay",
             Self::Early => "early",
             Self::Flood => "flood",
-            Self::Impersonate { victim } => return write!(f, "impersonate={victim}"),
-            Self::SpoofReady { victim } => return write!(f, "spoof-ready={victim}"),
+            Self::Impersonate { .. } => "impersonate",
+            Self::SpoofReady { .. } => "spoof-ready",
             Self::Hoard => "hoard",
             Self::Fork => "fork",
             Self::ExitBeforeReady => "exit-before-ready",
+        }
+    }
+
+    /// The agent this mode attacks, if it names one.
+    pub fn victim(&self) -> Option<usize> {
+        match self {
+            Self::Impersonate { victim } | Self::SpoofReady { victim } => Some(*victim),
+            _ => None,
+        }
+    }
+
+    /// Every mode as written on the command line, `AGENT` standing for a victim.
+    fn usage() -> Vec<String> {
+        Self::ALL
+            .iter()
+            .map(|m| match m.victim() {
+                Some(_) => format!("{}=AGENT", m.name()),
+                None => m.name().to_string(),
+            })
+            .collect()
+    }
+}
+
+impl FromStr for Misbehave {
+    type Err = UnknownMisbehave;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let unknown = || UnknownMisbehave {
+            given: s.to_string(),
         };
-        f.write_str(name)
+        let (name, victim) = match s.split_once('=') {
+            Some((name, victim)) => (name, Some(victim.parse().map_err(|_| unknown())?)),
+            None => (s, None),
+        };
+        let mode = *Self::ALL
+            .iter()
+            .find(|m| m.name() == name)
+            .ok_or_else(unknown)?;
+        match (mode, victim) {
+            (Self::Impersonate { .. }, Some(victim)) => Ok(Self::Impersonate { victim }),
+            (Self::SpoofReady { .. }, Some(victim)) => Ok(Self::SpoofReady { victim }),
+            (mode, None) if mode.victim().is_none() => Ok(mode),
+            _ => Err(unknown()),
+        }
+    }
+}
+
+impl fmt::Display for Misbehave {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())?;
+        match self.victim() {
+            Some(victim) => write!(f, "={victim}"),
+            None => Ok(()),
+        }
     }
 }
 
@@ -152,7 +162,7 @@ mod tests {
 
     #[test]
     fn every_named_mode_parses_and_prints_back() {
-        for name in MISBEHAVE_NAMES {
+        for name in Misbehave::usage() {
             let name = name.replace("AGENT", "4");
             let mode: Misbehave = name.parse().expect(&name);
             assert_eq!(mode.to_string(), name);

@@ -1,0 +1,206 @@
+//! Everything the coordinator reads from `/proc`, in one place: processes (state, parent,
+//! group, start time, CPU time), their environment and command line, this process's open
+//! descriptors, memory, the load average, and the CPU time of idle agents ([`IdleCpu`]).
+//! Every reader returns `None` (or nothing) for what it cannot read: a process that is
+//! gone, another user's.
+
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+
+/// Clock ticks per second of `/proc/PID/stat` times (`USER_HZ`, fixed at 100 by the
+/// Linux ABI whatever the kernel's `HZ`).
+const USER_HZ: f64 = 100.0;
+
+/// What `/proc/PID/stat` says about a process.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ProcStat {
+    /// The process id.
+    pub pid: u32,
+    /// `R`, `S`, `D`, `Z` (zombie), ...
+    pub state: u8,
+    /// The parent's process id.
+    pub ppid: u32,
+    /// The process group id.
+    pub pgid: u32,
+    /// CPU time so far, user and system (`utime + stime`), in clock ticks ([`USER_HZ`]).
+    pub cpu_ticks: u64,
+    /// Start time since boot, in clock ticks: with the pid, names one process for good.
+    pub start: u64,
+}
+
+impl ProcStat {
+    /// Process `pid`'s status, if it exists.
+    pub fn read(pid: u32) -> Option<Self> {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+        // pid (comm) state ppid pgrp ...: fields from `state` (field 3) on; the command
+        // may hold spaces and parentheses, the last `)` ends it.
+        let rest: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+        let utime: u64 = rest.get(11)?.parse().ok()?;
+        let stime: u64 = rest.get(12)?.parse().ok()?;
+        Some(Self {
+            pid,
+            state: *rest.first()?.as_bytes().first()?,
+            ppid: rest.get(1)?.parse().ok()?,
+            pgid: rest.get(2)?.parse().ok()?,
+            cpu_ticks: utime + stime,
+            start: rest.get(19)?.parse().ok()?,
+        })
+    }
+
+    /// Whether the process is dead and not yet reaped.
+    pub fn zombie(&self) -> bool {
+        matches!(self.state, b'Z' | b'X')
+    }
+}
+
+/// The process ids listed in `/proc` now.
+fn all_pids() -> Vec<u32> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse().ok())
+        .collect()
+}
+
+/// Every process in `/proc` now.
+pub fn all_processes() -> Vec<ProcStat> {
+    all_pids().into_iter().filter_map(ProcStat::read).collect()
+}
+
+/// Whether process `pid` exists (zombie or not).
+pub fn process_exists(pid: u32) -> bool {
+    std::path::Path::new(&format!("/proc/{pid}")).exists()
+}
+
+/// Whether process `pid`'s environment holds exactly `entry` (`NAME=value`). False if it
+/// cannot be read: a zombie's, another user's.
+pub fn environment_has(pid: u32, entry: &[u8]) -> bool {
+    std::fs::read(format!("/proc/{pid}/environ"))
+        .is_ok_and(|env| env.split(|&b| b == 0).any(|e| e == entry))
+}
+
+/// Whether some process's command line (`/proc/PID/cmdline`: arguments ended by NUL)
+/// holds `needle`.
+pub fn any_command_line_holds(needle: &[u8]) -> bool {
+    all_pids().into_iter().any(|pid| {
+        std::fs::read(format!("/proc/{pid}/cmdline"))
+            .is_ok_and(|c| c.windows(needle.len()).any(|w| w == needle))
+    })
+}
+
+/// The file descriptors this process has open (`/proc/self/fd`).
+pub fn open_fds() -> Vec<i32> {
+    let Ok(dir) = std::fs::read_dir("/proc/self/fd") else {
+        return Vec::new();
+    };
+    dir.flatten()
+        .filter_map(|e| e.file_name().to_string_lossy().parse().ok())
+        .collect()
+}
+
+/// Process `pid`'s resident memory (`VmRSS`), KiB.
+pub fn rss_kib(pid: u32) -> Option<f64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// The machine's load average over the last minute.
+pub fn load_average() -> Option<f64> {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// What a set of processes did while held idle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct IdleCpu {
+    /// How long they were held idle, seconds.
+    pub held_s: f64,
+    /// Processes measured.
+    pub processes: usize,
+    /// Their CPU time meanwhile, utime + stime from `/proc/PID/stat`, summed, seconds
+    /// (10 ms resolution).
+    pub cpu_s: f64,
+    /// The same from the scheduler's nanosecond counter (`/proc/PID/schedstat`), seconds.
+    pub exact_cpu_s: f64,
+    /// How often they were woken meanwhile (context switches, summed): the liveness
+    /// timeout of the blocking wait, nothing else, when nobody polls.
+    pub wakeups: u64,
+}
+
+#[derive(Clone, Copy)]
+struct Snapshot {
+    ticks: u64,
+    run_ns: u64,
+    switches: u64,
+}
+
+fn snapshot(pid: u32) -> Option<Snapshot> {
+    let ticks = ProcStat::read(pid)?.cpu_ticks;
+    let run_ns = std::fs::read_to_string(format!("/proc/{pid}/schedstat"))
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0);
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let switches = status
+        .lines()
+        .filter(|l| l.contains("ctxt_switches:"))
+        .filter_map(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+        .sum();
+    Some(Snapshot {
+        ticks,
+        run_ns,
+        switches,
+    })
+}
+
+impl IdleCpu {
+    /// Sleep `hold` and measure the CPU time processes `pids` used meanwhile.
+    pub fn measure(pids: &[u32], hold: Duration) -> Self {
+        let before: Vec<Option<Snapshot>> = pids.iter().map(|&p| snapshot(p)).collect();
+        let started = Instant::now();
+        std::thread::sleep(hold);
+        let held_s = started.elapsed().as_secs_f64();
+        let mut out = Self {
+            held_s,
+            ..Self::default()
+        };
+        for (&pid, b) in pids.iter().zip(before) {
+            let (Some(b), Some(a)) = (b, snapshot(pid)) else {
+                continue;
+            };
+            out.processes += 1;
+            out.cpu_s += a.ticks.saturating_sub(b.ticks) as f64 / USER_HZ;
+            out.exact_cpu_s += a.run_ns.saturating_sub(b.run_ns) as f64 / 1e9;
+            out.wakeups += a.switches.saturating_sub(b.switches);
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sleeping_child_uses_no_cpu() {
+        let mut child = std::process::Command::new("sleep")
+            .arg("5")
+            .spawn()
+            .expect("sleep");
+        std::thread::sleep(Duration::from_millis(50));
+        let idle = IdleCpu::measure(&[child.id()], Duration::from_millis(200));
+        let _ = child.kill();
+        let _ = child.wait();
+        assert_eq!(idle.processes, 1);
+        assert_eq!(idle.cpu_s, 0.0);
+        assert!(idle.exact_cpu_s < 0.01, "{idle:?}");
+    }
+}

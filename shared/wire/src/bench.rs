@@ -1,0 +1,29 @@
+//! The services and the sample of `coordinator bench`'s latency floor.
+
+use iceoryx2::prelude::*;
+
+/// Benchmark floor (`coordinator bench`): coordinator to ping-pong process, one small
+/// sample per round trip.
+pub const BENCH_PING_SERVICE: &str = "bench/ping";
+/// Benchmark floor: ping-pong process to coordinator (the ready handshake has `seq` 0).
+pub const BENCH_PONG_SERVICE: &str = "bench/pong";
+/// Benchmark floor: event "a ping is published" (or [`EVENT_QUIT`](crate::EVENT_QUIT)).
+pub const BENCH_PING_EVENT: &str = "bench/ping-event";
+/// Benchmark floor: event "the pong is published".
+pub const BENCH_PONG_EVENT: &str = "bench/pong-event";
+/// Event id on [`BENCH_PING_EVENT`]: answer framed requests on the Unix socket now,
+/// until the coordinator sends the frame header [`BENCH_SOCKET_DONE`].
+pub const BENCH_EVENT_SOCKET: usize = 3;
+/// Request length in a socket frame header meaning "back to the iceoryx2 ping-pong".
+pub const BENCH_SOCKET_DONE: u32 = u32::MAX;
+
+/// The small sample of the benchmark floor's ping-pong, each way.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::BenchPing")]
+pub struct BenchPing {
+    /// Round trip number (0: the ping-pong process's ready handshake).
+    pub seq: u64,
+    /// Filler, so the sample is as small as a turn's header.
+    pub payload: [u64; 3],
+}

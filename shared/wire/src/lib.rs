@@ -1,0 +1,58 @@
+//! The transport between the coordinator and the agents: messages over iceoryx2 shared
+//! memory, the configuration, prefix and private folder of a run, and the agents' test
+//! modes. The algorithms it carries are in `shared`, which knows nothing of it.
+//!
+//! Every message is `#[repr(C)]`, `ZeroCopySend` with an explicit type name, of fixed
+//! capacity and without pointers: a sample is written in place in shared memory
+//! ([`loan_default`]) and read in place by the other process, with no serialization.
+//!
+//! Every agent has a channel of its own: five services below the run's prefix, named by
+//! [`AgentServiceNames`] after the agent and the generation of its process. One channel
+//! per agent, not services shared by all: every service then has exactly one port on
+//! each side, so an agent that opens extra ports can starve no one but itself, a turn
+//! reads one connection instead of N, and a replacement process never shares a service
+//! with its predecessor.
+//!
+//! Everything an agent writes is untrusted: the coordinator reads a state sample only
+//! through [`AgentState::read_checked`], which copies it out of shared memory and checks
+//! every field before anything uses it.
+//!
+//! One concept per module:
+//! - `message`: the messages ([`Mission`], [`World`], [`AgentState`]) and their checks;
+//! - `services`: the names of an agent's channel and the events rung on it;
+//! - `config`: the iceoryx2 configuration of a run ([`ipc_config`]);
+//! - `prefix`: the run prefix ([`RunPrefix`]);
+//! - `run_folder`: the run's private folder and files ([`RunRoot`]);
+//! - `loan`: the one in-place initialisation of a loaned sample ([`loan_default`]);
+//! - `clock`: the machine's monotonic clock ([`monotonic_ns`]);
+//! - `bench`: the latency floor's services and sample ([`BenchPing`]);
+//! - [`misbehave`]: the agents' test modes.
+#![warn(missing_docs)]
+
+mod bench;
+mod clock;
+mod config;
+mod loan;
+mod message;
+pub mod misbehave;
+mod prefix;
+mod run_folder;
+mod services;
+
+pub use bench::{
+    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
+    BENCH_SOCKET_DONE, BenchPing,
+};
+pub use clock::monotonic_ns;
+pub use config::{Role, ipc_config};
+pub use loan::loan_default;
+pub use message::{
+    AgentState, CapacityError, MAX_COMPUTE_NS, MalformedState, Mission, StateKind, StateMsg,
+    WireAgent, WireBody, WireDisk, WirePoint, WirePose, World,
+};
+pub use prefix::{MAX_PREFIX_LEN, PrefixError, RUN_ENV, RunPrefix};
+pub use run_folder::{
+    RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private, remove_run_root,
+    run_root,
+};
+pub use services::{AgentServiceNames, EVENT_ECHO, EVENT_QUIT, EVENT_TURN};

@@ -1,0 +1,61 @@
+//! The world before a turn: the coordinator's message to the agent whose turn it is.
+
+use iceoryx2::prelude::*;
+use iceoryx2_bb_container::vector::{StaticVec, Vector};
+use shared::vocabulary::{Body, MAX_AGENTS};
+
+use crate::{CapacityError, WirePoint, WirePose};
+
+/// One agent's body in the world message.
+#[repr(C)]
+#[derive(Debug, Default, Clone, Copy, PartialEq, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::WireBody")]
+pub struct WireBody {
+    /// Where the agent stands.
+    pub position: WirePoint,
+    /// 1 while the agent belongs to the formation, 0 once it is frozen as an obstacle.
+    pub alive: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+}
+
+/// The world before a turn: published by the coordinator, read by the agent whose turn it
+/// is.
+#[repr(C)]
+#[derive(Debug, Default, ZeroCopySend, PlacementDefault)]
+#[type_name("formation::World")]
+pub struct World {
+    /// Increases with every world published; a state answering it echoes it.
+    pub seq: u64,
+    /// The step (centre pose index).
+    pub step: u64,
+    /// The turn's token: drawn for this turn alone from a generator seeded by the OS
+    /// random source, so no process can answer a turn before it is granted; the move
+    /// answering it carries it back.
+    pub token: u64,
+    /// Whose turn it is.
+    pub turn_agent: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+    /// The formation centre at this step.
+    pub centre: WirePose,
+    /// Every agent, in agent order, dead ones included (they are obstacles).
+    pub bodies: StaticVec<WireBody, MAX_AGENTS>,
+}
+
+impl World {
+    /// Replace the bodies with `bodies` (positions) and their `alive` flags.
+    pub fn set_bodies(&mut self, bodies: &[Body], alive: &[bool]) -> Result<(), CapacityError> {
+        self.bodies.clear();
+        for (b, &a) in bodies.iter().zip(alive) {
+            self.bodies
+                .push(WireBody {
+                    position: b.position.into(),
+                    alive: u32::from(a),
+                    reserved: 0,
+                })
+                .map_err(|_| CapacityError::Agents(bodies.len()))?;
+        }
+        Ok(())
+    }
+}

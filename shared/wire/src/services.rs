@@ -1,0 +1,75 @@
+//! The names of one agent's channel and the events rung on it.
+//!
+//! Every agent has a channel of its own: five services below the run's prefix (set in the
+//! iceoryx2 config, [`crate::ipc_config`]), named after the agent and the generation of its
+//! process (0 for the first, one more for every replacement):
+//! - `mission`: publish-subscribe, history 1: the static scenario;
+//! - `world`: publish-subscribe, coordinator to agent: the world of its turn, with the
+//!   turn's token;
+//! - `turn`: event, coordinator to agent: "your turn" / "quit" / "echo";
+//! - `state`: publish-subscribe, agent to coordinator: its handshake and its moves;
+//! - `done`: event, agent to coordinator: "my state is published".
+
+/// The names of the five services of one agent's channel (see the crate documentation).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AgentServiceNames {
+    /// Coordinator to agent, history 1: the [`Mission`](crate::Mission).
+    pub mission: String,
+    /// Coordinator to agent: the [`World`](crate::World) of each turn.
+    pub world: String,
+    /// Event, coordinator to agent: [`EVENT_TURN`], [`EVENT_QUIT`], [`EVENT_ECHO`].
+    pub turn: String,
+    /// Agent to coordinator: its [`AgentState`](crate::AgentState) (handshake, moves, echoes).
+    pub state: String,
+    /// Event, agent to coordinator: a state is published.
+    pub done: String,
+}
+
+impl AgentServiceNames {
+    /// The services of agent `agent` served by its `generation`-th process (0 for the
+    /// first; a replacement gets the next generation and so services of its own).
+    pub fn new(agent: usize, generation: u32) -> Self {
+        let base = format!("formation/agent/{agent}/{generation}");
+        Self {
+            mission: format!("{base}/mission"),
+            world: format!("{base}/world"),
+            turn: format!("{base}/turn"),
+            state: format!("{base}/state"),
+            done: format!("{base}/done"),
+        }
+    }
+}
+
+/// Event id on a turn service: take your turn (the world is published).
+pub const EVENT_TURN: usize = 1;
+/// Event id on a turn service: leave cleanly now.
+pub const EVENT_QUIT: usize = 2;
+/// Event id on a turn service: answer at once with an empty [`StateKind::Echo`](crate::StateKind::Echo) state,
+/// without reading the world or planning (`coordinator bench`: the wake-up alone).
+pub const EVENT_ECHO: usize = 3;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_agent_generation_has_services_of_its_own() {
+        let a = AgentServiceNames::new(3, 0);
+        let b = AgentServiceNames::new(3, 1);
+        let c = AgentServiceNames::new(4, 0);
+        let all = |n: &AgentServiceNames| {
+            [
+                n.mission.clone(),
+                n.world.clone(),
+                n.turn.clone(),
+                n.state.clone(),
+                n.done.clone(),
+            ]
+        };
+        let mut names: Vec<String> = [all(&a), all(&b), all(&c)].concat();
+        let count = names.len();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), count);
+    }
+}
