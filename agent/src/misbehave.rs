@@ -86,12 +86,12 @@ pub fn corrupt(
         Misbehave::ThroughObstacle => {
             let nearest = obstacles
                 .iter()
-                .min_by(|a, b| (a.center - me).norm().total_cmp(&(b.center - me).norm()))?;
-            let across = nearest.center + (nearest.center - me);
+                .min_by(|a, b| (a.centre - me).norm().total_cmp(&(b.centre - me).norm()))?;
+            let across = nearest.centre + (nearest.centre - me);
             Some((
                 Move {
                     best: across,
-                    waypoints: vec![*me, nearest.center, across],
+                    waypoints: vec![*me, nearest.centre, across],
                     ..honest
                 },
                 status,

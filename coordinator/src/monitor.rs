@@ -61,7 +61,7 @@ impl SafetyMonitor {
             .iter()
             .map(|o| {
                 let r = Vector2::new(o.radius_m, o.radius_m);
-                Aabb::new(o.center - r, o.center + r)
+                Aabb::new(o.centre - r, o.centre + r)
             })
             .collect();
         Self {
@@ -124,11 +124,11 @@ impl SafetyMonitor {
         };
         for (segment, [a, b]) in pairs.iter().enumerate() {
             let shape = Segment::new(*a, *b);
-            let hits = |center: &Point, other_radius_m: f64| -> bool {
+            let hits = |centre: &Point, other_radius_m: f64| -> bool {
                 // Overlap deeper than the tolerance <=> the segment meets the ball shrunk
                 // by the tolerance.
                 let ball = Ball::new(other_radius_m + radius_m - SAFETY_TOLERANCE_M);
-                let at = Isometry2::translation(center.x, center.y);
+                let at = Isometry2::translation(centre.x, centre.y);
                 query::intersection_test(&identity, &shape, &at, &ball).unwrap_or(true)
             };
             let reach = Vector2::new(radius_m, radius_m);
@@ -138,7 +138,7 @@ impl SafetyMonitor {
             );
             for leaf in self.bvh.intersect_aabb(&sweep) {
                 let o = &self.obstacles[leaf as usize];
-                if hits(&o.center, o.radius_m) {
+                if hits(&o.centre, o.radius_m) {
                     return Err(Refusal::Obstacle {
                         segment,
                         obstacle: leaf as usize,

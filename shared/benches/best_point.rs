@@ -58,7 +58,7 @@ fn workload(count: usize, side_m: f64, seed: u64) -> Workload {
             // Uniform over the disk area.
             let r = DISK_RADIUS_M * rng.random::<f64>().sqrt();
             let a = std::f64::consts::TAU * rng.random::<f64>();
-            disk.center + r * Vector::new(a.cos(), a.sin())
+            disk.centre + r * Vector::new(a.cos(), a.sin())
         })
         .collect();
     let grid = DiskGrid::new(disks);
@@ -179,7 +179,7 @@ fn bench_packed_formation(c: &mut Criterion) {
         .iter()
         .map(|(agent, centre, me, others)| {
             let inflate = |d: &Disk| Disk {
-                center: d.center,
+                centre: d.centre,
                 radius_m: d.radius_m + grow_m,
             };
             let obstacles = DiskGrid::new(scenario.obstacles.iter().map(inflate).collect());
@@ -188,7 +188,7 @@ fn bench_packed_formation(c: &mut Criterion) {
                     .iter()
                     .map(|b| {
                         inflate(&Disk {
-                            center: b.position,
+                            centre: b.position,
                             radius_m: b.radius_m,
                         })
                     })

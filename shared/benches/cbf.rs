@@ -48,7 +48,7 @@ fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
         field.signed_inset_m(p) >= AGENT_RADIUS_M
             && obstacles
                 .iter()
-                .all(|d| (p - d.center).norm() >= d.radius_m + AGENT_RADIUS_M)
+                .all(|d| (p - d.centre).norm() >= d.radius_m + AGENT_RADIUS_M)
             && others
                 .iter()
                 .all(|o| (p - o.position).norm() >= o.radius_m + AGENT_RADIUS_M)

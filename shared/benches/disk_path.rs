@@ -93,7 +93,7 @@ fn enclosed(scene: &Scene) -> (Vec<Disk>, Point, Point) {
     // Clear the inside of the ring of scene obstacles so the goal is free.
     let mut cleared = Vec::new();
     for d in scene.grid.disks() {
-        if (d.center - c).norm() > 3.0 + RADIUS_M {
+        if (d.centre - c).norm() > 3.0 + RADIUS_M {
             cleared.push(*d);
         }
     }

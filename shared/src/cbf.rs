@@ -268,8 +268,8 @@ fn sensed(
 ) -> Vec<(Point, f64, bool)> {
     let mut out = Vec::new();
     let _ = obstacles.visit_near(me, sensing_radius_m, |_, d| {
-        if (me - d.center).norm() - d.radius_m <= sensing_radius_m {
-            out.push((d.center, d.radius_m, false));
+        if (me - d.centre).norm() - d.radius_m <= sensing_radius_m {
+            out.push((d.centre, d.radius_m, false));
         }
         ControlFlow::<()>::Continue(())
     });

@@ -11,14 +11,14 @@ pub type Point = nalgebra::Point2<f64>;
 /// A displacement in the plane, in metres.
 pub type Vector = nalgebra::Vector2<f64>;
 
-/// A closed disk: the set of points within `radius_m` of `center`.
+/// A closed disk: the set of points within `radius_m` of `centre`.
 ///
 /// Planners work with *inflated* disks: an obstacle or another agent grown by the moving
 /// agent's own radius, so that the moving agent becomes a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disk {
     /// Centre of the disk.
-    pub center: Point,
+    pub centre: Point,
     /// Radius of the disk, in metres (strictly positive).
     pub radius_m: f64,
 }
@@ -27,7 +27,7 @@ impl Disk {
     /// A disk of radius `radius_m` around (`x_m`, `y_m`).
     pub fn new(x_m: f64, y_m: f64, radius_m: f64) -> Self {
         Self {
-            center: Point::new(x_m, y_m),
+            centre: Point::new(x_m, y_m),
             radius_m,
         }
     }
@@ -35,25 +35,25 @@ impl Disk {
     /// The same disk with its radius grown by `by_m`.
     pub fn inflated(&self, by_m: f64) -> Self {
         Self {
-            center: self.center,
+            centre: self.centre,
             radius_m: self.radius_m + by_m,
         }
     }
 
     /// Signed distance from `p` to the disk's boundary: negative inside, zero on it.
     pub fn signed_distance_m(&self, p: &Point) -> f64 {
-        (p - self.center).norm() - self.radius_m
+        (p - self.centre).norm() - self.radius_m
     }
 
     /// The point of the boundary circle at angle `angle_rad` (counter-clockwise from +x).
     pub fn boundary_point(&self, angle_rad: f64) -> Point {
-        self.center + self.radius_m * Vector::new(angle_rad.cos(), angle_rad.sin())
+        self.centre + self.radius_m * Vector::new(angle_rad.cos(), angle_rad.sin())
     }
 
     /// Smallest distance from the segment `a`-`b` to the centre, minus the radius:
     /// negative when the segment enters the open disk.
     pub fn signed_distance_to_segment_m(&self, a: &Point, b: &Point) -> f64 {
-        distance_point_segment(&self.center, a, b) - self.radius_m
+        distance_point_segment(&self.centre, a, b) - self.radius_m
     }
 }
 
@@ -193,10 +193,10 @@ impl DiskGrid {
         );
         let mut max_radius_m: f64 = 0.0;
         for d in &disks {
-            min.x = min.x.min(d.center.x - d.radius_m);
-            min.y = min.y.min(d.center.y - d.radius_m);
-            max.x = max.x.max(d.center.x + d.radius_m);
-            max.y = max.y.max(d.center.y + d.radius_m);
+            min.x = min.x.min(d.centre.x - d.radius_m);
+            min.y = min.y.min(d.centre.y - d.radius_m);
+            max.x = max.x.max(d.centre.x + d.radius_m);
+            max.y = max.y.max(d.centre.y + d.radius_m);
             max_radius_m = max_radius_m.max(d.radius_m);
         }
         let area = ((max.x - min.x) * (max.y - min.y)).max(f64::MIN_POSITIVE);
@@ -217,7 +217,7 @@ impl DiskGrid {
         };
         let mut counts = vec![0u32; columns * rows + 1];
         for d in &grid.disks {
-            let (c0, r0, c1, r1) = grid.cell_range(&d.center, d.radius_m, d.radius_m);
+            let (c0, r0, c1, r1) = grid.cell_range(&d.centre, d.radius_m, d.radius_m);
             for r in r0..=r1 {
                 for c in c0..=c1 {
                     counts[r * columns + c] += 1;
@@ -234,7 +234,7 @@ impl DiskGrid {
         let mut fill = start.clone();
         let mut items = vec![0u32; acc as usize];
         for (i, d) in grid.disks.iter().enumerate() {
-            let (c0, r0, c1, r1) = grid.cell_range(&d.center, d.radius_m, d.radius_m);
+            let (c0, r0, c1, r1) = grid.cell_range(&d.centre, d.radius_m, d.radius_m);
             for r in r0..=r1 {
                 for c in c0..=c1 {
                     let k = r * columns + c;
@@ -258,17 +258,17 @@ impl DiskGrid {
         self.max_radius_m
     }
 
-    /// Cell column/row range covering the box `center ± (half_w, half_h)`, clamped.
-    fn cell_range(&self, center: &Point, half_w: f64, half_h: f64) -> (usize, usize, usize, usize) {
+    /// Cell column/row range covering the box `centre ± (half_w, half_h)`, clamped.
+    fn cell_range(&self, centre: &Point, half_w: f64, half_h: f64) -> (usize, usize, usize, usize) {
         let to_cell = |v: f64, o: f64, n: usize| -> usize {
             let k = ((v - o) / self.cell_m).floor();
             if k <= 0.0 { 0 } else { (k as usize).min(n - 1) }
         };
         (
-            to_cell(center.x - half_w, self.origin.x, self.columns),
-            to_cell(center.y - half_h, self.origin.y, self.rows),
-            to_cell(center.x + half_w, self.origin.x, self.columns),
-            to_cell(center.y + half_h, self.origin.y, self.rows),
+            to_cell(centre.x - half_w, self.origin.x, self.columns),
+            to_cell(centre.y - half_h, self.origin.y, self.rows),
+            to_cell(centre.x + half_w, self.origin.x, self.columns),
+            to_cell(centre.y + half_h, self.origin.y, self.rows),
         )
     }
 
@@ -284,9 +284,9 @@ impl DiskGrid {
         if self.disks.is_empty() || !(min.x <= max.x && min.y <= max.y) {
             return ControlFlow::Continue(());
         }
-        let center = nalgebra::center(min, max);
+        let centre = nalgebra::center(min, max);
         let (c0, r0, c1, r1) =
-            self.cell_range(&center, 0.5 * (max.x - min.x), 0.5 * (max.y - min.y));
+            self.cell_range(&centre, 0.5 * (max.x - min.x), 0.5 * (max.y - min.y));
         for r in r0..=r1 {
             for c in c0..=c1 {
                 let k = r * self.columns + c;
@@ -294,15 +294,15 @@ impl DiskGrid {
                     &self.cell_items[self.cell_start[k] as usize..self.cell_start[k + 1] as usize]
                 {
                     let d = &self.disks[i as usize];
-                    if d.center.x + d.radius_m < min.x
-                        || d.center.x - d.radius_m > max.x
-                        || d.center.y + d.radius_m < min.y
-                        || d.center.y - d.radius_m > max.y
+                    if d.centre.x + d.radius_m < min.x
+                        || d.centre.x - d.radius_m > max.x
+                        || d.centre.y + d.radius_m < min.y
+                        || d.centre.y - d.radius_m > max.y
                     {
                         continue;
                     }
                     // Report the disk only from the first cell shared by its box and the query's.
-                    let (dc0, dr0, _, _) = self.cell_range(&d.center, d.radius_m, d.radius_m);
+                    let (dc0, dr0, _, _) = self.cell_range(&d.centre, d.radius_m, d.radius_m);
                     if c == dc0.max(c0) && r == dr0.max(r0) {
                         visit(i as usize, d)?;
                     }
@@ -452,13 +452,13 @@ pub fn circle_circle_intersections(
     Some([foot + half_chord_m * normal, foot - half_chord_m * normal])
 }
 
-/// The points where the circle of radius `radius_m` around `center` crosses the line
+/// The points where the circle of radius `radius_m` around `centre` crosses the line
 /// through `line_point` with direction `line_direction` (any non-zero length).
 ///
 /// `None` when the line misses the circle or the direction is zero. A tangent line gives
 /// its touching point twice. The points are ordered along `line_direction`.
 pub fn circle_line_intersections(
-    center: &Point,
+    centre: &Point,
     radius_m: f64,
     line_point: &Point,
     line_direction: &Vector,
@@ -468,8 +468,8 @@ pub fn circle_line_intersections(
     if !has_direction {
         return None;
     }
-    let foot = line_point + ((center - line_point).dot(line_direction) / length2) * line_direction;
-    let offset_m = (center - foot).norm();
+    let foot = line_point + ((centre - line_point).dot(line_direction) / length2) * line_direction;
+    let offset_m = (centre - foot).norm();
     let line_meets_circle = offset_m <= radius_m;
     if !line_meets_circle {
         return None;
@@ -491,10 +491,10 @@ mod tests {
             .iter()
             .enumerate()
             .filter(|(_, d)| {
-                d.center.x + d.radius_m >= min.x
-                    && d.center.x - d.radius_m <= max.x
-                    && d.center.y + d.radius_m >= min.y
-                    && d.center.y - d.radius_m <= max.y
+                d.centre.x + d.radius_m >= min.x
+                    && d.centre.x - d.radius_m <= max.x
+                    && d.centre.y + d.radius_m >= min.y
+                    && d.centre.y - d.radius_m <= max.y
             })
             .map(|(i, _)| i)
             .collect()

@@ -109,7 +109,7 @@ pub fn check_move(
         let min = Point::new(a.x.min(b.x), a.y.min(b.y)) - reach;
         let max = Point::new(a.x.max(b.x), a.y.max(b.y)) + reach;
         let hit = obstacles.visit_box(&min, &max, |obstacle, o| {
-            let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.center, a, b);
+            let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.centre, a, b);
             if overlap_m > SAFETY_TOLERANCE_M {
                 ControlFlow::Break(Violation::HitsObstacle {
                     segment,
@@ -149,7 +149,7 @@ pub fn clearances_m(
     let mut to_obstacle = f64::INFINITY;
     let _ = obstacles.visit_near(&body.position, reach_m, |_, o| {
         to_obstacle =
-            to_obstacle.min((body.position - o.center).norm() - o.radius_m - body.radius_m);
+            to_obstacle.min((body.position - o.centre).norm() - o.radius_m - body.radius_m);
         ControlFlow::<()>::Continue(())
     });
     let to_other = others

@@ -57,7 +57,7 @@ impl BestPointPlanner {
                 obstacles
                     .iter()
                     .map(|o| Disk {
-                        center: o.center - offset,
+                        centre: o.centre - offset,
                         radius_m: o.radius_m + grow_m,
                     })
                     .collect(),
@@ -84,7 +84,7 @@ impl BestPointPlanner {
             others
                 .iter()
                 .map(|b| Disk {
-                    center: b.position - self.offset,
+                    centre: b.position - self.offset,
                     radius_m: b.radius_m + grow_m,
                 })
                 .collect(),

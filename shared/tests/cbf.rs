@@ -37,7 +37,7 @@ fn segment_clearance_m(
 ) -> f64 {
     let disks = obstacles
         .iter()
-        .map(|d| (d.center, d.radius_m))
+        .map(|d| (d.centre, d.radius_m))
         .chain(others.iter().map(|o| (o.position, o.radius_m)));
     let mut worst = f64::INFINITY;
     for (c, r) in disks {
@@ -214,7 +214,7 @@ fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
         let free = |p: &Point| {
             obstacles
                 .iter()
-                .all(|d| (p - d.center).norm() >= d.radius_m + radius_m + 0.01)
+                .all(|d| (p - d.centre).norm() >= d.radius_m + radius_m + 0.01)
         };
         let start = Point::new(2.5, 3.0 + 14.0 * rng.random::<f64>());
         let slot = Point::new(29.0, 2.0 + 16.0 * rng.random::<f64>());

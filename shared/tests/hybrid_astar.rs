@@ -62,7 +62,7 @@ fn check_path(
             "{what}: pose {i} {p:?} leaves the field inset by {c}"
         );
         for d in obstacles {
-            let clearance = (q - d.center).norm() - d.radius_m;
+            let clearance = (q - d.centre).norm() - d.radius_m;
             assert!(
                 clearance >= c - 1e-9,
                 "{what}: pose {i} {p:?} is {clearance} m from {d:?}"
@@ -73,7 +73,7 @@ fn check_path(
     for (i, w) in path.windows(2).enumerate() {
         let (a, b) = (w[0].position(), w[1].position());
         for d in obstacles {
-            let clearance = distance_point_segment(&d.center, &a, &b) - d.radius_m;
+            let clearance = distance_point_segment(&d.centre, &a, &b) - d.radius_m;
             assert!(
                 clearance >= c - 1e-9,
                 "{what}: chord {i} is {clearance} m from {d:?}"

@@ -110,7 +110,7 @@ fn infeasibility(case: &OracleCase, p: &Point) -> Option<String> {
     }
     case.disks
         .iter()
-        .find(|d| (p - d.center).norm() < d.radius_m - TOLERANCE_M)
+        .find(|d| (p - d.centre).norm() < d.radius_m - TOLERANCE_M)
         .map(|d| format!("{p:?} is inside {d:?}"))
 }
 

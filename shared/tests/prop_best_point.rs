@@ -83,12 +83,12 @@ prop_compose! {
                     disks.push(Disk { radius_m: 0.5 * first.radius_m + 0.3, ..first });
                 }
                 Degeneracy::Tangent(angle_rad, radius_m) => {
-                    let centre = first.center
+                    let centre = first.centre
                         + (first.radius_m + radius_m) * Vector::new(angle_rad.cos(), angle_rad.sin());
-                    disks.push(Disk { center: centre, radius_m });
+                    disks.push(Disk { centre: centre, radius_m });
                 }
                 Degeneracy::TouchingEdge => {
-                    disks[0].center.x = first.radius_m;
+                    disks[0].centre.x = first.radius_m;
                 }
             }
         }
@@ -96,7 +96,7 @@ prop_compose! {
             QueryPlacement::Anywhere(x, y) => {
                 Point::new(-5.0 + x * (width_m + 10.0), -5.0 + y * (height_m + 10.0))
             }
-            QueryPlacement::AtCentre(i) if !disks.is_empty() => disks[i % disks.len()].center,
+            QueryPlacement::AtCentre(i) if !disks.is_empty() => disks[i % disks.len()].centre,
             QueryPlacement::OnCircle(i, a) if !disks.is_empty() => {
                 disks[i % disks.len()].boundary_point(a)
             }
@@ -112,7 +112,7 @@ fn is_free_brute_force(scene: &Scene, p: &Point) -> bool {
         && scene
             .disks
             .iter()
-            .all(|d| (p - d.center).norm() >= d.radius_m)
+            .all(|d| (p - d.centre).norm() >= d.radius_m)
 }
 
 /// Feasible to the tolerance, by brute force over every disk.
@@ -121,7 +121,7 @@ fn is_feasible_brute_force(scene: &Scene, p: &Point) -> bool {
         && scene
             .disks
             .iter()
-            .all(|d| (p - d.center).norm() >= d.radius_m - TOLERANCE_M)
+            .all(|d| (p - d.centre).norm() >= d.radius_m - TOLERANCE_M)
 }
 
 /// Points to compare the result with: uniform points over the field, the corners, and a

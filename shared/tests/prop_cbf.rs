@@ -163,7 +163,7 @@ struct World {
 fn point_clearance_m(w: &World, p: &Point) -> f64 {
     let mut c = w.field.signed_inset_m(p) - w.radius_m;
     for d in &w.obstacles {
-        c = c.min((p - d.center).norm() - d.radius_m - w.radius_m);
+        c = c.min((p - d.centre).norm() - d.radius_m - w.radius_m);
     }
     for o in &w.others {
         c = c.min((p - o.position).norm() - o.radius_m - w.radius_m);
@@ -178,7 +178,7 @@ fn segment_clearance_m(w: &World, a: &Point, b: &Point) -> f64 {
     let disks = w
         .obstacles
         .iter()
-        .map(|d| (d.center, d.radius_m))
+        .map(|d| (d.centre, d.radius_m))
         .chain(w.others.iter().map(|o| (o.position, o.radius_m)));
     for (centre, r) in disks {
         c = c.min(distance_point_segment(&centre, a, b) - r - w.radius_m);
@@ -238,7 +238,7 @@ fn world(seed: u64) -> World {
         let p = match rng.random_range(0..4) {
             0 if !w.obstacles.is_empty() => {
                 let d = w.obstacles[rng.random_range(0..w.obstacles.len())];
-                d.center + (d.radius_m + radius_m) * towards
+                d.centre + (d.radius_m + radius_m) * towards
             }
             1 if !w.others.is_empty() => {
                 let o = w.others[rng.random_range(0..w.others.len())];

@@ -48,12 +48,12 @@ fn dist_to_piece(p: &Point, piece: &PathPiece) -> f64 {
     match *piece {
         PathPiece::Segment { from, to } => dist_to_segment(p, &from, &to),
         PathPiece::Arc {
-            center,
+            centre,
             radius_m,
             start_rad,
             sweep_rad,
         } => {
-            let v = p - center;
+            let v = p - centre;
             let phi = v.y.atan2(v.x);
             let rel = if sweep_rad >= 0.0 {
                 rem_turn(phi - start_rad)
@@ -80,7 +80,7 @@ fn is_free(p: &Point, disks: &[Disk], field: &Field, tol: f64) -> bool {
     field.contains(p, tol)
         && disks
             .iter()
-            .all(|d| (p - d.center).norm() >= d.radius_m - tol)
+            .all(|d| (p - d.centre).norm() >= d.radius_m - tol)
 }
 
 /// Independent approximate planner: visibility graph over `per_circle` points on each
@@ -100,7 +100,7 @@ fn approximate_length(
         let grown = d.radius_m / half_step.cos() * (1.0 + 1e-9) + 1e-9;
         for i in 0..per_circle {
             let a = i as f64 * TAU / per_circle as f64;
-            let p = d.center + grown * nalgebra::Vector2::new(a.cos(), a.sin());
+            let p = d.centre + grown * nalgebra::Vector2::new(a.cos(), a.sin());
             if is_free(&p, disks, field, 0.0) {
                 nodes.push(p);
             }
@@ -109,7 +109,7 @@ fn approximate_length(
     let visible = |a: &Point, b: &Point| {
         disks
             .iter()
-            .all(|d| dist_to_segment(&d.center, a, b) >= d.radius_m)
+            .all(|d| dist_to_segment(&d.centre, a, b) >= d.radius_m)
     };
     let n = nodes.len();
     let mut dist = vec![f64::INFINITY; n];
@@ -174,14 +174,14 @@ fn check_path(
     for p in &samples {
         prop_assert!(field.contains(p, TOL_M), "sample {p:?} outside the field");
         for d in disks {
-            let c = (p - d.center).norm() - d.radius_m;
+            let c = (p - d.centre).norm() - d.radius_m;
             prop_assert!(c >= -TOL_M, "sample {p:?} inside {d:?} by {c}");
         }
     }
     for piece in &path.pieces {
         if let PathPiece::Segment { from, to } = piece {
             for d in disks {
-                let c = dist_to_segment(&d.center, from, to) - d.radius_m;
+                let c = dist_to_segment(&d.centre, from, to) - d.radius_m;
                 prop_assert!(c >= -TOL_M, "segment {piece:?} enters {d:?} by {c}");
             }
         }
@@ -218,7 +218,7 @@ fn check_polyline(path: &DiskPath, disks: &[Disk], e: f64) -> Result<(), TestCas
             );
         }
         for d in disks {
-            let c = dist_to_segment(&d.center, &w[0], &w[1]) - d.radius_m;
+            let c = dist_to_segment(&d.centre, &w[0], &w[1]) - d.radius_m;
             prop_assert!(c >= -e - 1e-9, "chord enters {d:?} by {c}");
         }
     }
@@ -240,7 +240,7 @@ fn make_point(field: &Field, disks: &[Disk], raw: (f64, f64, f64, usize), x0: f6
     let (u, v, snap, pick) = raw;
     if snap < 0.3 && !disks.is_empty() {
         let d = &disks[pick % disks.len()];
-        return d.center + d.radius_m * nalgebra::Vector2::new((u * TAU).cos(), (u * TAU).sin());
+        return d.centre + d.radius_m * nalgebra::Vector2::new((u * TAU).cos(), (u * TAU).sin());
     }
     if snap < 0.8 {
         return Point::new((x0 + 0.4 * u) * field.width_m, v * field.height_m);
@@ -345,7 +345,7 @@ proptest! {
     }
 }
 
-/// A ring of disks around `center`, either closed (neighbours overlap by at least 5 cm) or
+/// A ring of disks around `centre`, either closed (neighbours overlap by at least 5 cm) or
 /// with one unambiguous gap (at least 0.5 m wide), plus a few loose disks.
 #[derive(Clone, Debug)]
 struct Ring {
@@ -368,7 +368,7 @@ fn rings() -> impl Strategy<Value = Ring> {
             "ambiguous ring",
             |(count, ring_r, phase, closed, gap_frac, inside_start, loose, (gu, gv))| {
                 let field = Field::new(20.0, 20.0);
-                let center = Point::new(10.0, 10.0);
+                let centre = Point::new(10.0, 10.0);
                 let spacing = 2.0 * ring_r * (std::f64::consts::PI / count as f64).sin();
                 // Closed: neighbours overlap by >= 5 cm. Open: one disk removed, gap >= 0.5 m.
                 let disk_r = 0.5 * spacing + 0.05 + 0.3 * gap_frac;
@@ -379,8 +379,8 @@ fn rings() -> impl Strategy<Value = Ring> {
                     }
                     let a = phase * TAU + i as f64 * TAU / count as f64;
                     disks.push(Disk::new(
-                        center.x + ring_r * a.cos(),
-                        center.y + ring_r * a.sin(),
+                        centre.x + ring_r * a.cos(),
+                        centre.y + ring_r * a.sin(),
                         disk_r,
                     ));
                 }
@@ -397,13 +397,13 @@ fn rings() -> impl Strategy<Value = Ring> {
                 }
                 for &(x, y, r) in &loose {
                     let c = Point::new(1.0 + 18.0 * x, 1.0 + 18.0 * y);
-                    if (c - center).norm() > ring_r + disk_r + r + 0.5 {
+                    if (c - centre).norm() > ring_r + disk_r + r + 0.5 {
                         disks.push(Disk::new(c.x, c.y, r));
                     }
                 }
-                let inner = center;
+                let inner = centre;
                 let outer = Point::new(0.2 + 19.6 * gu, 0.2 + 19.6 * gv);
-                if (outer - center).norm() < ring_r + disk_r + 0.3
+                if (outer - centre).norm() < ring_r + disk_r + 0.3
                     || !is_free(&outer, &disks, &field, 0.0)
                 {
                     return None;
@@ -501,7 +501,7 @@ fn lattices() -> impl Strategy<Value = Lattice> {
                             + spacing * nalgebra::Vector2::new(i as f64 + 0.5, j as f64 + 0.5)
                             + jitter * spacing * nalgebra::Vector2::new(nx - 0.5, ny - 0.5);
                         disks.push(Disk {
-                            center: c,
+                            centre: c,
                             radius_m: radius,
                         });
                     }
@@ -521,7 +521,7 @@ fn lattices() -> impl Strategy<Value = Lattice> {
                             let a = disks[pick % n];
                             let b = disks[(pick + 1 + (v * 8.0) as usize) % n];
                             shared::geometry::circle_circle_intersections(
-                                &a.center, a.radius_m, &b.center, b.radius_m,
+                                &a.centre, a.radius_m, &b.centre, b.radius_m,
                             )
                             .map_or(a.boundary_point(u * TAU), |x| x[(u < 0.5) as usize])
                         }

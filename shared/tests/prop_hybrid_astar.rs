@@ -54,7 +54,7 @@ fn case() -> impl Strategy<Value = Case> {
                     // Mostly keep the endpoints free, so that most cases plan.
                     obstacles.retain(|d| {
                         [start, goal].iter().all(|p| {
-                            (p.position() - d.center).norm() > d.radius_m + clearance_m + 0.1
+                            (p.position() - d.centre).norm() > d.radius_m + clearance_m + 0.1
                         })
                     });
                 }
@@ -81,7 +81,7 @@ fn blocked(case: &Case, p: &Pose) -> bool {
         || case
             .obstacles
             .iter()
-            .any(|d| (p.position() - d.center).norm() < d.radius_m + c)
+            .any(|d| (p.position() - d.centre).norm() < d.radius_m + c)
 }
 
 fn same_pose(a: &Pose, b: &Pose) -> bool {
@@ -116,7 +116,7 @@ fn check_path(
         );
         for d in &case.obstacles {
             prop_assert!(
-                (q - d.center).norm() - d.radius_m >= c - 1e-9,
+                (q - d.centre).norm() - d.radius_m >= c - 1e-9,
                 "pose {:?} hits {:?}",
                 p,
                 d
@@ -127,7 +127,7 @@ fn check_path(
     for w in path.windows(2) {
         let (a, b) = (w[0].position(), w[1].position());
         for d in &case.obstacles {
-            prop_assert!(distance_point_segment(&d.center, &a, &b) - d.radius_m >= c - 1e-9);
+            prop_assert!(distance_point_segment(&d.centre, &a, &b) - d.radius_m >= c - 1e-9);
         }
         let distance = (b - a).norm();
         let turn = wrap_angle_rad(w[1].heading_rad - w[0].heading_rad).abs();

@@ -100,7 +100,7 @@ impl<'a> FormationFigure<'a> {
         };
         if s.obstacles
             .iter()
-            .any(|o| view.touches_disk((o.center.x, o.center.y), o.radius_m + margin_m))
+            .any(|o| view.touches_disk((o.centre.x, o.centre.y), o.radius_m + margin_m))
         {
             legend.extend(obstacle_items);
         }

@@ -79,7 +79,7 @@ fn nearest_obstacle_clearance(grid: &DiskGrid, p: &Point, r: f64, diagonal: f64)
     loop {
         let mut best = f64::INFINITY;
         let _ = grid.visit_near(p, reach, |_, o: &Disk| {
-            best = best.min((p - o.center).norm() - o.radius_m - r);
+            best = best.min((p - o.centre).norm() - o.radius_m - r);
             ControlFlow::<()>::Continue(())
         });
         // A disk not visited has its centre farther than `reach` from `p`.

@@ -222,7 +222,7 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
     pub fn obstacles(&self, obstacles: &[Disk], margin_m: f64) -> anyhow::Result<()> {
         let dashed = obstacles.len() <= 400;
         for o in obstacles {
-            let c = (o.center.x, o.center.y);
+            let c = (o.centre.x, o.centre.y);
             let r = o.radius_m + margin_m;
             if !self.view.touches_disk(c, r) {
                 continue;
@@ -245,7 +245,7 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
         }
         for o in obstacles {
             self.disk(
-                (o.center.x, o.center.y),
+                (o.centre.x, o.centre.y),
                 o.radius_m,
                 Some(fill(solid(palette::OBSTACLE))),
                 None,

@@ -95,12 +95,12 @@ impl<B: DrawingBackend> DrawingBackend for TextSetter<B> {
 
     fn draw_circle<S: BackendStyle>(
         &mut self,
-        center: BackendCoord,
+        centre: BackendCoord,
         radius: u32,
         style: &S,
         fill: bool,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.draw_circle(center, radius, style, fill)
+        self.inner.draw_circle(centre, radius, style, fill)
     }
 
     fn fill_polygon<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(

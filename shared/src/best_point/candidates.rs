@@ -188,7 +188,7 @@ impl<'s> CandidateSearch<'s> {
             // Ids gathered by earlier rings are sorted; a box query reports a disk once.
             let earlier = gathered_ids.len();
             let _ = self.space.visit_box(&min, &max, |id, disk| {
-                let to_center_m = (disk.center - query).norm();
+                let to_center_m = (disk.centre - query).norm();
                 let circle_meets_ring = (to_center_m - disk.radius_m).abs() <= reach_m;
                 if disk.radius_m > 0.0
                     && circle_meets_ring
@@ -257,7 +257,7 @@ impl<'s> CandidateSearch<'s> {
     /// gathered before it.
     fn push_disk_candidates(&mut self, i: usize) {
         let disk = self.gathered[i];
-        let outward = self.query - disk.center;
+        let outward = self.query - disk.centre;
         let outward_m = outward.norm();
         let direction = if outward_m > 0.0 {
             outward / outward_m
@@ -266,7 +266,7 @@ impl<'s> CandidateSearch<'s> {
             // of the circle's free arcs come as crossings.
             Vector::x()
         };
-        self.push(disk.center + disk.radius_m * direction);
+        self.push(disk.centre + disk.radius_m * direction);
 
         let field = self.space.field;
         let edge_lines = [
@@ -277,7 +277,7 @@ impl<'s> CandidateSearch<'s> {
         ];
         for (line_point, line_direction) in edge_lines {
             if let Some(crossings) =
-                circle_line_intersections(&disk.center, disk.radius_m, &line_point, &line_direction)
+                circle_line_intersections(&disk.centre, disk.radius_m, &line_point, &line_direction)
             {
                 crossings.into_iter().for_each(|p| self.push(p));
             }
@@ -287,13 +287,13 @@ impl<'s> CandidateSearch<'s> {
             let other = self.gathered[j];
             // Cheap rejection of the (many) pairs that are far apart.
             let reach_m = disk.radius_m + other.radius_m;
-            if (disk.center - other.center).norm_squared() > reach_m * reach_m {
+            if (disk.centre - other.centre).norm_squared() > reach_m * reach_m {
                 continue;
             }
             if let Some(crossings) = circle_circle_intersections(
-                &disk.center,
+                &disk.centre,
                 disk.radius_m,
-                &other.center,
+                &other.centre,
                 other.radius_m,
             ) {
                 crossings.into_iter().for_each(|p| self.push(p));

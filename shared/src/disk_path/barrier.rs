@@ -46,20 +46,20 @@ pub(super) fn visit_barrier_edges(
     let outside = disks.len();
     let r_max = disks.iter().map(|d| d.radius_m).fold(0.0, f64::max);
     let mut order: Vec<usize> = (0..disks.len()).collect();
-    order.sort_by(|&a, &b| disks[a].center.x.total_cmp(&disks[b].center.x));
+    order.sort_by(|&a, &b| disks[a].centre.x.total_cmp(&disks[b].centre.x));
     for (pos, &i) in order.iter().enumerate() {
         let di = &disks[i];
         for &j in &order[pos + 1..] {
             let dj = &disks[j];
-            if dj.center.x - di.center.x >= di.radius_m + r_max {
+            if dj.centre.x - di.centre.x >= di.radius_m + r_max {
                 break;
             }
             let reach = di.radius_m + dj.radius_m - BARRIER_MARGIN_M;
-            if (dj.center - di.center).norm() < reach {
-                visit(i, j, &di.center, &dj.center)?;
+            if (dj.centre - di.centre).norm() < reach {
+                visit(i, j, &di.centre, &dj.centre)?;
             }
         }
-        let (c, r, m) = (di.center, di.radius_m, BARRIER_MARGIN_M);
+        let (c, r, m) = (di.centre, di.radius_m, BARRIER_MARGIN_M);
         let (w, h) = (field.width_m, field.height_m);
         let exits = [
             (c.x < r - m, Point::new(c.x.min(0.0) - 1.0, c.y)),

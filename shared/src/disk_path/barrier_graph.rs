@@ -73,8 +73,8 @@ impl BarrierGraph {
         let _ = space.visit_box(&(from - grow), &(from + grow), |_, d| {
             let usable = d.radius_m > 0.0 && d.radius_m.is_finite();
             if usable
-                && (field.clamp(&d.center) - d.center).norm() <= d.radius_m
-                && (d.center - from).norm() <= reach_m + d.radius_m
+                && (field.clamp(&d.centre) - d.centre).norm() <= d.radius_m
+                && (d.centre - from).norm() <= reach_m + d.radius_m
             {
                 disks.push(*d);
             }

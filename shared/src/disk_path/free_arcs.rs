@@ -18,7 +18,7 @@ pub(super) fn turn_rem(x: f64) -> f64 {
 /// Open angular intervals `(start, width)` of a circle that lie strictly inside other disks
 /// or outside the field (beyond tolerance). A width of a full turn blocks the whole circle.
 pub(super) fn blocked_intervals(k: usize, circles: &[Disk], field: &Field) -> Vec<(f64, f64)> {
-    let ck = circles[k].center;
+    let ck = circles[k].centre;
     let rk = circles[k].radius_m;
     let mut out = Vec::new();
     // The circle point at angle phi is blocked iff cos(phi - alpha) > c.
@@ -41,7 +41,7 @@ pub(super) fn blocked_intervals(k: usize, circles: &[Disk], field: &Field) -> Ve
         if reach <= 0.0 {
             continue;
         }
-        let v = dj.center - ck;
+        let v = dj.centre - ck;
         let d = v.norm();
         if d >= rk + reach || d + reach <= rk {
             continue;

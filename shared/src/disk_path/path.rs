@@ -12,11 +12,11 @@ pub enum PathPiece {
         /// Last point.
         to: Point,
     },
-    /// Arc of the circle (`center`, `radius_m`) starting at angle `start_rad`, sweeping
+    /// Arc of the circle (`centre`, `radius_m`) starting at angle `start_rad`, sweeping
     /// `sweep_rad` (positive = counter-clockwise).
     Arc {
         /// Centre of the circle.
-        center: Point,
+        centre: Point,
         /// Radius of the circle, in metres.
         radius_m: f64,
         /// Angle of the first point, counter-clockwise from +x, in radians.
@@ -26,10 +26,10 @@ pub enum PathPiece {
     },
 }
 
-/// The point of the circle (`center`, `radius_m`) at angle `angle_rad`.
-fn circle_point(center: &Point, radius_m: f64, angle_rad: f64) -> Point {
+/// The point of the circle (`centre`, `radius_m`) at angle `angle_rad`.
+fn circle_point(centre: &Point, radius_m: f64, angle_rad: f64) -> Point {
     let (sin, cos) = angle_rad.sin_cos();
-    center + radius_m * Vector::new(cos, sin)
+    centre + radius_m * Vector::new(cos, sin)
 }
 
 impl PathPiece {
@@ -38,11 +38,11 @@ impl PathPiece {
         match self {
             Self::Segment { from, .. } => *from,
             Self::Arc {
-                center,
+                centre,
                 radius_m,
                 start_rad,
                 ..
-            } => circle_point(center, *radius_m, *start_rad),
+            } => circle_point(centre, *radius_m, *start_rad),
         }
     }
 
@@ -51,11 +51,11 @@ impl PathPiece {
         match self {
             Self::Segment { to, .. } => *to,
             Self::Arc {
-                center,
+                centre,
                 radius_m,
                 start_rad,
                 sweep_rad,
-            } => circle_point(center, *radius_m, start_rad + sweep_rad),
+            } => circle_point(centre, *radius_m, start_rad + sweep_rad),
         }
     }
 
@@ -77,11 +77,11 @@ impl PathPiece {
         match self {
             Self::Segment { from, to } => from + t * (to - from),
             Self::Arc {
-                center,
+                centre,
                 radius_m,
                 start_rad,
                 sweep_rad,
-            } => circle_point(center, *radius_m, start_rad + t * sweep_rad),
+            } => circle_point(centre, *radius_m, start_rad + t * sweep_rad),
         }
     }
 }
@@ -194,7 +194,7 @@ mod tests {
     #[test]
     fn polyline_vertices_lie_on_arcs_and_respect_the_chord_error() {
         let arc = PathPiece::Arc {
-            center: Point::new(1.0, 2.0),
+            centre: Point::new(1.0, 2.0),
             radius_m: 2.0,
             start_rad: 0.3,
             sweep_rad: -2.5,

@@ -109,9 +109,9 @@ fn candidate_disks(space: &FreeSpace, s: &Point, t: &Point, limit_m: f64) -> Vec
     let mut out = Vec::new();
     let _ = space.visit_box(&min, &max, |_, d| {
         let usable = d.radius_m > 0.0 && d.radius_m.is_finite();
-        let meets_field = usable && (field.clamp(&d.center) - d.center).norm() <= d.radius_m;
+        let meets_field = usable && (field.clamp(&d.centre) - d.centre).norm() <= d.radius_m;
         if meets_field
-            && (d.center - s).norm() + (d.center - t).norm() <= limit_m + 2.0 * d.radius_m
+            && (d.centre - s).norm() + (d.centre - t).norm() <= limit_m + 2.0 * d.radius_m
         {
             out.push(*d);
         }

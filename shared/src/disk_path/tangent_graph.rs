@@ -191,7 +191,7 @@ impl<'a, 's> Planner<'a, 's> {
         let (dst_center, dst_rho) = match target {
             Target::Circle(j, sense) => {
                 let d = &self.circles[j as usize];
-                (d.center, f64::from(sense) * d.radius_m)
+                (d.centre, f64::from(sense) * d.radius_m)
             }
             Target::Goal => (self.to, 0.0),
         };
@@ -227,22 +227,22 @@ impl<'a, 's> Planner<'a, 's> {
         let src_rho = f64::from(sense) * src.radius_m;
         let (depart, arrive, arrive_angle_rad, degenerate) = match target {
             Target::Goal => {
-                let v = self.to - src.center;
+                let v = self.to - src.centre;
                 if (v.norm() - src.radius_m).abs() <= FREE_TOLERANCE_M {
                     // The goal is on this circle: the arc ends at the goal's angle.
                     (self.to, self.to, 0.0, true)
                 } else {
-                    let (d, a) = directed_tangent(&src.center, src_rho, &self.to, 0.0)?;
+                    let (d, a) = directed_tangent(&src.centre, src_rho, &self.to, 0.0)?;
                     (d, a, 0.0, false)
                 }
             }
             Target::Circle(..) => {
-                let (d, a) = directed_tangent(&src.center, src_rho, &dst_center, dst_rho)?;
+                let (d, a) = directed_tangent(&src.centre, src_rho, &dst_center, dst_rho)?;
                 let w = a - dst_center;
                 (d, a, w.y.atan2(w.x), false)
             }
         };
-        let v = depart - src.center;
+        let v = depart - src.centre;
         let depart_angle = v.y.atan2(v.x);
         let mut sweep_rad = turn_rem(f64::from(sense) * (depart_angle - node.angle_rad));
         if sweep_rad > TAU - FULL_TURN_SNAP_RAD {
@@ -349,7 +349,7 @@ impl<'a, 's> Planner<'a, 's> {
                 let circle = &self.circles[a.key.to as usize];
                 if circle.radius_m * edge.sweep_rad > MIN_ARC_LENGTH_M {
                     let arc = PathPiece::Arc {
-                        center: circle.center,
+                        centre: circle.centre,
                         radius_m: circle.radius_m,
                         start_rad: a.angle_rad,
                         sweep_rad: f64::from(a.key.to_sense) * edge.sweep_rad,

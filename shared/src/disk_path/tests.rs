@@ -20,7 +20,7 @@ fn min_clearance_and_inset(path: &DiskPath, disks: &[Disk], field: &Field) -> (f
     let mut inset = f64::INFINITY;
     for p in path.sample(1e-3) {
         for d in disks {
-            clearance = clearance.min((p - d.center).norm() - d.radius_m);
+            clearance = clearance.min((p - d.centre).norm() - d.radius_m);
         }
         inset = inset.min(field.signed_inset_m(&p));
     }
@@ -179,7 +179,7 @@ fn disk_sticking_out_of_the_field_forces_the_other_side() {
     let disks = vec![Disk::new(5.0, 1.5, 2.0)];
     let (a, b) = (Point::new(1.0, 1.0), Point::new(9.0, 1.0));
     let path = plan(field, disks.clone(), a, b).expect("path");
-    let c = disks[0].center;
+    let c = disks[0].centre;
     let (va, vb) = (a - c, b - c);
     let d = va.norm();
     let (angle_a, angle_b) = (va.y.atan2(va.x), vb.y.atan2(vb.x));
@@ -235,7 +235,7 @@ fn long_wall_needs_several_ellipse_rounds() {
     assert!(clearance >= -1e-9 && inset >= -1e-9, "{clearance} {inset}");
     // Around the top disk (30, 16.2): symmetric tangents plus the arc over it.
     let top = disks[27];
-    let d = (top.center - a).norm();
+    let d = (top.centre - a).norm();
     // a and b seen from the top centre are 2 atan(1 / 11.2) apart below it; the arc
     // covers the rest of the turn minus the two tangent angles.
     let below = 2.0 * (1.0f64 / 11.2).atan();

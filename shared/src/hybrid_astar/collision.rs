@@ -38,7 +38,7 @@ impl Checker {
             && self
                 .grid
                 .visit_near(p, 0.0, |_, d| {
-                    if (p - d.center).norm() < d.radius_m {
+                    if (p - d.centre).norm() < d.radius_m {
                         ControlFlow::Break(())
                     } else {
                         ControlFlow::Continue(())
@@ -65,7 +65,7 @@ impl Checker {
         if self
             .candidates
             .iter()
-            .any(|d| piece.distance_m(&d.center) < d.radius_m)
+            .any(|d| piece.distance_m(&d.centre) < d.radius_m)
         {
             return false;
         }
@@ -86,7 +86,7 @@ impl Checker {
             if self
                 .candidates
                 .iter()
-                .any(|d| distance_point_segment(&d.center, &a, &b) < d.radius_m)
+                .any(|d| distance_point_segment(&d.centre, &a, &b) < d.radius_m)
             {
                 return false;
             }

@@ -257,8 +257,8 @@ impl Holonomic {
         let mut touched = vec![false; blocked.len()];
         for d in checker.grid.disks() {
             let r = Vector::new(d.radius_m, d.radius_m);
-            let (c0, r0) = fine.column_row(fine.cell_of(&(d.center - r)));
-            let (c1, r1) = fine.column_row(fine.cell_of(&(d.center + r)));
+            let (c0, r0) = fine.column_row(fine.cell_of(&(d.centre - r)));
+            let (c1, r1) = fine.column_row(fine.cell_of(&(d.centre + r)));
             for row in r0..=r1 {
                 touched[row * fine.columns + c0..=row * fine.columns + c1].fill(true);
             }
@@ -291,7 +291,7 @@ impl Holonomic {
                 ];
                 candidates
                     .iter()
-                    .any(|d| corners.iter().all(|p| (p - d.center).norm() < d.radius_m))
+                    .any(|d| corners.iter().all(|p| (p - d.centre).norm() < d.radius_m))
             });
         }
         blocked

@@ -30,7 +30,7 @@ use crate::geometry::{Disk, Field, Pose};
 /// let path = plan(&field, &obstacles, &start, &goal, &settings)?;
 /// assert_eq!((path.first(), path.last()), (Some(&start), Some(&goal)));
 /// // The path goes around the disk, 0.5 m clear of it, and not far out of the way.
-/// let clear = |p: &Pose| (p.position() - obstacles[0].center).norm() >= 2.0 + 0.5;
+/// let clear = |p: &Pose| (p.position() - obstacles[0].centre).norm() >= 2.0 + 0.5;
 /// assert!(path.iter().all(clear));
 /// let length_m = path_length_m(&path);
 /// assert!(length_m > 30.0 && length_m < 33.0, "{length_m}");
@@ -67,8 +67,8 @@ pub fn plan_with_stats(
         ));
     }
     if obstacles.iter().any(|d| {
-        !(d.center.x.is_finite()
-            && d.center.y.is_finite()
+        !(d.centre.x.is_finite()
+            && d.centre.y.is_finite()
             && d.radius_m.is_finite()
             && d.radius_m >= 0.0)
     }) {

@@ -45,9 +45,9 @@ impl Piece {
     fn circle(&self) -> (Point, f64, f64) {
         let k = self.curvature_per_m;
         let h = self.start.heading_rad;
-        let center = Point::new(self.start.x_m - h.sin() / k, self.start.y_m + h.cos() / k);
-        let phi0 = (self.start.y_m - center.y).atan2(self.start.x_m - center.x);
-        (center, phi0, k * self.length_m)
+        let centre = Point::new(self.start.x_m - h.sin() / k, self.start.y_m + h.cos() / k);
+        let phi0 = (self.start.y_m - centre.y).atan2(self.start.x_m - centre.x);
+        (centre, phi0, k * self.length_m)
     }
 
     /// Whether the angle `angle_rad` (seen from the circle's centre) lies on the arc.
@@ -66,13 +66,13 @@ impl Piece {
         let mut min = Point::new(a.x.min(b.x), a.y.min(b.y));
         let mut max = Point::new(a.x.max(b.x), a.y.max(b.y));
         if self.curvature_per_m != 0.0 {
-            let (center, phi0, sweep) = self.circle();
+            let (centre, phi0, sweep) = self.circle();
             let r = 1.0 / self.curvature_per_m.abs();
             for (i, extreme) in [
-                (0, center.x + r),
-                (1, center.y + r),
-                (2, center.x - r),
-                (3, center.y - r),
+                (0, centre.x + r),
+                (1, centre.y + r),
+                (2, centre.x - r),
+                (3, centre.y - r),
             ] {
                 if Self::sweeps(phi0, sweep, i as f64 * FRAC_PI_2) {
                     match i {
@@ -94,9 +94,9 @@ impl Piece {
         if self.curvature_per_m == 0.0 {
             return distance_point_segment(p, &a, &b);
         }
-        let (center, phi0, sweep) = self.circle();
+        let (centre, phi0, sweep) = self.circle();
         let r = 1.0 / self.curvature_per_m.abs();
-        let d = p - center;
+        let d = p - centre;
         let dn = d.norm();
         if dn == 0.0 {
             return r;

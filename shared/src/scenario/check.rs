@@ -420,7 +420,7 @@ impl Checker<'_> {
                     name,
                     format!(
                         "({}, {}) is within the centre clearance {} m of obstacle {k} at ({}, {}) radius {} m",
-                        p.x, p.y, path.centre_clearance_m, o.center.x, o.center.y, o.radius_m
+                        p.x, p.y, path.centre_clearance_m, o.centre.x, o.centre.y, o.radius_m
                     ),
                 ));
             }
@@ -456,7 +456,7 @@ impl Checker<'_> {
                     name,
                     format!(
                         "at the start pose the agent at ({:.3}, {:.3}) overlaps obstacle {k} at ({}, {})",
-                        p.x, p.y, o.center.x, o.center.y
+                        p.x, p.y, o.centre.x, o.centre.y
                     ),
                 ));
             }

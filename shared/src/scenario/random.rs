@@ -45,7 +45,7 @@ pub(super) fn random_obstacles(
             .all(|k| (c - k).norm() >= radius_m + keep_clear_m)
         {
             disks.push(Disk {
-                center: c,
+                centre: c,
                 radius_m,
             });
         }

@@ -86,8 +86,8 @@ impl Scenario {
             let _ = writeln!(
                 t,
                 "  {{ x_m = {}, y_m = {}, radius_m = {} }},",
-                toml_f64(o.center.x),
-                toml_f64(o.center.y),
+                toml_f64(o.centre.x),
+                toml_f64(o.centre.y),
                 toml_f64(o.radius_m)
             );
         }

@@ -87,8 +87,8 @@ impl Mission {
         for o in obstacles {
             self.obstacles
                 .push(WireDisk {
-                    x_m: o.center.x,
-                    y_m: o.center.y,
+                    x_m: o.centre.x,
+                    y_m: o.centre.y,
                     radius_m: o.radius_m,
                 })
                 .map_err(|_| CapacityError::Obstacles(obstacles.len()))?;
