@@ -85,7 +85,7 @@ prop_compose! {
                 Degeneracy::Tangent(angle_rad, radius_m) => {
                     let centre = first.centre
                         + (first.radius_m + radius_m) * Vector::new(angle_rad.cos(), angle_rad.sin());
-                    disks.push(Disk { centre: centre, radius_m });
+                    disks.push(Disk { centre, radius_m });
                 }
                 Degeneracy::TouchingEdge => {
                     disks[0].centre.x = first.radius_m;
