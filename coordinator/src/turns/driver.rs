@@ -1,0 +1,321 @@
+//! The step loop: every live agent takes its turn in order; its answer is judged and
+//! checked before the recorder takes it.
+
+use std::time::{Duration, Instant};
+
+use shared::geometry::Pose;
+use shared::record::Recorder;
+use shared::scenario::Scenario;
+use shared::vocabulary::MoveStatus;
+use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
+
+use super::judge::{Judged, accept_or_reject, judge_answer};
+use super::{BetweenSteps, LIVENESS_SLICE, Progress, RunOptions, TurnSample, progress_bar};
+use crate::agents::{AgentProcesses, Exit};
+use crate::ipc::{CoordinatorIpc, Grant, TurnSplit};
+use crate::monitor::SafetyMonitor;
+use crate::procfs::{self, IdleCpu};
+
+/// What the coordinator learned while waiting for a move.
+pub(super) enum Answer {
+    /// The move arrived.
+    Move(Box<StateMsg>),
+    /// The agent answered its turn with a sample that failed the checks.
+    Malformed(String),
+    /// The agent's process is gone; detected after this long.
+    Dead(Duration),
+    /// The deadline passed with the process alive.
+    Missed,
+    /// SIGINT or SIGTERM reached the coordinator.
+    Interrupted,
+}
+
+pub(super) struct Driver<'a, 's> {
+    pub(super) scenario: &'a Scenario,
+    pub(super) options: &'a RunOptions,
+    pub(super) ipc: &'a mut CoordinatorIpc,
+    pub(super) procs: &'a mut AgentProcesses,
+    pub(super) recorder: &'a mut Recorder<'s>,
+    pub(super) progress: &'a mut Progress,
+    /// Consecutive missed turns per agent.
+    pub(super) missed: Vec<u32>,
+    /// Called after every step.
+    pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
+}
+
+impl Driver<'_, '_> {
+    /// Start `agent`'s process on its open channel; a replacement never misbehaves.
+    pub(super) fn spawn(&mut self, agent: usize, replacement: bool) -> anyhow::Result<()> {
+        let generation = self.ipc.generation(agent).unwrap_or(0);
+        let mut extra = vec!["--generation".to_string(), generation.to_string()];
+        if !replacement
+            && let Some((_, mode)) = self.options.misbehave.iter().find(|(a, _)| *a == agent)
+        {
+            extra.extend(["--misbehave".to_string(), mode.to_string()]);
+        }
+        self.procs.spawn(agent, &extra)?;
+        Ok(())
+    }
+
+    pub(super) fn pids(&self) -> Vec<Option<u32>> {
+        (0..self.scenario.agents.len())
+            .map(|i| self.procs.pid(i))
+            .collect()
+    }
+
+    pub(super) fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<()> {
+        let n = self.scenario.agents.len();
+        for i in 0..n {
+            self.spawn(i, false)?;
+        }
+        let all: Vec<usize> = (0..n).collect();
+        self.start_agents(0, &all, self.options.startup_timeout, false)?;
+        self.progress.startup_s = started.elapsed().as_secs_f64();
+        self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
+            let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
+            IdleCpu::measure(&pids, hold)
+        });
+        self.progress.turn_samples.reserve(n * centre_path.len());
+
+        let monitor = SafetyMonitor::new(self.scenario.field, &self.scenario.obstacles);
+        let bar = progress_bar(
+            centre_path.len().saturating_sub(1),
+            &self.scenario.name,
+            self.options.progress,
+        );
+
+        'steps: for (step, centre) in centre_path.iter().enumerate().skip(1) {
+            // Agents that died while waiting for their turn are noticed now.
+            let checked = Instant::now();
+            for agent in 0..n {
+                if self.recorder.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
+                    self.on_death(step, agent, checked.elapsed(), "exited between turns")?;
+                }
+            }
+            for agent in 0..n {
+                if !self.recorder.alive()[agent] {
+                    continue;
+                }
+                if self.take_turn(&monitor, step, agent, centre)? {
+                    break 'steps;
+                }
+            }
+            self.recorder.end_step(step);
+            bar.inc(1);
+            let pids = self.pids();
+            (self.between_steps)(BetweenSteps {
+                step,
+                prefix: self.ipc.prefix(),
+                ipc: self.ipc,
+                alive: self.recorder.alive(),
+                pids: &pids,
+            })?;
+            if self.ipc.termination_requested() {
+                self.progress.interrupted = true;
+                break;
+            }
+        }
+        bar.finish_and_clear();
+        self.progress.rss_kib = self
+            .pids()
+            .into_iter()
+            .flatten()
+            .filter_map(procfs::rss_kib)
+            .collect();
+        self.progress.completed = !self.progress.interrupted;
+        Ok(())
+    }
+
+    /// Grant `agent` its turn at `step` and judge the answer; true if the run was
+    /// interrupted.
+    pub(super) fn take_turn(
+        &mut self,
+        monitor: &SafetyMonitor,
+        step: usize,
+        agent: usize,
+        centre: &Pose,
+    ) -> anyhow::Result<bool> {
+        // Nothing that arrived since the agent's last turn answers this one.
+        self.drain(step, agent)?;
+        if !self.recorder.alive()[agent] {
+            return Ok(false);
+        }
+        let slot = self.scenario.agents[agent].slot.ideal_position(centre);
+        // Stamped before the world exists, so no answer to it can predate the stamp.
+        let granted = Instant::now();
+        let granted_ns = monotonic_ns();
+        let grant = self.ipc.publish_world(
+            step,
+            agent,
+            centre,
+            self.recorder.bodies(),
+            self.recorder.alive(),
+        )?;
+        self.ipc.notify_turn(agent)?;
+        if self.options.kills.contains(&(agent, step))
+            && let Some(pid) = self.procs.signal_kill(agent)
+        {
+            self.recorder.note_fault(
+                step,
+                agent,
+                "killed",
+                format!("fault injection: SIGKILL to process {pid} during its turn"),
+                None,
+            );
+        }
+        match self.wait_answer(step, agent, grant, granted)? {
+            Answer::Move(msg) => {
+                let held_ns = monotonic_ns();
+                self.missed[agent] = 0;
+                let latency_ns = held_ns.saturating_sub(granted_ns);
+                if msg.compute_ns > latency_ns {
+                    self.recorder.note_fault(
+                        step,
+                        agent,
+                        "malformed",
+                        format!(
+                            "reports {} ns of compute in a turn of {latency_ns} ns; counted as {latency_ns} ns",
+                            msg.compute_ns
+                        ),
+                        None,
+                    );
+                }
+                let sample = TurnSample {
+                    step,
+                    agent,
+                    latency_us: latency_ns as f64 / 1e3,
+                    compute_us: msg.compute_ns.min(latency_ns) as f64 / 1e3,
+                    split: TurnSplit::of(granted_ns, &msg, held_ns),
+                };
+                self.progress.latency_us.push(sample.latency_us);
+                self.progress.compute_us.push(sample.compute_us);
+                self.progress.turn_samples.push(sample);
+                accept_or_reject(monitor, self.recorder, step, agent, slot, *msg);
+            }
+            Answer::Malformed(why) => {
+                self.missed[agent] = 0;
+                tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
+                self.recorder
+                    .reject_as(step, agent, slot, MoveStatus::Rejected, "malformed", why);
+            }
+            Answer::Dead(after) => {
+                self.on_death(step, agent, after, "died during its turn")?;
+            }
+            Answer::Missed => self.on_missed(step, agent, slot)?,
+            Answer::Interrupted => {
+                self.progress.interrupted = true;
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    /// Take in whatever `agent`'s channel holds between turns: none of it answers a
+    /// turn. Recorded, never used.
+    pub(super) fn drain(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
+        let pid = self.procs.pid(agent);
+        let (mut extra, mut malformed) = (0usize, Vec::new());
+        while let Some(incoming) = self.ipc.receive(agent) {
+            if let Some(from) = incoming.publisher_pid
+                && Some(from) != pid
+            {
+                self.on_impersonation(step, agent, from)?;
+                continue;
+            }
+            match incoming.msg {
+                Ok(msg) if msg.kind == StateKind::Echo => {}
+                Ok(_) => extra += 1,
+                Err(why) => {
+                    let unreadable = matches!(why, MalformedState::Unreadable(_));
+                    malformed.push(why.to_string());
+                    if unreadable {
+                        break;
+                    }
+                }
+            }
+        }
+        if extra > 0 {
+            self.recorder.note_fault(
+                step,
+                agent,
+                "unsolicited",
+                format!(
+                    "{extra} state(s) arrived between turns (an extra move, or an answer to a turn not yet granted); ignored"
+                ),
+                None,
+            );
+        }
+        if let Some(first) = malformed.first() {
+            self.recorder.note_fault(
+                step,
+                agent,
+                "malformed",
+                format!(
+                    "{} sample(s) between turns failed the checks, first: {first}",
+                    malformed.len()
+                ),
+                None,
+            );
+        }
+        Ok(())
+    }
+
+    /// Wait for `agent`'s answer to `grant`, checking its process every slice.
+    pub(super) fn wait_answer(
+        &mut self,
+        step: usize,
+        agent: usize,
+        grant: Grant,
+        granted: Instant,
+    ) -> anyhow::Result<Answer> {
+        let deadline = granted + self.options.turn_deadline;
+        let pid = self.procs.pid(agent);
+        let mut unsolicited = 0usize;
+        let answer = loop {
+            let mut found = None;
+            while let Some(incoming) = self.ipc.receive(agent) {
+                if let Some(from) = incoming.publisher_pid
+                    && Some(from) != pid
+                {
+                    self.on_impersonation(step, agent, from)?;
+                    continue;
+                }
+                match judge_answer(incoming, grant, step, pid) {
+                    Judged::Answer(a) => {
+                        found = Some(a);
+                        break;
+                    }
+                    Judged::Unsolicited => unsolicited += 1,
+                    Judged::Ignore => {}
+                }
+            }
+            if let Some(a) = found {
+                break a;
+            }
+            if self.ipc.termination_requested() {
+                break Answer::Interrupted;
+            }
+            if self.procs.poll(agent) == Exit::Exited {
+                break Answer::Dead(granted.elapsed());
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                break Answer::Missed;
+            }
+            self.ipc
+                .wait_done(agent, (now + LIVENESS_SLICE).min(deadline));
+        };
+        if unsolicited > 0 {
+            self.recorder.note_fault(
+                step,
+                agent,
+                "unsolicited",
+                format!(
+                    "{unsolicited} state(s) during the turn carried no valid token for it (replayed or guessed); ignored"
+                ),
+                None,
+            );
+        }
+        Ok(answer)
+    }
+}

@@ -1,0 +1,137 @@
+//! What happens to an agent that dies, stays silent, or uses another agent's channel.
+
+use std::time::Duration;
+
+use shared::geometry::Point;
+use shared::vocabulary::MoveStatus;
+
+use super::driver::Driver;
+
+impl Driver<'_, '_> {
+    /// A sample on `channel_agent`'s channel was published by process `publisher_pid`,
+    /// not by the agent's own: the culprit, if it is one of the run's agents, is killed
+    /// and frozen.
+    pub(super) fn on_impersonation(
+        &mut self,
+        step: usize,
+        channel_agent: usize,
+        publisher_pid: u32,
+    ) -> anyhow::Result<()> {
+        self.on_intruder(step, channel_agent, publisher_pid, "published on")
+    }
+
+    /// Process `pid` used `channel_agent`'s channel (`how`): recorded against the culprit
+    /// agent, which is killed and frozen, or against the channel if it is no agent.
+    pub(super) fn on_intruder(
+        &mut self,
+        step: usize,
+        channel_agent: usize,
+        pid: u32,
+        how: &str,
+    ) -> anyhow::Result<()> {
+        let culprit = self.procs.agent_of_pid(pid);
+        tracing::warn!(
+            "step {step}: process {pid} (agent {culprit:?}) {how} agent {channel_agent}'s channel"
+        );
+        match culprit {
+            Some(c) if self.recorder.alive()[c] && self.procs.pid(c) == Some(pid) => {
+                self.recorder.note_fault(
+                    step,
+                    c,
+                    "impersonation",
+                    format!("process {pid} {how} agent {channel_agent}'s channel; killed"),
+                    None,
+                );
+                self.on_death(step, c, Duration::ZERO, "was killed for impersonation")?;
+            }
+            // An earlier process of an agent, already killed and recorded.
+            Some(_) => {}
+            None => self.recorder.note_fault(
+                step,
+                channel_agent,
+                "impersonation",
+                format!("process {pid}, not an agent of this run, {how} this agent's channel"),
+                None,
+            ),
+        }
+        Ok(())
+    }
+
+    /// Look for processes attached to the channels of `agents` that are not theirs.
+    pub(super) fn scan_for_intruders(
+        &mut self,
+        step: usize,
+        agents: &[usize],
+    ) -> anyhow::Result<()> {
+        for &agent in agents {
+            let Some(pid) = self.procs.pid(agent) else {
+                continue;
+            };
+            for intruder in self.ipc.intruders(agent, pid) {
+                self.on_intruder(step, agent, intruder, "opened the services of")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Freeze a dead agent, clean its shared-memory resources, and respawn it if asked.
+    pub(super) fn on_death(
+        &mut self,
+        step: usize,
+        agent: usize,
+        after: Duration,
+        how: &str,
+    ) -> anyhow::Result<()> {
+        let ms = after.as_secs_f64() * 1e3;
+        tracing::warn!(
+            "step {step}: agent {agent} {how}; frozen as an obstacle ({ms:.1} ms to notice)"
+        );
+        self.recorder
+            .freeze_dead(step, agent, format!("the agent process {how}"), ms);
+        self.procs.kill_now(agent);
+        self.ipc.close_channel(agent);
+        let cleaned = self.ipc.cleanup_dead_nodes();
+        tracing::info!("cleaned the resources of {cleaned} dead node(s)");
+        self.missed[agent] = 0;
+        if self.options.respawn {
+            self.respawn(step, agent)?;
+        }
+        Ok(())
+    }
+
+    /// A live agent missed its deadline: it keeps its place; after too many misses in a
+    /// row it is declared hung, killed and frozen.
+    pub(super) fn on_missed(
+        &mut self,
+        step: usize,
+        agent: usize,
+        slot: Point,
+    ) -> anyhow::Result<()> {
+        self.missed[agent] += 1;
+        self.recorder.reject(
+            step,
+            agent,
+            slot,
+            MoveStatus::Missed,
+            format!(
+                "no move within the {:?} turn deadline",
+                self.options.turn_deadline
+            ),
+        );
+        if self.missed[agent] >= self.options.max_missed_turns {
+            tracing::warn!(
+                "step {step}: agent {agent} missed {} turns in a row: killing it",
+                self.missed[agent]
+            );
+            self.recorder.note_fault(
+                step,
+                agent,
+                "hung",
+                format!("missed {} turns in a row; killed", self.missed[agent]),
+                None,
+            );
+            self.on_death(step, agent, Duration::ZERO, "was killed as hung")?;
+        }
+        Ok(())
+    }
+}

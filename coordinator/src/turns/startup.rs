@@ -1,0 +1,192 @@
+//! Starting agents: the ready handshake, failed starts, replacements.
+
+use std::time::{Duration, Instant};
+
+use anyhow::bail;
+use wire::StateKind;
+
+use super::LIVENESS_SLICE;
+use super::driver::Driver;
+use crate::agents::Exit;
+
+/// How long a replacement process has to shake hands.
+const REPLACEMENT_TIMEOUT: Duration = Duration::from_secs(10);
+
+impl Driver<'_, '_> {
+    /// Wait for the ready handshake of every agent in `agents` (their processes are
+    /// started). An agent that exits first, sends a bad handshake or none in `timeout`
+    /// is recorded `failed-to-start` and frozen (or replaced, with `respawn`). For
+    /// `replacements`, success is recorded `respawned` and failure `respawn_failed`,
+    /// never retried.
+    pub(super) fn start_agents(
+        &mut self,
+        step: usize,
+        agents: &[usize],
+        timeout: Duration,
+        replacements: bool,
+    ) -> anyhow::Result<()> {
+        let deadline = Instant::now() + timeout;
+        let mut pending: Vec<usize> = agents.to_vec();
+        let mut failed: Vec<(usize, String)> = Vec::new();
+        while !pending.is_empty() {
+            for agent in pending.clone() {
+                let pid = self.procs.pid(agent);
+                if pid.is_none() || self.ipc.generation(agent).is_none() {
+                    // Quarantined while the others started.
+                    pending.retain(|&a| a != agent);
+                    continue;
+                }
+                while let Some(incoming) = self.ipc.receive(agent) {
+                    if let Some(from) = incoming.publisher_pid
+                        && Some(from) != pid
+                    {
+                        self.on_impersonation(step, agent, from)?;
+                        continue;
+                    }
+                    match incoming.msg {
+                        Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
+                            pending.retain(|&a| a != agent);
+                            if let Err(e) = self.ipc.update_connections(agent) {
+                                tracing::warn!("agent {agent}: {e:#}");
+                            }
+                            if replacements {
+                                self.recorder.mark_alive(agent);
+                                self.recorder.note_fault(
+                                    step,
+                                    agent,
+                                    "respawned",
+                                    format!(
+                                        "replacement process {} takes the slot from the last position",
+                                        msg.pid
+                                    ),
+                                    None,
+                                );
+                            }
+                            break;
+                        }
+                        Ok(msg) if msg.kind == StateKind::Ready => {
+                            failed.push((
+                                agent,
+                                format!("its handshake claims process {}, not {pid:?}", msg.pid),
+                            ));
+                            pending.retain(|&a| a != agent);
+                            break;
+                        }
+                        Ok(msg) => self.recorder.note_fault(
+                            step,
+                            agent,
+                            "unsolicited",
+                            format!("a {:?} message before its handshake; ignored", msg.kind),
+                            None,
+                        ),
+                        Err(why) => {
+                            self.recorder.note_fault(
+                                step,
+                                agent,
+                                "malformed",
+                                format!("handshake: {why}"),
+                                None,
+                            );
+                            failed.push((agent, format!("a malformed handshake ({why})")));
+                            pending.retain(|&a| a != agent);
+                            break;
+                        }
+                    }
+                }
+            }
+            // Quarantined agents (impersonators) are no longer waited for.
+            pending.retain(|&a| self.procs.pid(a).is_some());
+            for agent in pending.clone() {
+                if self.procs.poll(agent) == Exit::Exited {
+                    failed.push((agent, "it exited before its handshake".to_string()));
+                    pending.retain(|&a| a != agent);
+                }
+            }
+            if pending.is_empty() {
+                break;
+            }
+            if self.ipc.termination_requested() {
+                bail!("interrupted while the agents were starting");
+            }
+            if Instant::now() >= deadline {
+                for &agent in &pending {
+                    failed.push((
+                        agent,
+                        format!("no handshake within {:.1} s", timeout.as_secs_f64()),
+                    ));
+                }
+                break;
+            }
+            self.ipc
+                .wait_done(pending[0], (Instant::now() + LIVENESS_SLICE).min(deadline));
+        }
+        let started: Vec<usize> = agents
+            .iter()
+            .copied()
+            .filter(|a| !failed.iter().any(|(f, _)| f == a))
+            .collect();
+        self.scan_for_intruders(step, &started)?;
+        for (agent, why) in failed {
+            if replacements {
+                tracing::warn!("agent {agent}: the replacement did not start: {why}");
+                self.procs.kill_now(agent);
+                self.ipc.close_channel(agent);
+                self.ipc.cleanup_dead_nodes();
+                self.recorder
+                    .note_fault(step, agent, "respawn_failed", why, None);
+            } else {
+                self.on_failed_start(step, agent, &why)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `agent` did not start: frozen where it stands, replaced if `respawn` asks.
+    pub(super) fn on_failed_start(
+        &mut self,
+        step: usize,
+        agent: usize,
+        why: &str,
+    ) -> anyhow::Result<()> {
+        tracing::warn!("step {step}: agent {agent} failed to start: {why}");
+        let pid = self.procs.pid(agent);
+        self.procs.kill_now(agent);
+        // Whoever sat on its channel is named before the channel goes.
+        if let Some(pid) = pid {
+            for intruder in self.ipc.intruders(agent, pid) {
+                self.on_intruder(step, agent, intruder, "opened the services of")?;
+            }
+        }
+        self.ipc.close_channel(agent);
+        self.ipc.cleanup_dead_nodes();
+        if self.recorder.alive()[agent] {
+            self.recorder.freeze(
+                step,
+                agent,
+                "failed-to-start",
+                format!("the agent process did not start: {why}"),
+                None,
+            );
+        }
+        if self.options.respawn {
+            self.respawn(step, agent)?;
+        }
+        Ok(())
+    }
+
+    /// Start a replacement process for `agent` on a channel of its own.
+    pub(super) fn respawn(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
+        let opened = self
+            .ipc
+            .open_channel(agent, self.scenario)
+            .and_then(|_| self.spawn(agent, true));
+        if let Err(e) = opened {
+            tracing::warn!("agent {agent}: the replacement did not start: {e:#}");
+            self.recorder
+                .note_fault(step, agent, "respawn_failed", format!("{e:#}"), None);
+            return Ok(());
+        }
+        // The replacement's own failure is recorded, and not retried (no respawn loop).
+        self.start_agents(step, &[agent], REPLACEMENT_TIMEOUT, true)
+    }
+}
