@@ -78,6 +78,18 @@ pub struct CurvePath {
 }
 
 impl CurvePath {
+    /// The "path" between poses that no path joins (or given non-finite numbers): one
+    /// straight segment of NaN length, so every length computed from it is NaN.
+    pub fn unreachable(turning_radius_m: f64) -> Self {
+        Self {
+            segments: vec![Segment {
+                steer: Steer::Straight,
+                length_m: f64::NAN,
+            }],
+            turning_radius_m,
+        }
+    }
+
     /// Total length travelled, in metres: the sum of the absolute segment lengths.
     pub fn length_m(&self) -> f64 {
         self.segments.iter().map(|s| s.length_m.abs()).sum()

@@ -15,7 +15,7 @@
 
 use std::f64::consts::TAU;
 
-use crate::curve::{CurvePath, Segment, Steer, check_turning_radius, scaled_segment};
+use crate::curve::{CurvePath, Steer, check_turning_radius, scaled_segment};
 use crate::geometry::Pose;
 
 /// The shortest forward-only path from `from` to `to` for turning radius `turning_radius_m`.
@@ -30,21 +30,17 @@ use crate::geometry::Pose;
 /// If `turning_radius_m` is not finite and strictly positive (callers validate it).
 pub fn shortest_path(from: &Pose, to: &Pose, turning_radius_m: f64) -> CurvePath {
     check_turning_radius(turning_radius_m);
-    let segments = match solve(from, to, turning_radius_m) {
-        Some(word) => word
-            .steers
-            .iter()
-            .zip(word.lengths)
-            .filter_map(|(steer, length)| scaled_segment(*steer, length, turning_radius_m))
-            .collect(),
-        None => vec![Segment {
-            steer: Steer::Straight,
-            length_m: f64::NAN,
-        }],
-    };
-    CurvePath {
-        segments,
-        turning_radius_m,
+    match solve(from, to, turning_radius_m) {
+        Some(word) => CurvePath {
+            segments: word
+                .steers
+                .iter()
+                .zip(word.lengths)
+                .filter_map(|(steer, length)| scaled_segment(*steer, length, turning_radius_m))
+                .collect(),
+            turning_radius_m,
+        },
+        None => CurvePath::unreachable(turning_radius_m),
     }
 }
 

@@ -12,7 +12,7 @@ use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
 use super::judge::{Judged, accept_or_reject, judge_answer};
 use super::{BetweenSteps, LIVENESS_SLICE, Progress, RunOptions, TurnSample, progress_bar};
 use crate::agents::{AgentProcesses, Exit};
-use crate::ipc::{CoordinatorIpc, Grant, TurnSplit};
+use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
 use crate::monitor::SafetyMonitor;
 use crate::procfs::{self, IdleCpu};
 
@@ -210,18 +210,29 @@ impl Driver<'_, '_> {
         Ok(false)
     }
 
+    /// The next sample on `agent`'s channel published by the agent's own process (or one
+    /// that could not be received at all); samples of any other process are recorded
+    /// as `impersonation` on the way and dropped.
+    pub(super) fn receive_own(
+        &mut self,
+        step: usize,
+        agent: usize,
+    ) -> anyhow::Result<Option<Incoming>> {
+        let pid = self.procs.pid(agent);
+        while let Some(incoming) = self.ipc.receive(agent) {
+            match incoming.publisher_pid {
+                Some(from) if Some(from) != pid => self.on_impersonation(step, agent, from)?,
+                _ => return Ok(Some(incoming)),
+            }
+        }
+        Ok(None)
+    }
+
     /// Take in whatever `agent`'s channel holds between turns: none of it answers a
     /// turn. Recorded, never used.
     pub(super) fn drain(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
-        let pid = self.procs.pid(agent);
         let (mut extra, mut malformed) = (0usize, Vec::new());
-        while let Some(incoming) = self.ipc.receive(agent) {
-            if let Some(from) = incoming.publisher_pid
-                && Some(from) != pid
-            {
-                self.on_impersonation(step, agent, from)?;
-                continue;
-            }
+        while let Some(incoming) = self.receive_own(step, agent)? {
             match incoming.msg {
                 Ok(msg) if msg.kind == StateKind::Echo => {}
                 Ok(_) => extra += 1,
@@ -273,13 +284,7 @@ impl Driver<'_, '_> {
         let mut unsolicited = 0usize;
         let answer = loop {
             let mut found = None;
-            while let Some(incoming) = self.ipc.receive(agent) {
-                if let Some(from) = incoming.publisher_pid
-                    && Some(from) != pid
-                {
-                    self.on_impersonation(step, agent, from)?;
-                    continue;
-                }
+            while let Some(incoming) = self.receive_own(step, agent)? {
                 match judge_answer(incoming, grant, step, pid) {
                     Judged::Answer(a) => {
                         found = Some(a);

@@ -36,13 +36,7 @@ impl Driver<'_, '_> {
                     pending.retain(|&a| a != agent);
                     continue;
                 }
-                while let Some(incoming) = self.ipc.receive(agent) {
-                    if let Some(from) = incoming.publisher_pid
-                        && Some(from) != pid
-                    {
-                        self.on_impersonation(step, agent, from)?;
-                        continue;
-                    }
+                while let Some(incoming) = self.receive_own(step, agent)? {
                     match incoming.msg {
                         Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
                             pending.retain(|&a| a != agent);

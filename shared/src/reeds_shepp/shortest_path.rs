@@ -1,7 +1,7 @@
 //! The entry points: the shortest Reeds-Shepp path between two poses, and its length.
 
 use super::word::solve;
-use crate::curve::{CurvePath, Segment, Steer, check_turning_radius};
+use crate::curve::{CurvePath, check_turning_radius};
 use crate::geometry::Pose;
 
 /// The shortest Reeds-Shepp path from `from` to `to` for turning radius `turning_radius_m`.
@@ -14,16 +14,12 @@ use crate::geometry::Pose;
 /// If `turning_radius_m` is not finite and strictly positive (callers validate it).
 pub fn shortest_path(from: &Pose, to: &Pose, turning_radius_m: f64) -> CurvePath {
     check_turning_radius(turning_radius_m);
-    let segments = match solve(from, to, turning_radius_m) {
-        Some(word) => word.segments(turning_radius_m).collect(),
-        None => vec![Segment {
-            steer: Steer::Straight,
-            length_m: f64::NAN,
-        }],
-    };
-    CurvePath {
-        segments,
-        turning_radius_m,
+    match solve(from, to, turning_radius_m) {
+        Some(word) => CurvePath {
+            segments: word.segments(turning_radius_m).collect(),
+            turning_radius_m,
+        },
+        None => CurvePath::unreachable(turning_radius_m),
     }
 }
 
@@ -65,6 +61,7 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
+    use crate::curve::Steer;
     use crate::geometry::wrap_angle_rad;
 
     const TOLERANCE: f64 = 1e-9;
