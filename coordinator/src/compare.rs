@@ -110,16 +110,7 @@ fn csv_bytes(rows: &[Row]) -> anyhow::Result<Vec<u8>> {
 /// letters, digits, `-` and `_` only, with `-2`, `-3`, ... when two scenarios share a
 /// name.
 fn run_folder_name(scenario: &str, planner: PlannerKind, taken: &mut Vec<String>) -> String {
-    let clean: String = scenario
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
+    let clean = output::file_name_part(scenario);
     let base = format!("{clean}-{}", planner.name());
     let name = (1..)
         .map(|k| {

@@ -191,8 +191,14 @@ fn timestamped_run_dir(scenario_name: &str) -> PathBuf {
     let stamp = humantime::format_rfc3339_seconds(std::time::SystemTime::now())
         .to_string()
         .replace(':', "-");
-    let name: String = scenario_name
-        .chars()
+    let name = file_name_part(scenario_name);
+    PathBuf::from("runs").join(format!("{name}-{stamp}"))
+}
+
+/// `text` as a part of a file name: ASCII letters, digits, `-` and `_` kept, anything
+/// else `_`.
+pub(crate) fn file_name_part(text: &str) -> String {
+    text.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
                 c
@@ -200,8 +206,7 @@ fn timestamped_run_dir(scenario_name: &str) -> PathBuf {
                 '_'
             }
         })
-        .collect();
-    PathBuf::from("runs").join(format!("{name}-{stamp}"))
+        .collect()
 }
 
 /// An output folder (`run --out`, `compare --out`), checked before anything runs.
