@@ -1,0 +1,27 @@
+//! Plane geometry shared by every planner: points, disks, the rectangular field, and a
+//! uniform-grid spatial index over disks.
+//!
+//! Everything is `f64` and uses nalgebra's `Point2`/`Vector2`, the same types parry2d-f64
+//! uses, so there is one vector type in the whole system.
+
+/// A point of the plane, in metres.
+pub type Point = nalgebra::Point2<f64>;
+/// A displacement in the plane, in metres.
+pub type Vector = nalgebra::Vector2<f64>;
+
+mod disk;
+mod disk_grid;
+mod field;
+mod free_space;
+mod intersections;
+mod pose;
+
+pub use disk::{Disk, distance_point_segment};
+pub use disk_grid::DiskGrid;
+pub use field::Field;
+pub use free_space::FreeSpace;
+pub use intersections::{circle_circle_intersections, circle_line_intersections};
+pub use pose::{Pose, wrap_angle_rad};
+
+#[cfg(test)]
+mod tests;
