@@ -14,6 +14,7 @@ mod plan;
 mod procfs;
 pub mod render;
 mod run_command;
+mod stale_runs;
 mod stats;
 pub mod turns;
 pub mod validate;

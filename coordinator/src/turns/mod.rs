@@ -220,7 +220,7 @@ pub fn run_scenario_with(
         Err(e) => return Err(fail(e, &recorder, progress)),
     };
     agents::raise_fd_limit();
-    crate::ipc::clean_stale_runs();
+    crate::stale_runs::clean_stale_runs();
     // No other run on this machine uses it, and no one can predict it.
     let prefix = match RunPrefix::new_random() {
         Ok(prefix) => prefix.to_string(),
@@ -235,7 +235,7 @@ pub fn run_scenario_with(
     let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
         Ok(ipc) => ipc,
         Err(e) => {
-            crate::ipc::remove_run_files(&prefix);
+            crate::stale_runs::remove_run_files(&prefix);
             return Err(fail(e, &recorder, progress));
         }
     };
