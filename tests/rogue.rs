@@ -16,7 +16,10 @@ const ROGUE: u64 = 3;
 /// Run the paper example with `args`; assert what every attacked run must show, and
 /// return its summary.
 fn attacked_run(args: &[&str], out: &Path) -> Value {
-    let (output, pid) = run_to_end(args, out);
+    // A generous deadline: these tests compare trajectories, and a loaded machine must
+    // not turn a late honest answer into a missed turn.
+    let args = [args, &["--turn-deadline-ms", "10000"]].concat();
+    let (output, pid) = run_to_end(&args, out);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{args:?}: {stderr}");
     assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
