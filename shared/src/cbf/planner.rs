@@ -1,0 +1,104 @@
+//! The safe control-barrier-function planner.
+
+use crate::formation::Slot;
+use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
+use crate::vocabulary::{AgentSpec, Body, CBF_MARGIN_M, CbfSettings, CbfSettingsError, Move};
+
+use super::*;
+
+/// The CBF-QP planner of one agent: one barrier constraint per sensed neighbour and per
+/// field edge, an exact QP, one straight step of `dt` (see the module documentation for
+/// the safety argument). Same turn interface as [`crate::turn::BestPointPlanner`].
+#[derive(Clone, Debug)]
+pub struct CbfPlanner {
+    field: Field,
+    slot: Slot,
+    radius_m: f64,
+    /// Static obstacles, true radii.
+    obstacles: DiskGrid,
+    settings: CbfSettings,
+}
+
+impl CbfPlanner {
+    /// The planner of agent `spec` in `field` among `obstacles` (true radii), after
+    /// checking `settings` for this agent ([`CbfSettings::validate_for_agent`]).
+    pub fn new(
+        field: Field,
+        obstacles: &[Disk],
+        spec: &AgentSpec,
+        settings: CbfSettings,
+    ) -> Result<Self, CbfSettingsError> {
+        settings.validate_for_agent(spec.radius_m)?;
+        Ok(Self {
+            field,
+            slot: spec.slot,
+            radius_m: spec.radius_m,
+            obstacles: DiskGrid::new(obstacles.to_vec()),
+            settings,
+        })
+    }
+
+    /// This agent's radius, in metres.
+    pub fn radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &CbfSettings {
+        &self.settings
+    }
+
+    /// The ideal slot when the centre is at `centre`.
+    pub fn slot_position(&self, centre: &Pose) -> Point {
+        self.slot.ideal_position(centre)
+    }
+
+    /// The safety constraints on the velocity of the agent at `me` (rows `a . u <= b`):
+    /// the four field edges, then every sensed obstacle, then every sensed agent of
+    /// `others` (half responsibility).
+    pub fn constraints(&self, me: &Point, others: &[Body]) -> Vec<HalfPlane> {
+        let gamma = self.settings.gamma_per_s;
+        let inset_m = self.radius_m + CBF_MARGIN_M;
+        let mut rows = vec![
+            HalfPlane::new(Vector::new(-1.0, 0.0), gamma * (me.x - inset_m)),
+            HalfPlane::new(
+                Vector::new(1.0, 0.0),
+                gamma * (self.field.width_m - inset_m - me.x),
+            ),
+            HalfPlane::new(Vector::new(0.0, -1.0), gamma * (me.y - inset_m)),
+            HalfPlane::new(
+                Vector::new(0.0, 1.0),
+                gamma * (self.field.height_m - inset_m - me.y),
+            ),
+        ];
+        for (centre, radius_m, is_agent) in
+            sensed(&self.obstacles, others, me, self.settings.sensing_radius_m)
+        {
+            let away = me - centre;
+            let reach_m = self.radius_m + radius_m + CBF_MARGIN_M;
+            let distance_m = away.norm();
+            // (d - R)(d + R) keeps its precision near the boundary, unlike d^2 - R^2.
+            let h = (distance_m - reach_m) * (distance_m + reach_m);
+            let share = if is_agent { 0.5 } else { 1.0 };
+            rows.push(HalfPlane::new(-2.0 * away, gamma * share * h));
+        }
+        rows
+    }
+
+    /// The velocity chosen at `me` towards `slot`: the QP's solution, capped at the
+    /// maximum speed.
+    pub fn velocity(&self, slot: &Point, me: &Point, others: &[Body]) -> Result<Vector, QpError> {
+        let u_nom = self.settings.nominal(slot, me);
+        let u = solve_qp_2d(&u_nom, &self.constraints(me, others))?;
+        Ok(self.settings.capped(u))
+    }
+
+    /// Plan this agent's move while every `other` body stands still: one step of `dt`
+    /// at the CBF-QP velocity; stays put ([`MoveStatus::Stayed`]) when the QP is
+    /// infeasible (only possible from an unsafe or non-finite state).
+    pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        let slot = self.slot_position(centre);
+        let u = self.velocity(&slot, me, others).ok();
+        step_move(slot, me, u, self.settings.dt_s)
+    }
+}
