@@ -30,6 +30,9 @@ pub(super) enum Answer {
     Interrupted,
 }
 
+/// One run while it goes: the scenario and options, the ports and processes, the record
+/// and what the step loop has measured. Its methods are spread over `turns/` by concern:
+/// the step loop here, handshakes in `startup.rs`, faults in `faults.rs`.
 pub(super) struct Driver<'a, 's> {
     pub(super) scenario: &'a Scenario,
     pub(super) options: &'a RunOptions,
@@ -57,12 +60,14 @@ impl Driver<'_, '_> {
         Ok(())
     }
 
+    /// Each agent's process id, if it has a process.
     pub(super) fn pids(&self) -> Vec<Option<u32>> {
         (0..self.scenario.agents.len())
             .map(|i| self.procs.pid(i))
             .collect()
     }
 
+    /// Start every agent, then run every step of `centre_path`.
     pub(super) fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<()> {
         let n = self.scenario.agents.len();
         for i in 0..n {
