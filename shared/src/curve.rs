@@ -258,3 +258,19 @@ pub(crate) fn check_turning_radius(turning_radius_m: f64) {
         "turning radius must be finite and > 0 m, got {turning_radius_m}"
     );
 }
+
+/// Test tolerance of the curve planners, in metres and radians.
+#[cfg(test)]
+pub(crate) const TOLERANCE: f64 = 1e-9;
+
+/// Test helper of the curve planners: `actual` and `expected` agree to [`TOLERANCE`] in
+/// position and heading (headings compared modulo a full turn).
+#[cfg(test)]
+pub(crate) fn assert_pose_close(actual: &Pose, expected: &Pose) {
+    assert!(
+        (actual.x_m - expected.x_m).abs() < TOLERANCE
+            && (actual.y_m - expected.y_m).abs() < TOLERANCE
+            && wrap_angle_rad(actual.heading_rad - expected.heading_rad).abs() < TOLERANCE,
+        "{actual:?} != {expected:?}"
+    );
+}

@@ -62,18 +62,7 @@ mod tests {
 
     use super::*;
     use crate::curve::Steer;
-    use crate::geometry::wrap_angle_rad;
-
-    const TOLERANCE: f64 = 1e-9;
-
-    fn assert_pose_close(actual: &Pose, expected: &Pose) {
-        assert!(
-            (actual.x_m - expected.x_m).abs() < TOLERANCE
-                && (actual.y_m - expected.y_m).abs() < TOLERANCE
-                && wrap_angle_rad(actual.heading_rad - expected.heading_rad).abs() < TOLERANCE,
-            "{actual:?} != {expected:?}"
-        );
-    }
+    use crate::curve::{TOLERANCE, assert_pose_close};
 
     #[test]
     fn identical_poses_give_an_empty_path() {
