@@ -99,6 +99,23 @@ fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> any
     Ok(())
 }
 
+/// Create ports with `make` until it fails or [`HOARD_PER_SERVICE`] are held; returns
+/// how many were had.
+fn grab<P: 'static, E>(
+    held: &mut Vec<Box<dyn Any>>,
+    mut make: impl FnMut() -> Result<P, E>,
+) -> usize {
+    let mut count = 0;
+    while count < HOARD_PER_SERVICE {
+        let Ok(port) = make() else {
+            break;
+        };
+        held.push(Box::new(port));
+        count += 1;
+    }
+    count
+}
+
 /// Open every other agent's five services and as many ports on each as the run allows.
 fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
     let node = rogue_node(prefix, held)?;
@@ -113,26 +130,14 @@ fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Resul
             // The first agent without a channel: past the last agent.
             break;
         };
-        for _ in 0..HOARD_PER_SERVICE {
-            let Ok(p) = mission.subscriber_builder().create() else {
-                break;
-            };
-            held.push(Box::new(p));
-            ports += 1;
-        }
+        ports += grab(held, || mission.subscriber_builder().create());
         held.push(Box::new(mission));
         if let Ok(world) = node
             .service_builder(&service_name(&names.world)?)
             .publish_subscribe::<World>()
             .open()
         {
-            for _ in 0..HOARD_PER_SERVICE {
-                let Ok(p) = world.subscriber_builder().create() else {
-                    break;
-                };
-                held.push(Box::new(p));
-                ports += 1;
-            }
+            ports += grab(held, || world.subscriber_builder().create());
             held.push(Box::new(world));
         }
         if let Ok(state) = node
@@ -140,33 +145,15 @@ fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Resul
             .publish_subscribe::<AgentState>()
             .open()
         {
-            for _ in 0..HOARD_PER_SERVICE {
-                let Ok(p) = state.publisher_builder().create() else {
-                    break;
-                };
-                held.push(Box::new(p));
-                ports += 1;
-            }
+            ports += grab(held, || state.publisher_builder().create());
             held.push(Box::new(state));
         }
         for name in [&names.turn, &names.done] {
             let Ok(event) = node.service_builder(&service_name(name)?).event().open() else {
                 continue;
             };
-            for _ in 0..HOARD_PER_SERVICE {
-                let Ok(p) = event.notifier_builder().create() else {
-                    break;
-                };
-                held.push(Box::new(p));
-                ports += 1;
-            }
-            for _ in 0..HOARD_PER_SERVICE {
-                let Ok(p) = event.listener_builder().create() else {
-                    break;
-                };
-                held.push(Box::new(p));
-                ports += 1;
-            }
+            ports += grab(held, || event.notifier_builder().create());
+            ports += grab(held, || event.listener_builder().create());
             held.push(Box::new(event));
         }
     }
