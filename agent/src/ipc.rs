@@ -200,7 +200,11 @@ impl IpcTransport {
                 step: w.step,
                 token: w.token,
                 centre: w.centre.into(),
-                positions: w.bodies.iter().map(|b| Point::from(b.position)).collect(),
+                bodies: w
+                    .bodies
+                    .iter()
+                    .map(|b| (b.agent as usize, Point::from(b.position)))
+                    .collect(),
             });
         }
         Ok(turn)

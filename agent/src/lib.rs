@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::Parser;
+use shared::geometry::Point;
 use shared::turn::TurnPlanner;
 use shared::vocabulary::{Body, Move};
 
@@ -104,6 +105,39 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     serve(&mut transport, args.agent, args.misbehave)
 }
 
+/// Read the turn's bodies into `others` (every listed agent but `agent`, with its radius
+/// from `radii_m`) and return `agent`'s own position. A list that is not in increasing
+/// agent order, names an agent the mission does not have, or lacks `agent` is an error:
+/// the world comes from another process.
+fn read_bodies(
+    turn: &TurnInput,
+    agent: usize,
+    radii_m: &[f64],
+    others: &mut Vec<Body>,
+) -> anyhow::Result<Point> {
+    others.clear();
+    let mut me = None;
+    let mut previous: Option<usize> = None;
+    for &(j, position) in &turn.bodies {
+        if previous.is_some_and(|p| p >= j) {
+            bail!("the world lists agent {j} after agent {previous:?}: not in increasing order");
+        }
+        previous = Some(j);
+        let Some(&radius_m) = radii_m.get(j) else {
+            bail!(
+                "the world lists agent {j} but the mission has {} agents",
+                radii_m.len()
+            );
+        };
+        if j == agent {
+            me = Some(position);
+        } else {
+            others.push(Body { position, radius_m });
+        }
+    }
+    me.with_context(|| format!("the world does not list agent {agent} itself"))
+}
+
 /// The agent's turn loop: announce readiness, then for every turn plan and publish a
 /// move, until [`Command::Quit`]. `misbehave` is a test mode that publishes bad moves
 /// (modes that act outside the turn loop change nothing here).
@@ -144,29 +178,8 @@ pub fn serve<T: Transport>(
         let Some(planner) = planner.as_ref() else {
             continue;
         };
-        if turn.positions.len() != radii_m.len() {
-            bail!(
-                "the world has {} agents but the mission {}",
-                turn.positions.len(),
-                radii_m.len()
-            );
-        }
         let started = Instant::now();
-        let me = turn.positions.get(agent).copied().with_context(|| {
-            format!(
-                "the world has {} agents, not agent {agent}",
-                turn.positions.len()
-            )
-        })?;
-        others.clear();
-        others.extend(
-            turn.positions
-                .iter()
-                .zip(&radii_m)
-                .enumerate()
-                .filter(|(j, _)| *j != agent)
-                .map(|(_, (&position, &radius_m))| Body { position, radius_m }),
-        );
+        let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let mv = planner.plan_move(&turn.centre, &me, &others);
         let compute = started.elapsed();
         let Some(mode) = misbehave else {
@@ -276,7 +289,7 @@ mod tests {
                 step: step as u64,
                 token: 1000 + step as u64,
                 centre: path[step],
-                positions: positions.clone(),
+                bodies: positions.iter().copied().enumerate().collect(),
             })
             .collect()
     }
@@ -293,16 +306,15 @@ mod tests {
         let planner = &agent_planners(&scenario).expect("planners")[agent];
         for ((seq, mv, status), turn) in t.published.iter().zip(&turns) {
             let others: Vec<Body> = turn
-                .positions
+                .bodies
                 .iter()
-                .enumerate()
                 .filter(|(j, _)| *j != agent)
-                .map(|(j, &position)| Body {
+                .map(|&(j, position)| Body {
                     position,
                     radius_m: scenario.agents[j].radius_m,
                 })
                 .collect();
-            let want = planner.plan_move(&turn.centre, &turn.positions[agent], &others);
+            let want = planner.plan_move(&turn.centre, &turn.bodies[agent].1, &others);
             assert_eq!(*seq, turn.seq);
             assert_eq!(*mv, want);
             assert_eq!(*status, want.status as u32);
@@ -325,11 +337,30 @@ mod tests {
     fn a_world_that_disagrees_with_the_mission_is_an_error_not_a_panic() {
         let scenario = Scenario::paper();
         let mut turns = first_turns(&scenario, 0);
-        turns[0].positions.pop();
-        let mut t = scripted(&scenario, turns);
-        let err = serve(&mut t, 0, None).expect_err("a world one agent short");
-        assert!(format!("{err:#}").contains("the world has 5 agents but the mission 6"));
+        turns[0].bodies.push((6, Point::new(1.0, 1.0)));
+        let mut t = scripted(&scenario, turns.clone());
+        let err = serve(&mut t, 0, None).expect_err("a world with a seventh agent");
+        assert!(
+            format!("{err:#}").contains("the world lists agent 6 but the mission has 6 agents"),
+            "{err:#}"
+        );
         assert!(t.published.is_empty());
+        turns[0].bodies.pop();
+        turns[0].bodies.swap(1, 2);
+        let mut t = scripted(&scenario, turns.clone());
+        let err = serve(&mut t, 0, None).expect_err("out of order");
+        assert!(
+            format!("{err:#}").contains("not in increasing order"),
+            "{err:#}"
+        );
+        turns[0].bodies.remove(0);
+        turns[0].bodies.sort_by_key(|b| b.0);
+        let mut t = scripted(&scenario, turns);
+        let err = serve(&mut t, 0, None).expect_err("without itself");
+        assert!(
+            format!("{err:#}").contains("does not list agent 0 itself"),
+            "{err:#}"
+        );
     }
 
     #[test]

@@ -29,9 +29,10 @@ pub struct TurnInput {
     pub token: u64,
     /// The formation centre.
     pub centre: Pose,
-    /// Every agent's position, in agent order (this agent's included); their radii are
-    /// in the mission.
-    pub positions: Vec<Point>,
+    /// The agents this agent may sense, itself included, as (agent index, position) in
+    /// increasing index order (every agent when it has no sensing radius); their radii
+    /// are in the mission.
+    pub bodies: Vec<(usize, Point)>,
 }
 
 /// What the coordinator asks.

@@ -334,6 +334,7 @@ impl CoordinatorIpc {
         centre: &Pose,
         bodies: &[Body],
         alive: &[bool],
+        visible: &[usize],
     ) -> anyhow::Result<Grant> {
         self.seq += 1;
         let grant = Grant {
@@ -348,7 +349,7 @@ impl CoordinatorIpc {
         w.token = grant.token;
         w.turn_agent = agent as u32;
         w.centre = (*centre).into();
-        w.set_bodies(bodies, alive)?;
+        w.set_bodies(bodies, alive, visible.iter().copied())?;
         sample.send().context("sending the world")?;
         Ok(grant)
     }

@@ -23,9 +23,25 @@ pub enum Refusal {
     /// The move does not start where the agent stands.
     #[error("the move starts {0} m from the agent")]
     Teleport(f64),
-    /// The move does not end at the announced best point.
+    /// The move does not end at the announced best point (and is not under way).
     #[error("the move does not end at its best point")]
     WrongEnd,
+    /// The move is longer than the agent's top speed.
+    #[error("the move is {length_m} m long, beyond the top speed of {max_m} m per step")]
+    TooLong {
+        /// Length of the move.
+        length_m: f64,
+        /// Top speed, metres per step.
+        max_m: f64,
+    },
+    /// The move meets the move of another agent of the same parallel group.
+    #[error("the move comes within {distance_m} m of agent {agent}'s move in the same group")]
+    GroupMate {
+        /// The other agent.
+        agent: usize,
+        /// Smallest distance between the two moves' polylines.
+        distance_m: f64,
+    },
     /// The agent would leave the field.
     #[error("waypoint {0} leaves the field")]
     OutsideField(usize),
@@ -73,13 +89,16 @@ impl SafetyMonitor {
 
     /// Check that agent `agent` (radius `radius_m`, standing at `from`) may follow
     /// `waypoints` to `best` while every body of `bodies` (all agents, by index) stands
-    /// still.
+    /// still. `under_way`: the agent says it stops short of `best` (top speed), so the
+    /// move need not end there.
+    #[allow(clippy::too_many_arguments)]
     pub fn check(
         &self,
         agent: usize,
         from: &Point,
         waypoints: &[Point],
         best: &Point,
+        under_way: bool,
         bodies: &[Body],
         max_waypoints: usize,
     ) -> Result<(), Refusal> {
@@ -97,7 +116,7 @@ impl SafetyMonitor {
         if start_offset_m > SAFETY_TOLERANCE_M {
             return Err(Refusal::Teleport(start_offset_m));
         }
-        if waypoints.last() != Some(best) {
+        if !under_way && waypoints.last() != Some(best) {
             return Err(Refusal::WrongEnd);
         }
         let radius_m = bodies[agent].radius_m;
@@ -158,6 +177,43 @@ impl SafetyMonitor {
     }
 }
 
+/// Check that the polyline `waypoints` is no longer than the top speed `max_step_m`
+/// (to the safety tolerance); without a top speed any length passes.
+pub fn check_length(waypoints: &[Point], max_step_m: Option<f64>) -> Result<(), Refusal> {
+    let Some(max_m) = max_step_m else {
+        return Ok(());
+    };
+    let length_m: f64 = waypoints
+        .windows(2)
+        .map(|w| nalgebra::distance(&w[0], &w[1]))
+        .sum();
+    if length_m > max_m + SAFETY_TOLERANCE_M {
+        return Err(Refusal::TooLong { length_m, max_m });
+    }
+    Ok(())
+}
+
+/// The smallest distance between the polylines `a` and `b` (a single point is a
+/// polyline), computed with parry's segment-segment query.
+pub fn distance_between_moves_m(a: &[Point], b: &[Point]) -> f64 {
+    let segments = |p: &[Point]| -> Vec<Segment> {
+        match p {
+            [] => Vec::new(),
+            [only] => vec![Segment::new(*only, *only)],
+            _ => p.windows(2).map(|w| Segment::new(w[0], w[1])).collect(),
+        }
+    };
+    let identity = Isometry2::identity();
+    let mut best = f64::INFINITY;
+    for sa in segments(a) {
+        for sb in segments(b) {
+            let d = query::distance(&identity, &sa, &identity, &sb).unwrap_or(0.0);
+            best = best.min(d);
+        }
+    }
+    best
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,14 +232,32 @@ mod tests {
     }
 
     #[test]
+    fn moves_longer_than_the_top_speed_and_moves_that_meet_are_caught() {
+        let path = [Point::new(0.0, 0.0), Point::new(3.0, 4.0)];
+        assert_eq!(check_length(&path, None), Ok(()));
+        assert_eq!(check_length(&path, Some(5.0)), Ok(()));
+        assert!(matches!(
+            check_length(&path, Some(4.9)),
+            Err(Refusal::TooLong { .. })
+        ));
+        let across = [Point::new(0.0, 4.0), Point::new(3.0, 0.0)];
+        assert_eq!(distance_between_moves_m(&path, &across), 0.0);
+        let beside = [Point::new(10.0, 4.0)];
+        assert!((distance_between_moves_m(&path, &beside) - 7.0).abs() < 1e-12);
+    }
+
+    #[test]
     fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
         let m = SafetyMonitor::new(Field::new(10.0, 10.0), &[Disk::new(5.0, 5.0, 1.0)]);
         let from = Point::new(1.0, 5.0);
         let clear = [from, Point::new(3.0, 3.0)];
-        assert_eq!(m.check(0, &from, &clear, &clear[1], &bodies(), 8), Ok(()));
+        assert_eq!(
+            m.check(0, &from, &clear, &clear[1], false, &bodies(), 8),
+            Ok(())
+        );
         let through = [from, Point::new(9.0, 5.0)];
         assert!(matches!(
-            m.check(0, &from, &through, &through[1], &bodies(), 8),
+            m.check(0, &from, &through, &through[1], false, &bodies(), 8),
             Err(Refusal::Obstacle { obstacle: 0, .. })
         ));
         let around = [
@@ -193,36 +267,38 @@ mod tests {
             Point::new(9.0, 5.0),
         ];
         assert_eq!(
-            m.check(0, &from, &around, &around[3], &bodies()[..1], 8),
+            m.check(0, &from, &around, &around[3], false, &bodies()[..1], 8),
             Ok(())
         );
         assert!(matches!(
-            m.check(0, &from, &around, &around[3], &bodies(), 8),
+            m.check(0, &from, &around, &around[3], false, &bodies(), 8),
             Err(Refusal::Agent { agent: 1, .. })
         ));
         let nan = [from, Point::new(f64::NAN, 0.0)];
         assert!(matches!(
-            m.check(0, &from, &nan, &nan[1], &bodies(), 8),
+            m.check(0, &from, &nan, &nan[1], false, &bodies(), 8),
             Err(Refusal::NotFinite(1))
         ));
         let jump = [Point::new(2.0, 2.0)];
         assert!(matches!(
-            m.check(0, &from, &jump, &jump[0], &bodies(), 8),
+            m.check(0, &from, &jump, &jump[0], false, &bodies(), 8),
             Err(Refusal::Teleport(_))
         ));
         let out = [from, Point::new(0.2, 5.0)];
         assert!(matches!(
-            m.check(0, &from, &out, &out[1], &bodies(), 8),
+            m.check(0, &from, &out, &out[1], false, &bodies(), 8),
             Err(Refusal::OutsideField(1))
         ));
         assert!(matches!(
-            m.check(0, &from, &clear, &from, &bodies(), 8),
+            m.check(0, &from, &clear, &from, false, &bodies(), 8),
             Err(Refusal::WrongEnd)
         ));
+        // Under way, a move may stop short of its best point.
+        assert_eq!(m.check(0, &from, &clear, &from, true, &bodies(), 8), Ok(()));
         // Touching is allowed: exactly the radii sum away.
         let touch = [from, Point::new(3.7, 5.0)];
         assert_eq!(
-            m.check(0, &from, &touch, &touch[1], &bodies()[..1], 8),
+            m.check(0, &from, &touch, &touch[1], false, &bodies()[..1], 8),
             Ok(())
         );
     }

@@ -114,6 +114,8 @@ pub struct Timing {
     pub wall_s: f64,
     /// From the first spawn to the last ready handshake, seconds.
     pub startup_s: f64,
+    /// Steps per second of the step loop (start-up excluded).
+    pub steps_per_s: f64,
     /// Resident set size of the agent processes at the end of the run, KiB.
     pub agent_rss_kib: Distribution,
 }

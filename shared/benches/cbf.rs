@@ -38,10 +38,7 @@ fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
             )
         })
         .collect();
-    let spec = AgentSpec {
-        slot: Slot::new(0.0, 0.0),
-        radius_m: AGENT_RADIUS_M,
-    };
+    let spec = AgentSpec::new(Slot::new(0.0, 0.0), AGENT_RADIUS_M);
     let planner = CbfPlanner::new(field, &obstacles, &spec, CbfSettings::default())
         .expect("default settings are valid");
     let free = |p: &Point, others: &[Body]| {

@@ -15,6 +15,8 @@
 //! - [`scenario`]: the TOML scenario model and its validation;
 //! - [`turn`]: one agent's turn: the paper's best-point planner, and every planner behind
 //!   one interface, shared by simulation and agents;
+//! - [`groups`]: parallel turns: which agents may move at once;
+//! - [`sensing`]: which agents an agent senses (limited sensing);
 //! - [`safety`]: the safety invariant checked with plain geometry;
 //! - [`record`]: the record of a run and its figures;
 //! - [`simulate`]: the in-process reference simulation.
@@ -28,12 +30,14 @@ pub mod disk_path;
 pub mod dubins;
 pub mod formation;
 pub mod geometry;
+pub mod groups;
 pub mod hybrid_astar;
 mod ordered;
 pub mod record;
 pub mod reeds_shepp;
 pub mod safety;
 pub mod scenario;
+pub mod sensing;
 pub mod simulate;
 pub mod turn;
 pub mod vocabulary;

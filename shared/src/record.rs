@@ -6,7 +6,7 @@
 
 use serde::Serialize;
 
-use crate::geometry::{DiskGrid, Point, Pose};
+use crate::geometry::{DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
@@ -18,7 +18,8 @@ pub struct AgentStep {
     pub position: Point,
     /// Its ideal slot at this step.
     pub slot: Point,
-    /// The best point it chose (its position when it did not move).
+    /// The best point it chose (its position when it did not move); with a top speed it
+    /// may stand short of it ([`MoveStatus::UnderWay`]).
     pub best: Point,
     /// `||position - slot||`, in metres.
     pub deviation_m: f64,
@@ -41,9 +42,19 @@ pub struct Step {
     pub centre: Pose,
     /// One entry per agent, in agent order.
     pub agents: Vec<AgentStep>,
+    /// How many groups of turns the step took (one per live agent in sequential mode).
+    pub groups: usize,
 }
 
 impl Step {
+    /// The longest move of the step, in metres.
+    pub fn max_move_m(&self) -> f64 {
+        self.agents
+            .iter()
+            .map(|a| polyline_length_m(&a.waypoints))
+            .fold(0.0, f64::max)
+    }
+
     /// Smallest clearance between any two bodies at the end of the step, in metres.
     pub fn min_clearance_m(&self) -> f64 {
         self.agents
@@ -123,6 +134,11 @@ pub struct Summary {
     pub max_deviation_m: f64,
     /// Mean deviation at the last step, in metres.
     pub final_mean_deviation_m: f64,
+    /// The longest single move of an agent in one step over the run, in metres.
+    pub max_move_m: f64,
+    /// Mean number of turn groups per step (steps 1 to the last): the number of live
+    /// agents in sequential mode, fewer with parallel turns.
+    pub mean_groups_per_step: f64,
     /// Every fault.
     pub faults: Vec<Fault>,
 }
@@ -164,6 +180,12 @@ impl Run {
                 .flat_map(|s| s.agents.iter().filter(|a| a.alive).map(|a| a.deviation_m))
                 .fold(0.0, f64::max),
             final_mean_deviation_m: self.steps.last().map_or(0.0, Step::mean_deviation_m),
+            max_move_m: self.steps.iter().map(Step::max_move_m).fold(0.0, f64::max),
+            mean_groups_per_step: if moving.is_empty() {
+                0.0
+            } else {
+                moving.iter().map(|s| s.groups as f64).sum::<f64>() / moving.len() as f64
+            },
             faults: self.faults.clone(),
         }
     }
@@ -179,6 +201,8 @@ pub struct Recorder<'a> {
     alive: Vec<bool>,
     /// This step's moves, one per agent, until the step ends.
     pending: Vec<Option<Move>>,
+    /// Groups of turns of this step ([`Self::note_groups`]).
+    groups: usize,
     run: Run,
 }
 
@@ -202,6 +226,7 @@ impl<'a> Recorder<'a> {
             bodies,
             alive: vec![true; n],
             pending: vec![None; n],
+            groups: 0,
             run: Run {
                 scenario: scenario.name.clone(),
                 centre_path: centre_path.to_vec(),
@@ -252,13 +277,89 @@ impl<'a> Recorder<'a> {
         &self.run.steps
     }
 
+    /// Record that this step's turns are taken in `groups` groups.
+    pub fn note_groups(&mut self, groups: usize) {
+        self.groups = groups;
+    }
+
     /// Check `mv` against the safety invariant (plain geometry) and, if it holds, move
-    /// `agent` to `mv.best`. A violating move is rejected: the agent stays where it
-    /// was, and the rejection is recorded as a fault of `step`.
+    /// `agent` to where the move ends. A violating move is rejected: the agent stays
+    /// where it was, and the rejection is recorded as a fault of `step`. One turn alone:
+    /// a group of one.
     pub fn submit(&mut self, step: usize, agent: usize, mv: Move) -> Result<(), Violation> {
+        let mut verdicts = self.submit_group(step, vec![(agent, mv)]);
+        verdicts.pop().unwrap_or(Ok(()))
+    }
+
+    /// Check the moves of one group of turns (agents planned against the same snapshot
+    /// and moving at once) and take those that hold; one verdict per move, in order.
+    ///
+    /// Each move is checked against every other body where it stands (the snapshot), its
+    /// length against the agent's top speed, and its end against its best point (it may
+    /// stop short only [`MoveStatus::UnderWay`]); then every pair of the moves that passed
+    /// is checked against each other's whole move: two that come within their radii sum
+    /// are both rejected.
+    pub fn submit_group(
+        &mut self,
+        step: usize,
+        moves: Vec<(usize, Move)>,
+    ) -> Vec<Result<(), Violation>> {
+        let mut verdicts: Vec<Result<(), Violation>> = moves
+            .iter()
+            .map(|(agent, mv)| self.check_alone(*agent, mv))
+            .collect();
+        // Every point of a move lies within its length of its start: far-apart pairs need
+        // no polyline distance.
+        let lengths_m: Vec<f64> = moves
+            .iter()
+            .map(|(_, mv)| polyline_length_m(&mv.waypoints))
+            .collect();
+        for i in 0..moves.len() {
+            for j in 0..i {
+                if verdicts[i].is_err() || verdicts[j].is_err() {
+                    continue;
+                }
+                let ((a, ma), (b, mb)) = (&moves[i], &moves[j]);
+                let reach_m = self.bodies[*a].radius_m + self.bodies[*b].radius_m;
+                let start_gap_m = (self.bodies[*a].position - self.bodies[*b].position).norm();
+                if start_gap_m > lengths_m[i] + lengths_m[j] + reach_m {
+                    continue;
+                }
+                let distance_m = distance_polyline_polyline(&ma.waypoints, &mb.waypoints);
+                if distance_m < reach_m - SAFETY_TOLERANCE_M {
+                    verdicts[i] = Err(Violation::MeetsGroupMate {
+                        agent: *b,
+                        distance_m,
+                        reach_m,
+                    });
+                    verdicts[j] = Err(Violation::MeetsGroupMate {
+                        agent: *a,
+                        distance_m,
+                        reach_m,
+                    });
+                }
+            }
+        }
+        for ((agent, mv), verdict) in moves.into_iter().zip(&verdicts) {
+            match verdict {
+                Ok(()) => {
+                    self.bodies[agent].position = mv.end();
+                    self.pending[agent] = Some(mv);
+                }
+                Err(v) => {
+                    self.reject(step, agent, mv.slot, MoveStatus::Rejected, v.to_string());
+                }
+            }
+        }
+        verdicts
+    }
+
+    /// Check one move against the bodies where they stand, the field, the agent's top
+    /// speed and its best point.
+    fn check_alone(&self, agent: usize, mv: &Move) -> Result<(), Violation> {
         let body = self.bodies[agent];
         let others = self.others(agent);
-        let checked = safety::check_move(
+        safety::check_move(
             &self.scenario.field,
             &self.obstacles,
             &others,
@@ -266,27 +367,19 @@ impl<'a> Recorder<'a> {
             &body.position,
             &mv.waypoints,
             MAX_WAYPOINTS,
-        )
-        .and_then(|()| {
-            // The last waypoint is where the agent ends up; it must be the best point.
-            match mv.waypoints.last() {
-                Some(end) if *end == mv.best => Ok(()),
-                _ => Err(Violation::BadLength {
-                    count: mv.waypoints.len(),
-                }),
-            }
-        });
-        match checked {
-            Ok(()) => {
-                self.bodies[agent].position = mv.best;
-                self.pending[agent] = Some(mv);
-                Ok(())
-            }
-            Err(v) => {
-                self.reject(step, agent, mv.slot, MoveStatus::Rejected, v.to_string());
-                Err(v)
+        )?;
+        if let Some(max_m) = self.scenario.agents[agent].max_step_m {
+            let length_m = polyline_length_m(&mv.waypoints);
+            if length_m > max_m + SAFETY_TOLERANCE_M {
+                return Err(Violation::TooLong { length_m, max_m });
             }
         }
+        // The last waypoint is where the agent ends up; it must be the best point, unless
+        // the agent is under way to it.
+        if mv.status != MoveStatus::UnderWay && mv.end() != mv.best {
+            return Err(Violation::WrongEnd);
+        }
+        Ok(())
     }
 
     /// Record that `agent` did not move this step because its move was refused
@@ -426,6 +519,7 @@ impl<'a> Recorder<'a> {
             step,
             centre,
             agents,
+            groups: std::mem::take(&mut self.groups),
         });
     }
 

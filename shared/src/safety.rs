@@ -52,6 +52,29 @@ pub enum Violation {
         /// Overlap depth.
         overlap_m: f64,
     },
+    /// The move is longer than the agent's top speed allows in one step.
+    #[error("the move is {length_m} m long, beyond the top speed of {max_m} m per step")]
+    TooLong {
+        /// Length of the move.
+        length_m: f64,
+        /// The agent's top speed, metres per step.
+        max_m: f64,
+    },
+    /// The move ends neither at its best point nor, under way, short of it.
+    #[error("the move does not end at its best point")]
+    WrongEnd,
+    /// The move comes too close to the move of an agent of the same parallel group.
+    #[error(
+        "the move comes within {distance_m} m of agent {agent}'s move in the same group (radii sum {reach_m} m)"
+    )]
+    MeetsGroupMate {
+        /// The other agent.
+        agent: usize,
+        /// Smallest distance between the two moves.
+        distance_m: f64,
+        /// The sum of their radii.
+        reach_m: f64,
+    },
     /// The body would overlap another body.
     #[error("segment {segment} overlaps body {body} by {overlap_m} m")]
     HitsBody {

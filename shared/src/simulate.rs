@@ -2,15 +2,19 @@
 //!
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
 //! plans its move while the others stand still ([`TurnPlanner::plan_move`]), and the
-//! move is checked against the safety invariant before it is taken. The multi-process
+//! move is checked against the safety invariant before it is taken. With parallel turns
+//! the agents of one group ([`turn_groups`]) plan against the same snapshot and their
+//! moves are taken together. The multi-process
 //! run must reproduce this trajectory to the bit.
 
 use crate::geometry::Pose;
+use crate::groups::turn_groups;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Recorder, Run};
 use crate::scenario::Scenario;
 use crate::turn::TurnPlanner;
 use crate::vocabulary::CbfSettingsError;
+use crate::vocabulary::Move;
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
@@ -72,11 +76,27 @@ pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, 
     let planners = agent_planners(scenario)?;
     let mut recorder = Recorder::new(scenario, centre_path);
     for (step, centre) in centre_path.iter().enumerate().skip(1) {
-        for (agent, planner) in planners.iter().enumerate() {
-            let me = recorder.bodies()[agent].position;
-            let mv = planner.plan_move(centre, &me, &recorder.others(agent));
+        let groups = turn_groups(
+            scenario.turns,
+            &scenario.agents,
+            recorder.bodies(),
+            recorder.alive(),
+        );
+        recorder.note_groups(groups.len());
+        for group in groups {
+            // Every agent of the group plans against the same snapshot.
+            let moves: Vec<(usize, Move)> = group
+                .iter()
+                .map(|&agent| {
+                    let me = recorder.bodies()[agent].position;
+                    (
+                        agent,
+                        planners[agent].plan_move(centre, &me, &recorder.others(agent)),
+                    )
+                })
+                .collect();
             // A rejected move is recorded by the recorder; the agent simply stays.
-            let _ = recorder.submit(step, agent, mv);
+            let _ = recorder.submit_group(step, moves);
         }
         recorder.end_step(step);
     }

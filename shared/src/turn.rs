@@ -9,7 +9,7 @@ use crate::best_point::{self, BestPointError};
 use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
+use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, polyline_prefix};
 use crate::vocabulary::{
     AgentSpec, Body, CbfSettingsError, MAX_WAYPOINTS, Move, MoveStatus, PlannerKind, PlannerSpec,
 };
@@ -38,6 +38,10 @@ pub struct BestPointPlanner {
     /// Static obstacles inflated by this agent's radius and the planning margin, in the
     /// planning frame.
     obstacles: DiskGrid,
+    /// With limited sensing: the obstacles with their true radii in world coordinates
+    /// (same order as `obstacles`), to pick the ones the agent senses each turn.
+    sensed_from: Option<DiskGrid>,
+    spec: AgentSpec,
 }
 
 impl BestPointPlanner {
@@ -62,7 +66,27 @@ impl BestPointPlanner {
                     })
                     .collect(),
             ),
+            sensed_from: spec
+                .sensing_radius_m
+                .map(|_| DiskGrid::new(obstacles.to_vec())),
+            spec: *spec,
         }
+    }
+
+    /// The inflated obstacles (planning frame) the agent senses from `me`, in obstacle
+    /// order; `None` when it senses everything.
+    fn sensed_obstacles(&self, me: &Point) -> Option<DiskGrid> {
+        let (grid, sensing_m) = (self.sensed_from.as_ref()?, self.spec.sensing_radius_m?);
+        let mut seen = Vec::new();
+        let _ = grid.visit_near(me, sensing_m + grid.max_radius_m(), |i, d| {
+            if self.spec.senses(me, &d.centre, d.radius_m) {
+                seen.push(i);
+            }
+            std::ops::ControlFlow::<()>::Continue(())
+        });
+        seen.sort_unstable();
+        let inflated = self.obstacles.disks();
+        Some(DiskGrid::new(seen.iter().map(|&i| inflated[i]).collect()))
     }
 
     /// This agent's radius, in metres.
@@ -76,7 +100,10 @@ impl BestPointPlanner {
     }
 
     /// Plan this agent's move while every `other` body stands still: the reachable free
-    /// point nearest to the slot and the shortest path there.
+    /// point nearest to the slot and the shortest path there. With limited sensing, only
+    /// the obstacles it senses are planned around (`others` are taken as given: see
+    /// [`TurnPlanner::plan_move`], which picks the sensed ones); the top speed is
+    /// [`TurnPlanner`]'s business too.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         let slot = self.slot_position(centre);
         let grow_m = self.radius_m + PLANNING_MARGIN_M;
@@ -89,7 +116,8 @@ impl BestPointPlanner {
                 })
                 .collect(),
         );
-        let layers = [&self.obstacles, &agents];
+        let sensed = self.sensed_obstacles(me);
+        let layers = [sensed.as_ref().unwrap_or(&self.obstacles), &agents];
         let space = FreeSpace::new(self.field, &layers);
         let (slot_p, me_p) = (slot - self.offset, me - self.offset);
         // Back to world coordinates, keeping the slot and the start bit-exact.
@@ -142,7 +170,11 @@ impl BestPointPlanner {
             Some((p, path)) if p == best_p => path,
             _ => return stay(MoveStatus::Stayed),
         };
-        let mut waypoints: Vec<Point> = path
+        // With a top speed the agent follows the path that far: cut on the path itself
+        // (on an arc's circle, not on a chord), so it stops at a free point.
+        let under_way = self.spec.max_step_m.and_then(|s| path.prefix(s));
+        let followed = under_way.as_ref().unwrap_or(&path);
+        let mut waypoints: Vec<Point> = followed
             .polyline(0.5 * PLANNING_MARGIN_M)
             .iter()
             .map(to_world)
@@ -150,14 +182,19 @@ impl BestPointPlanner {
         if waypoints.len() > MAX_WAYPOINTS {
             return stay(MoveStatus::PathTooLong);
         }
-        // The polyline starts at the agent and ends at the best point, exactly.
+        // The polyline starts at the agent and ends at the best point (or the cut),
+        // exactly.
         if let Some(first) = waypoints.first_mut() {
             *first = *me;
         }
-        if let Some(last) = waypoints.last_mut() {
+        if under_way.is_none()
+            && let Some(last) = waypoints.last_mut()
+        {
             *last = best;
         }
-        let status = if (slot - best).norm() <= 1e-9 {
+        let status = if under_way.is_some() {
+            MoveStatus::UnderWay
+        } else if (slot - best).norm() <= 1e-9 {
             MoveStatus::AtSlot
         } else {
             MoveStatus::Deviated
@@ -171,10 +208,17 @@ impl BestPointPlanner {
     }
 }
 
-/// Any of the controllers, behind one `plan_move`: what the reference simulation and the
-/// agent processes call.
+/// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
+/// top speed applied: what the reference simulation and the agent processes call.
 #[derive(Clone, Debug)]
-pub enum TurnPlanner {
+pub struct TurnPlanner {
+    controller: Controller,
+    spec: AgentSpec,
+}
+
+/// The controllers.
+#[derive(Clone, Debug)]
+enum Controller {
     /// The paper's method, exact ([`BestPointPlanner`]).
     BestPoint(BestPointPlanner),
     /// The control-barrier-function QP.
@@ -185,34 +229,71 @@ pub enum TurnPlanner {
 
 impl TurnPlanner {
     /// The planner `planner.kind` for agent `spec` in `field` among `obstacles` (true
-    /// radii).
+    /// radii). A barrier planner senses no farther than the agent does.
     pub fn new(
         planner: &PlannerSpec,
         field: Field,
         obstacles: &[Disk],
         spec: &AgentSpec,
     ) -> Result<Self, CbfSettingsError> {
-        Ok(match planner.kind {
+        let mut cbf = planner.cbf;
+        if let Some(sensing_m) = spec.sensing_radius_m {
+            cbf.sensing_radius_m = cbf.sensing_radius_m.min(sensing_m);
+        }
+        let controller = match planner.kind {
             PlannerKind::BestPoint => {
-                Self::BestPoint(BestPointPlanner::new(field, obstacles, spec))
+                Controller::BestPoint(BestPointPlanner::new(field, obstacles, spec))
             }
-            PlannerKind::Cbf => Self::Cbf(CbfPlanner::new(field, obstacles, spec, planner.cbf)?),
-            PlannerKind::ZcbfLogsumexp => Self::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
+            PlannerKind::Cbf => Controller::Cbf(CbfPlanner::new(field, obstacles, spec, cbf)?),
+            PlannerKind::ZcbfLogsumexp => Controller::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
                 field,
                 obstacles,
                 spec,
-                planner.cbf,
+                cbf,
                 planner.lse_sharpness_per_m,
             )?),
+        };
+        Ok(Self {
+            controller,
+            spec: *spec,
         })
     }
 
+    /// The agent this planner moves.
+    pub fn spec(&self) -> &AgentSpec {
+        &self.spec
+    }
+
     /// Plan this agent's move while every `other` body stands still.
+    ///
+    /// With a sensing radius the controller sees only the bodies of `others` (and the
+    /// obstacles) whose disks come within it, so bodies beyond it change nothing; `others`
+    /// may be all bodies or any superset of the sensed ones. With a top speed the move is
+    /// the first `max_step_m` of the controller's path, with status
+    /// [`MoveStatus::UnderWay`] when it stops short of the best point.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
-        match self {
-            Self::BestPoint(p) => p.plan_move(centre, me, others),
-            Self::Cbf(p) => p.plan_move(centre, me, others),
-            Self::ZcbfLogSumExp(p) => p.plan_move(centre, me, others),
+        let sensed: Vec<Body>;
+        let others = if self.spec.sensing_radius_m.is_some() {
+            sensed = others
+                .iter()
+                .filter(|b| self.spec.senses(me, &b.position, b.radius_m))
+                .copied()
+                .collect();
+            &sensed
+        } else {
+            others
+        };
+        let mut mv = match &self.controller {
+            Controller::BestPoint(p) => p.plan_move(centre, me, others),
+            Controller::Cbf(p) => p.plan_move(centre, me, others),
+            Controller::ZcbfLogSumExp(p) => p.plan_move(centre, me, others),
+        };
+        if let Some(max_step_m) = self.spec.max_step_m
+            && let Some(prefix) = polyline_prefix(&mv.waypoints, max_step_m)
+        {
+            mv.waypoints = prefix;
+            mv.status = MoveStatus::UnderWay;
         }
+        mv
     }
 }

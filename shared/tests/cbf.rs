@@ -14,10 +14,7 @@ use shared::vocabulary::{
 
 /// An agent whose slot is the formation centre itself, so the centre pose is the slot.
 fn spec(radius_m: f64) -> AgentSpec {
-    AgentSpec {
-        slot: Slot::new(0.0, 0.0),
-        radius_m,
-    }
+    AgentSpec::new(Slot::new(0.0, 0.0), radius_m)
 }
 
 fn at(p: Point) -> Pose {

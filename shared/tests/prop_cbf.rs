@@ -364,7 +364,7 @@ proptest! {
     #[test]
     fn cbf_moves_keep_the_invariant_along_the_whole_segment(seed in any::<u64>()) {
         let w = world(seed);
-        let spec = AgentSpec { slot: Slot::new(0.0, 0.0), radius_m: w.radius_m };
+        let spec = AgentSpec::new(Slot::new(0.0, 0.0), w.radius_m);
         let planner = CbfPlanner::new(w.field, &w.obstacles, &spec, w.settings)
             .expect("the settings are valid by construction");
         let grid = DiskGrid::new(w.obstacles.clone());

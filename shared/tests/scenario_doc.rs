@@ -8,7 +8,8 @@
 //!   table too;
 //! - each key's default cell is true: a `required` key left out is an error naming it,
 //!   a literal default gives the same scenario as leaving the key out, `same as KEY`
-//!   likewise with KEY's value, `none` may be left out;
+//!   likewise with KEY's value, `none` may be left out (with the keys its limits say
+//!   need it);
 //! - every `float` key refuses NaN naming itself, a `> 0` key refuses 0, a `≥ 0` key
 //!   refuses -1;
 //! - the limits table gives the values of the constants in `shared::scenario` and
@@ -228,6 +229,14 @@ fn check_row(example: &Table, row: &KeyRow, problems: &mut Vec<String>) {
     if default.starts_with("required") {
         expect_error(&removed, "left out", problems);
     } else if default == "none" {
+        // A key other keys need ("needed by `KEY`, `KEY`" in its limits cell) may be
+        // left out together with them.
+        let mut removed = removed;
+        if let Some((_, needers)) = row.limits.split_once("needed by ") {
+            for needer in needers.split('`').skip(1).step_by(2) {
+                removed = without(&removed, needer);
+            }
+        }
         if let Err(e) = parse(&removed, "doc.toml") {
             problems.push(format!("{key}: documented optional, but left out: {e}"));
         }

@@ -4,7 +4,8 @@
 
 use std::path::PathBuf;
 
-use shared::geometry::DiskGrid;
+use shared::geometry::{DiskGrid, distance_polyline_polyline, polyline_length_m};
+use shared::groups::turn_groups;
 use shared::record::Run;
 use shared::safety::{self, SAFETY_TOLERANCE_M};
 use shared::scenario::Scenario;
@@ -26,8 +27,11 @@ fn scenario_files() -> Vec<PathBuf> {
     files
 }
 
-/// Re-check every accepted move of the run from the record alone: each agent's polyline
-/// against the true obstacles and every other agent as they stood when it moved.
+/// Re-check every accepted move of the run from the record alone, with the turn
+/// semantics of the scenario: the groups of each step are found again from the positions
+/// at its start ([`turn_groups`]); each move is checked against the true obstacles and
+/// every other agent as they stood when its group moved, against the agent's top speed,
+/// and against the whole moves of its group mates.
 fn recheck_every_move(scenario: &Scenario, run: &Run) {
     let obstacles = DiskGrid::new(scenario.obstacles.clone());
     for w in run.steps.windows(2) {
@@ -41,25 +45,60 @@ fn recheck_every_move(scenario: &Scenario, run: &Run) {
                 radius_m: s.radius_m,
             })
             .collect();
-        for (i, a) in after.agents.iter().enumerate() {
-            let others: Vec<Body> = bodies
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != i)
-                .map(|(_, b)| *b)
-                .collect();
-            safety::check_move(
-                &scenario.field,
-                &obstacles,
-                &others,
-                bodies[i].radius_m,
-                &bodies[i].position,
-                &a.waypoints,
-                MAX_WAYPOINTS,
-            )
-            .unwrap_or_else(|v| panic!("{}: step {} agent {i}: {v}", scenario.name, after.step));
-            assert_eq!(*a.waypoints.last().unwrap(), a.position);
-            bodies[i].position = a.position;
+        let alive: Vec<bool> = before.agents.iter().map(|a| a.alive).collect();
+        let groups = turn_groups(scenario.turns, &scenario.agents, &bodies, &alive);
+        assert_eq!(
+            groups.len(),
+            after.groups,
+            "{}: step {}",
+            scenario.name,
+            after.step
+        );
+        for group in &groups {
+            for &i in group {
+                let a = &after.agents[i];
+                let others: Vec<Body> = bodies
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, b)| *b)
+                    .collect();
+                safety::check_move(
+                    &scenario.field,
+                    &obstacles,
+                    &others,
+                    bodies[i].radius_m,
+                    &bodies[i].position,
+                    &a.waypoints,
+                    MAX_WAYPOINTS,
+                )
+                .unwrap_or_else(|v| {
+                    panic!("{}: step {} agent {i}: {v}", scenario.name, after.step)
+                });
+                assert_eq!(*a.waypoints.last().unwrap(), a.position);
+                if let Some(max_m) = scenario.agents[i].max_step_m {
+                    let length_m = polyline_length_m(&a.waypoints);
+                    assert!(
+                        length_m <= max_m + 1e-9,
+                        "{}: step {} agent {i}: a move of {length_m} m, top speed {max_m} m",
+                        scenario.name,
+                        after.step
+                    );
+                }
+                for &j in group.iter().filter(|&&j| j < i) {
+                    let d = distance_polyline_polyline(&a.waypoints, &after.agents[j].waypoints);
+                    let need = bodies[i].radius_m + bodies[j].radius_m;
+                    assert!(
+                        d >= need - SAFETY_TOLERANCE_M,
+                        "{}: step {}: agents {i} and {j} of one group come within {d} m",
+                        scenario.name,
+                        after.step
+                    );
+                }
+            }
+            for &i in group {
+                bodies[i].position = after.agents[i].position;
+            }
         }
     }
 }

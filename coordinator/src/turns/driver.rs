@@ -1,15 +1,18 @@
-//! The step loop: every live agent takes its turn in order; its answer is judged and
-//! checked before the recorder takes it.
+//! The step loop: every live agent takes its turn, one group at a time (one agent a group
+//! in sequential mode); the answers are judged and checked before the recorder takes
+//! them.
 
 use std::time::{Duration, Instant};
 
 use shared::geometry::Pose;
+use shared::groups::turn_groups;
 use shared::record::Recorder;
 use shared::scenario::Scenario;
+use shared::sensing::SensedAgents;
 use shared::vocabulary::MoveStatus;
 use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
 
-use super::judge::{Judged, accept_or_reject, judge_answer};
+use super::judge::{Judged, judge_answer, judge_move, settle_group};
 use super::{BetweenSteps, LIVENESS_SLICE, Progress, RunOptions, TurnSample, progress_bar};
 use crate::agents::{AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
@@ -89,6 +92,7 @@ impl Driver<'_, '_> {
             self.options.progress,
         );
 
+        let stepping = Instant::now();
         'steps: for (step, centre) in centre_path.iter().enumerate().skip(1) {
             // Agents that died while waiting for their turn are noticed now.
             let checked = Instant::now();
@@ -97,11 +101,15 @@ impl Driver<'_, '_> {
                     self.on_death(step, agent, checked.elapsed(), "exited between turns")?;
                 }
             }
-            for agent in 0..n {
-                if !self.recorder.alive()[agent] {
-                    continue;
-                }
-                if self.take_turn(&monitor, step, agent, centre)? {
+            let groups = turn_groups(
+                self.scenario.turns,
+                &self.scenario.agents,
+                self.recorder.bodies(),
+                self.recorder.alive(),
+            );
+            self.recorder.note_groups(groups.len());
+            for group in &groups {
+                if self.take_group(&monitor, step, group, centre)? {
                     break 'steps;
                 }
             }
@@ -121,6 +129,7 @@ impl Driver<'_, '_> {
             }
         }
         bar.finish_and_clear();
+        self.progress.steps_s = stepping.elapsed().as_secs_f64();
         self.progress.rss_kib = self
             .pids()
             .into_iter()
@@ -131,87 +140,116 @@ impl Driver<'_, '_> {
         Ok(())
     }
 
-    /// Grant `agent` its turn at `step` and judge the answer; true if the run was
-    /// interrupted.
-    pub(super) fn take_turn(
+    /// Grant every agent of `group` its turn at `step` at once (each sees the same
+    /// snapshot, filtered to what it senses), then take their answers in order and judge
+    /// them; true if the run was interrupted.
+    pub(super) fn take_group(
         &mut self,
         monitor: &SafetyMonitor,
         step: usize,
-        agent: usize,
+        group: &[usize],
         centre: &Pose,
     ) -> anyhow::Result<bool> {
-        // Nothing that arrived since the agent's last turn answers this one.
-        self.drain(step, agent)?;
-        if !self.recorder.alive()[agent] {
-            return Ok(false);
-        }
-        let slot = self.scenario.agents[agent].slot.ideal_position(centre);
-        // Stamped before the world exists, so no answer to it can predate the stamp.
-        let granted = Instant::now();
-        let granted_ns = monotonic_ns();
-        let grant = self.ipc.publish_world(
-            step,
-            agent,
-            centre,
-            self.recorder.bodies(),
-            self.recorder.alive(),
-        )?;
-        self.ipc.notify_turn(agent)?;
-        if self.options.kills.contains(&(agent, step))
-            && let Some(pid) = self.procs.signal_kill(agent)
-        {
-            self.recorder.note_fault(
+        let sensing = self
+            .scenario
+            .agents
+            .iter()
+            .any(|a| a.sensing_radius_m.is_some())
+            .then(|| SensedAgents::new(self.recorder.bodies()));
+        let mut granted = Vec::with_capacity(group.len());
+        for &agent in group {
+            // Nothing that arrived since the agent's last turn answers this one.
+            self.drain(step, agent)?;
+            if !self.recorder.alive()[agent] {
+                continue;
+            }
+            let spec = &self.scenario.agents[agent];
+            let visible = match &sensing {
+                Some(s) => s.sensed_by(agent, spec),
+                None => (0..self.scenario.agents.len()).collect(),
+            };
+            // Stamped before the world exists, so no answer to it can predate the stamp.
+            let at = Instant::now();
+            let at_ns = monotonic_ns();
+            let grant = self.ipc.publish_world(
                 step,
                 agent,
-                "killed",
-                format!("fault injection: SIGKILL to process {pid} during its turn"),
-                None,
-            );
-        }
-        match self.wait_answer(step, agent, grant, granted)? {
-            Answer::Move(msg) => {
-                let held_ns = monotonic_ns();
-                self.missed[agent] = 0;
-                let latency_ns = held_ns.saturating_sub(granted_ns);
-                if msg.compute_ns > latency_ns {
-                    self.recorder.note_fault(
-                        step,
-                        agent,
-                        "malformed",
-                        format!(
-                            "reports {} ns of compute in a turn of {latency_ns} ns; counted as {latency_ns} ns",
-                            msg.compute_ns
-                        ),
-                        None,
-                    );
-                }
-                let sample = TurnSample {
+                centre,
+                self.recorder.bodies(),
+                self.recorder.alive(),
+                &visible,
+            )?;
+            self.ipc.notify_turn(agent)?;
+            if self.options.kills.contains(&(agent, step))
+                && let Some(pid) = self.procs.signal_kill(agent)
+            {
+                self.recorder.note_fault(
                     step,
                     agent,
-                    latency_us: latency_ns as f64 / 1e3,
-                    compute_us: msg.compute_ns.min(latency_ns) as f64 / 1e3,
-                    split: TurnSplit::of(granted_ns, &msg, held_ns),
-                };
-                self.progress.latency_us.push(sample.latency_us);
-                self.progress.compute_us.push(sample.compute_us);
-                self.progress.turn_samples.push(sample);
-                accept_or_reject(monitor, self.recorder, step, agent, slot, *msg);
+                    "killed",
+                    format!("fault injection: SIGKILL to process {pid} during its turn"),
+                    None,
+                );
             }
-            Answer::Malformed(why) => {
-                self.missed[agent] = 0;
-                tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
-                self.recorder
-                    .reject_as(step, agent, slot, MoveStatus::Rejected, "malformed", why);
-            }
-            Answer::Dead(after) => {
-                self.on_death(step, agent, after, "died during its turn")?;
-            }
-            Answer::Missed => self.on_missed(step, agent, slot)?,
-            Answer::Interrupted => {
-                self.progress.interrupted = true;
-                return Ok(true);
+            granted.push((agent, grant, at, at_ns));
+        }
+        let mut moves = Vec::with_capacity(granted.len());
+        for (agent, grant, at, at_ns) in granted {
+            let slot = self.scenario.agents[agent].slot.ideal_position(centre);
+            match self.wait_answer(step, agent, grant, at)? {
+                Answer::Move(msg) => {
+                    let held_ns = monotonic_ns();
+                    self.missed[agent] = 0;
+                    let latency_ns = held_ns.saturating_sub(at_ns);
+                    if msg.compute_ns > latency_ns {
+                        self.recorder.note_fault(
+                            step,
+                            agent,
+                            "malformed",
+                            format!(
+                                "reports {} ns of compute in a turn of {latency_ns} ns; counted as {latency_ns} ns",
+                                msg.compute_ns
+                            ),
+                            None,
+                        );
+                    }
+                    let sample = TurnSample {
+                        step,
+                        agent,
+                        latency_us: latency_ns as f64 / 1e3,
+                        compute_us: msg.compute_ns.min(latency_ns) as f64 / 1e3,
+                        split: TurnSplit::of(at_ns, &msg, held_ns),
+                    };
+                    self.progress.latency_us.push(sample.latency_us);
+                    self.progress.compute_us.push(sample.compute_us);
+                    self.progress.turn_samples.push(sample);
+                    if let Some(mv) = judge_move(monitor, self.recorder, step, agent, slot, *msg) {
+                        moves.push((agent, mv));
+                    }
+                }
+                Answer::Malformed(why) => {
+                    self.missed[agent] = 0;
+                    tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
+                    self.recorder.reject_as(
+                        step,
+                        agent,
+                        slot,
+                        MoveStatus::Rejected,
+                        "malformed",
+                        why,
+                    );
+                }
+                Answer::Dead(after) => {
+                    self.on_death(step, agent, after, "died during its turn")?;
+                }
+                Answer::Missed => self.on_missed(step, agent, slot)?,
+                Answer::Interrupted => {
+                    self.progress.interrupted = true;
+                    return Ok(true);
+                }
             }
         }
+        settle_group(self.recorder, step, moves);
         Ok(false)
     }
 

@@ -185,6 +185,8 @@ pub fn run_scenario(
 #[derive(Default)]
 struct Progress {
     startup_s: f64,
+    /// Time spent in the step loop, seconds.
+    steps_s: f64,
     latency_us: Vec<f64>,
     compute_us: Vec<f64>,
     turn_samples: Vec<TurnSample>,
@@ -290,15 +292,21 @@ pub fn run_scenario_with(
 }
 
 fn outcome(run: Run, progress: Progress, prefix: String, started: Instant) -> RunOutcome {
+    let steps = run.steps.len().saturating_sub(1);
     RunOutcome {
-        run,
         timing: Timing {
+            steps_per_s: if progress.steps_s > 0.0 {
+                steps as f64 / progress.steps_s
+            } else {
+                0.0
+            },
             turn_latency_us: Distribution::of(&progress.latency_us),
             compute_us: Distribution::of(&progress.compute_us),
             wall_s: started.elapsed().as_secs_f64(),
             startup_s: progress.startup_s,
             agent_rss_kib: Distribution::of(&progress.rss_kib),
         },
+        run,
         interrupted: progress.interrupted,
         prefix,
         turn_samples: progress.turn_samples,

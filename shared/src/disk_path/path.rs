@@ -127,6 +127,60 @@ impl DiskPath {
         self.pieces.last().map_or(self.origin, PathPiece::end)
     }
 
+    /// The first `max_length_m` metres of the path (a top speed's worth), or `None` when
+    /// the path is no longer than that. The cut piece keeps its kind: an arc is cut on its
+    /// circle, so the prefix ends on the path itself, never on a chord inside a disk.
+    ///
+    /// ```
+    /// use shared::disk_path::{DiskPath, PathPiece};
+    /// use shared::geometry::Point;
+    /// let quarter = PathPiece::Arc {
+    ///     centre: Point::new(0.0, 0.0),
+    ///     radius_m: 2.0,
+    ///     start_rad: 0.0,
+    ///     sweep_rad: std::f64::consts::FRAC_PI_2,
+    /// };
+    /// let path = DiskPath::new(Point::new(2.0, 0.0), vec![quarter]);
+    /// let half = path.prefix(0.5 * path.length_m()).unwrap();
+    /// let end = half.end();
+    /// assert!((end.coords.norm() - 2.0).abs() < 1e-12, "on the circle");
+    /// assert!((half.length_m() - 0.5 * path.length_m()).abs() < 1e-12);
+    /// assert_eq!(path.prefix(10.0), None);
+    /// ```
+    pub fn prefix(&self, max_length_m: f64) -> Option<DiskPath> {
+        let mut travelled_m = 0.0;
+        for (i, piece) in self.pieces.iter().enumerate() {
+            let piece_m = piece.length_m();
+            if travelled_m + piece_m > max_length_m {
+                let t = ((max_length_m - travelled_m) / piece_m).clamp(0.0, 1.0);
+                let mut pieces = self.pieces[..i].to_vec();
+                let cut = match *piece {
+                    PathPiece::Segment { from, to } => PathPiece::Segment {
+                        from,
+                        to: from + t * (to - from),
+                    },
+                    PathPiece::Arc {
+                        centre,
+                        radius_m,
+                        start_rad,
+                        sweep_rad,
+                    } => PathPiece::Arc {
+                        centre,
+                        radius_m,
+                        start_rad,
+                        sweep_rad: t * sweep_rad,
+                    },
+                };
+                if t > 0.0 {
+                    pieces.push(cut);
+                }
+                return Some(DiskPath::new(self.start(), pieces));
+            }
+            travelled_m += piece_m;
+        }
+        None
+    }
+
     /// Polyline vertices following the path, start and end included, such that every chord
     /// stays within `max_chord_error_m` of the true arc (inscribed chords: vertices exactly
     /// on the arcs, so a chord cuts at most `max_chord_error_m` into an arc's disk).

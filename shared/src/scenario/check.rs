@@ -6,7 +6,7 @@ use super::random::{Crowded, random_obstacles};
 use super::{PathSpec, Scenario, ScenarioError};
 use crate::formation::Slot;
 use crate::geometry::{Disk, Field, Point, Pose};
-use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec};
+use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec, TurnMode};
 
 /// Largest field side accepted, in metres: beyond this the numbers stop being a field.
 pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
@@ -179,6 +179,17 @@ impl Checker<'_> {
         self.start_and_goal_clear(&obstacles, &field, &path)?;
         self.formation_fits_at_start(&agents, &obstacles, &field, &path)?;
         let planner = self.planner(raw.planner, raw.cbf.as_ref(), &agents, side_m)?;
+        let turns = raw.turns.mode;
+        if turns == TurnMode::Parallel
+            && let Some(i) = agents.iter().position(|a| a.max_step_m.is_none())
+        {
+            return Err(self.invalid(
+                "turns.mode",
+                format!(
+                    "parallel turns need a top speed for every agent (formation.max_step_m), and agent {i} has none"
+                ),
+            ));
+        }
 
         Ok(Scenario {
             name: raw.name,
@@ -188,6 +199,7 @@ impl Checker<'_> {
             agents,
             path,
             planner,
+            turns,
         })
     }
 
@@ -355,6 +367,15 @@ impl Checker<'_> {
                 ),
             ));
         }
+        let diagonal_m = field.width_m.hypot(field.height_m);
+        let default_max_step_m = raw
+            .max_step_m
+            .map(|v| self.positive("formation.max_step_m", v, diagonal_m))
+            .transpose()?;
+        let sensing_radius_m = raw
+            .sensing_radius_m
+            .map(|v| self.positive("formation.sensing_radius_m", v, diagonal_m))
+            .transpose()?;
         let mut agents = Vec::with_capacity(raw.slots.len());
         for (i, s) in raw.slots.iter().enumerate() {
             let name = format!("formation.slots[{i}]");
@@ -368,9 +389,40 @@ impl Checker<'_> {
                 Some(r) => self.positive(&format!("{name}.radius_m"), r, hold_m)?,
                 None => default_radius_m,
             };
+            let max_step_m = match s.max_step_m {
+                Some(v) => Some(self.positive(&format!("{name}.max_step_m"), v, diagonal_m)?),
+                None => default_max_step_m,
+            };
+            // A move must never reach a body the agent cannot see: every point of a move
+            // lies within max_step_m of the start, so an unseen disk (farther than the
+            // sensing radius from the centre) stays clear iff the sensing radius covers
+            // the move plus the agent's own radius.
+            if let Some(sensing_m) = sensing_radius_m {
+                let Some(step_m) = max_step_m else {
+                    return Err(self.invalid(
+                        "formation.sensing_radius_m",
+                        format!(
+                            "limited sensing needs a top speed (formation.max_step_m or {name}.max_step_m): without one a move could reach a body the agent cannot see"
+                        ),
+                    ));
+                };
+                if sensing_m < step_m + radius_m {
+                    return Err(self.invalid(
+                        "formation.sensing_radius_m",
+                        format!(
+                            "{} m does not cover the move of agent {i} plus its radius ({} + {} m): a move could reach a body it cannot see",
+                            num(sensing_m),
+                            num(step_m),
+                            num(radius_m)
+                        ),
+                    ));
+                }
+            }
             agents.push(AgentSpec {
                 slot: Slot::new(r_m, theta_deg.to_radians()),
                 radius_m,
+                max_step_m,
+                sensing_radius_m,
             });
         }
         // The paper's Assumption 2: the nominal formation is itself collision-free.

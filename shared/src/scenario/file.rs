@@ -9,7 +9,7 @@ use serde::Deserialize;
 use super::check::Checker;
 use super::{Scenario, ScenarioError};
 use crate::geometry::Pose;
-use crate::vocabulary::PlannerKind;
+use crate::vocabulary::{PlannerKind, TurnMode};
 
 /// The paper's example (section III), embedded so `coordinator run` works with no file.
 pub const PAPER_SCENARIO_TOML: &str = include_str!("../../../scenarios/paper.toml");
@@ -97,6 +97,15 @@ pub(super) struct ScenarioFile {
     #[serde(default)]
     pub(super) planner: PlannerKind,
     pub(super) cbf: Option<CbfFile>,
+    #[serde(default)]
+    pub(super) turns: TurnsFile,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TurnsFile {
+    #[serde(default)]
+    pub(super) mode: TurnMode,
 }
 
 #[derive(Deserialize)]
@@ -174,6 +183,10 @@ pub(super) struct RandomFile {
 pub(super) struct FormationFile {
     #[serde(default = "default_agent_radius_m")]
     pub(super) agent_radius_m: f64,
+    /// Top speed of every agent, metres per step (absent: unbounded).
+    pub(super) max_step_m: Option<f64>,
+    /// Sensing radius of every agent, metres (absent: every body is known).
+    pub(super) sensing_radius_m: Option<f64>,
     pub(super) slots: Vec<SlotFile>,
 }
 
@@ -183,6 +196,8 @@ pub(super) struct SlotFile {
     pub(super) r_m: f64,
     pub(super) theta_deg: f64,
     pub(super) radius_m: Option<f64>,
+    /// This slot's top speed, overriding the formation's.
+    pub(super) max_step_m: Option<f64>,
 }
 
 #[derive(Deserialize)]

@@ -1,7 +1,7 @@
 //! The validated scenario: what a run is made of.
 
 use crate::geometry::{Disk, Field, Pose};
-use crate::vocabulary::{AgentSpec, PlannerKind, PlannerSpec};
+use crate::vocabulary::{AgentSpec, PlannerKind, PlannerSpec, TurnMode};
 
 /// A validated scenario: every number finite and in range, every body placed legally.
 #[derive(Clone, Debug, PartialEq)]
@@ -21,6 +21,8 @@ pub struct Scenario {
     pub path: PathSpec,
     /// The controller and its settings.
     pub planner: PlannerSpec,
+    /// One mover at a time, or parallel groups.
+    pub turns: TurnMode,
 }
 
 /// Settings of the formation centre's path.

@@ -99,14 +99,32 @@ impl Scenario {
             .first()
             .map_or(default_agent_radius_m(), |a| a.radius_m);
         let _ = writeln!(t, "agent_radius_m = {}", toml_f64(default_agent_m));
+        // The file has one sensing radius for the formation.
+        let sensing = self.agents.first().and_then(|a| a.sensing_radius_m);
+        if let Some(i) = self
+            .agents
+            .iter()
+            .position(|a| a.sensing_radius_m != sensing)
+        {
+            return Err(ResolveError::NotRepresentable {
+                field: format!("formation.slots[{i}]"),
+                reason: "the file format has one sensing radius for every agent".into(),
+            });
+        }
+        if let Some(v) = sensing {
+            let _ = writeln!(t, "sensing_radius_m = {}", toml_f64(v));
+        }
         let _ = writeln!(t, "slots = [");
         for (i, a) in self.agents.iter().enumerate() {
             let theta_deg = degrees_for(a.slot.theta_rad).ok_or_else(|| {
                 not_in_degrees(format!("formation.slots[{i}].theta_deg"), a.slot.theta_rad)
             })?;
+            let max_step = a
+                .max_step_m
+                .map_or(String::new(), |v| format!(", max_step_m = {}", toml_f64(v)));
             let _ = writeln!(
                 t,
-                "  {{ r_m = {}, theta_deg = {}, radius_m = {} }},",
+                "  {{ r_m = {}, theta_deg = {}, radius_m = {}{max_step} }},",
                 toml_f64(a.slot.r_m),
                 toml_f64(theta_deg),
                 toml_f64(a.radius_m)
@@ -132,6 +150,9 @@ impl Scenario {
         let _ = writeln!(t, "step_m = {}", toml_f64(p.step_m));
         let _ = writeln!(t, "centre_clearance_m = {}", toml_f64(p.centre_clearance_m));
         let _ = writeln!(t, "allow_reverse = {}", p.allow_reverse);
+
+        let _ = writeln!(t, "\n[turns]");
+        let _ = writeln!(t, "mode = {}", toml_string(self.turns.name()));
         Ok(t)
     }
 }
@@ -297,9 +318,11 @@ keep_clear_m = 1.5
 radius_m = 0.45
 [formation]
 agent_radius_m = 0.2
+max_step_m = 0.15000000000000002
+sensing_radius_m = 0.75
 slots = [
   { r_m = 0.0, theta_deg = -0.0 },
-  { r_m = 1.0000000000000002, theta_deg = 33.333333333333336, radius_m = 0.25 },
+  { r_m = 1.0000000000000002, theta_deg = 33.333333333333336, radius_m = 0.25, max_step_m = 0.1 },
   { r_m = 1.0, theta_deg = -179.99999999999997 },
   { r_m = 1.0, theta_deg = 360.0 },
   { r_m = 1.5, theta_deg = 0.1 },
@@ -311,6 +334,8 @@ turning_radius_m = 2.0
 step_m = 0.1
 centre_clearance_m = 0.0
 allow_reverse = true
+[turns]
+mode = "parallel"
 "#;
         let s = Scenario::parse(text, "odd.toml").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.obstacles.len(), 7);

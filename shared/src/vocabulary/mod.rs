@@ -7,7 +7,9 @@
 //!
 //! - [`Body`]: a disk at a position, as the planners see the other agents;
 //! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
-//! - [`AgentSpec`]: one agent of a scenario (its slot and radius);
+//! - [`AgentSpec`]: one agent of a scenario (its slot, radius, top speed and sensing
+//!   radius);
+//! - [`TurnMode`]: one mover at a time, or parallel groups;
 //! - [`PlannerKind`] and [`PlannerSpec`]: which controller moves the agents, with which
 //!   settings;
 //! - [`CbfSettings`]: the barrier-function planners' settings and their validation;
@@ -20,6 +22,7 @@ mod capacity;
 mod cbf_settings;
 mod moves;
 mod planner;
+mod turn_mode;
 
 pub use agent::AgentSpec;
 pub use body::Body;
@@ -27,3 +30,4 @@ pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
 pub use cbf_settings::{CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
 pub use moves::{Move, MoveStatus};
 pub use planner::{PlannerKind, PlannerSpec};
+pub use turn_mode::TurnMode;

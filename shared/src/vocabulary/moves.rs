@@ -17,22 +17,26 @@ pub enum MoveStatus {
     /// The path to the best point needs more than
     /// [`MAX_WAYPOINTS`](crate::vocabulary::MAX_WAYPOINTS) waypoints: stayed.
     PathTooLong = 4,
+    /// The path to the best point is longer than the agent's top speed allows in one
+    /// step: it followed the path that far and stopped (it plans again next step).
+    UnderWay = 5,
     /// The safety monitor rejected the published move: the agent stayed where it was.
-    Rejected = 5,
+    Rejected = 6,
     /// The agent missed its turn deadline (dead or hung): frozen where it was.
-    Missed = 6,
+    Missed = 7,
     /// The agent is out of the formation (its process died): a static obstacle.
-    Dead = 7,
+    Dead = 8,
 }
 
 impl MoveStatus {
     /// Every status, in code order.
-    pub const ALL: [MoveStatus; 8] = [
+    pub const ALL: [MoveStatus; 9] = [
         Self::AtSlot,
         Self::Deviated,
         Self::Stayed,
         Self::NoFreePoint,
         Self::PathTooLong,
+        Self::UnderWay,
         Self::Rejected,
         Self::Missed,
         Self::Dead,
@@ -43,10 +47,16 @@ impl MoveStatus {
     /// ```
     /// use shared::vocabulary::MoveStatus;
     /// assert_eq!(MoveStatus::from_code(MoveStatus::Rejected as u8), Some(MoveStatus::Rejected));
-    /// assert_eq!(MoveStatus::from_code(8), None);
+    /// assert_eq!(MoveStatus::from_code(9), None);
     /// ```
     pub fn from_code(code: u8) -> Option<Self> {
         Self::ALL.get(code as usize).copied()
+    }
+
+    /// Whether an agent may report this status itself (the others are the
+    /// coordinator's verdicts).
+    pub fn set_by_agent(&self) -> bool {
+        (*self as u8) <= Self::UnderWay as u8
     }
 
     /// A short lowercase name for tables and CSV files.
@@ -57,6 +67,7 @@ impl MoveStatus {
             Self::Stayed => "stayed",
             Self::NoFreePoint => "no_free_point",
             Self::PathTooLong => "path_too_long",
+            Self::UnderWay => "under_way",
             Self::Rejected => "rejected",
             Self::Missed => "missed",
             Self::Dead => "dead",
@@ -69,11 +80,20 @@ impl MoveStatus {
 pub struct Move {
     /// The ideal slot at this step.
     pub slot: Point,
-    /// The point the agent goes to (its current position when it stays).
+    /// The best point the agent aims for (its current position when it stays). With a
+    /// top speed the move may stop short of it ([`MoveStatus::UnderWay`]).
     pub best: Point,
     /// What happened.
     pub status: MoveStatus,
-    /// The polyline followed, from the current position to `best` (a single point when
-    /// the agent stays).
+    /// The polyline followed, from the current position to where the agent stops: `best`,
+    /// or short of it when under way (a single point when the agent stays).
     pub waypoints: Vec<Point>,
+}
+
+impl Move {
+    /// Where the agent stands after the move: its last waypoint (`best` for a move
+    /// without one, which the safety checks refuse anyway).
+    pub fn end(&self) -> Point {
+        self.waypoints.last().copied().unwrap_or(self.best)
+    }
 }

@@ -35,6 +35,10 @@ pub struct WireAgent {
     pub slot_theta_rad: f64,
     /// Body radius, in metres.
     pub radius_m: f64,
+    /// Top speed, metres per step; infinite for none.
+    pub max_step_m: f64,
+    /// Sensing radius, in metres; infinite when the agent knows every body.
+    pub sensing_radius_m: f64,
 }
 
 /// The static scenario, published once (history 1) for every agent.
@@ -99,6 +103,8 @@ impl Mission {
                     slot_r_m: a.slot.r_m,
                     slot_theta_rad: a.slot.theta_rad,
                     radius_m: a.radius_m,
+                    max_step_m: a.max_step_m.unwrap_or(f64::INFINITY),
+                    sensing_radius_m: a.sensing_radius_m.unwrap_or(f64::INFINITY),
                 })
                 .map_err(|_| CapacityError::Agents(agents.len()))?;
         }
@@ -140,6 +146,8 @@ impl Mission {
             .map(|a| AgentSpec {
                 slot: Slot::new(a.slot_r_m, a.slot_theta_rad),
                 radius_m: a.radius_m,
+                max_step_m: a.max_step_m.is_finite().then_some(a.max_step_m),
+                sensing_radius_m: a.sensing_radius_m.is_finite().then_some(a.sensing_radius_m),
             })
             .collect()
     }
@@ -151,7 +159,9 @@ mod tests {
 
     #[test]
     fn a_mission_round_trips_the_scenario_exactly() {
-        let s = Scenario::paper();
+        let mut s = Scenario::paper();
+        s.agents[1].max_step_m = Some(0.25);
+        s.agents[2].sensing_radius_m = Some(3.5);
         let mut m = Mission::default();
         m.fill(&s).unwrap();
         assert_eq!(m.planner(), Some(s.planner));

@@ -15,8 +15,8 @@ pub struct WireBody {
     pub position: WirePoint,
     /// 1 while the agent belongs to the formation, 0 once it is frozen as an obstacle.
     pub alive: u32,
-    /// Padding, always 0.
-    pub reserved: u32,
+    /// The agent's index (the radius is in the mission).
+    pub agent: u32,
 }
 
 /// The world before a turn: published by the coordinator, read by the agent whose turn it
@@ -39,20 +39,30 @@ pub struct World {
     pub reserved: u32,
     /// The formation centre at this step.
     pub centre: WirePose,
-    /// Every agent, in agent order, dead ones included (they are obstacles).
+    /// The agents the turn's agent may sense, itself included, in increasing agent order,
+    /// dead ones included (they are obstacles): every agent without a sensing radius.
     pub bodies: StaticVec<WireBody, MAX_AGENTS>,
 }
 
 impl World {
-    /// Replace the bodies with `bodies` (positions) and their `alive` flags.
-    pub fn set_bodies(&mut self, bodies: &[Body], alive: &[bool]) -> Result<(), CapacityError> {
+    /// Replace the bodies with the agents `visible` (indices, increasing) of `bodies`
+    /// (positions) with their `alive` flags.
+    pub fn set_bodies(
+        &mut self,
+        bodies: &[Body],
+        alive: &[bool],
+        visible: impl IntoIterator<Item = usize>,
+    ) -> Result<(), CapacityError> {
         self.bodies.clear();
-        for (b, &a) in bodies.iter().zip(alive) {
+        for i in visible {
+            let (Some(b), Some(&a)) = (bodies.get(i), alive.get(i)) else {
+                continue;
+            };
             self.bodies
                 .push(WireBody {
                     position: b.position.into(),
                     alive: u32::from(a),
-                    reserved: 0,
+                    agent: i as u32,
                 })
                 .map_err(|_| CapacityError::Agents(bodies.len()))?;
         }

@@ -1,0 +1,157 @@
+//! Parallel turns: the live agents of a step split into groups whose members cannot meet
+//! within the step, so a group's agents may plan against one snapshot and move at once.
+//!
+//! Agents `i` and `j` may share a group only if
+//! `||p_i - p_j|| > max_step_i + max_step_j + r_i + r_j`: each moves at most its top
+//! speed, so every point of `i`'s move stays more than `r_i + r_j` from every point of
+//! `j`'s. The split is a greedy colouring in agent order (each agent joins the first group
+//! holding no agent it could meet), so it depends on the positions alone and the
+//! reference simulation and the coordinator find the same groups.
+
+use std::collections::BTreeMap;
+
+use crate::geometry::Point;
+use crate::vocabulary::{AgentSpec, Body, TurnMode};
+
+/// The groups of one step, in turn order, each listing its agents in agent order. Dead
+/// agents take no turn and are in no group.
+///
+/// `Sequential` gives one group per live agent, in agent order (the paper's turns).
+/// `Parallel` needs a top speed for every agent (the scenario checks see to it); without
+/// one for every live agent it falls back to one group per agent.
+///
+/// ```
+/// use shared::formation::Slot;
+/// use shared::geometry::Point;
+/// use shared::groups::turn_groups;
+/// use shared::vocabulary::{AgentSpec, Body, TurnMode};
+/// let mut spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.5);
+/// spec.max_step_m = Some(1.0);
+/// let specs = [spec; 3];
+/// let at = |x: f64| Body { position: Point::new(x, 0.0), radius_m: 0.5 };
+/// // 0 and 1 are 2 m apart (they could meet: 1 + 1 + 0.5 + 0.5 = 3 m); 2 is far.
+/// let bodies = [at(0.0), at(2.0), at(10.0)];
+/// let groups = turn_groups(TurnMode::Parallel, &specs, &bodies, &[true; 3]);
+/// assert_eq!(groups, vec![vec![0, 2], vec![1]]);
+/// let one_by_one = turn_groups(TurnMode::Sequential, &specs, &bodies, &[true, false, true]);
+/// assert_eq!(one_by_one, vec![vec![0], vec![2]]);
+/// ```
+pub fn turn_groups(
+    mode: TurnMode,
+    specs: &[AgentSpec],
+    bodies: &[Body],
+    alive: &[bool],
+) -> Vec<Vec<usize>> {
+    let live = (0..bodies.len()).filter(|&i| alive.get(i).copied().unwrap_or(false));
+    match mode {
+        TurnMode::Sequential => live.map(|i| vec![i]).collect(),
+        TurnMode::Parallel => parallel_groups(specs, bodies, live),
+    }
+}
+
+/// How far agent `i` reaches within a step: its top speed plus its radius (`None`
+/// without a top speed: it could reach anything).
+fn reach_m(spec: &AgentSpec) -> Option<f64> {
+    spec.max_step_m.map(|s| s + spec.radius_m)
+}
+
+/// Whether agents `a` and `b` (reaches `ra`, `rb`) could meet within the step.
+fn could_meet(a: &Point, ra: f64, b: &Point, rb: f64) -> bool {
+    (a - b).norm() <= ra + rb
+}
+
+fn parallel_groups(
+    specs: &[AgentSpec],
+    bodies: &[Body],
+    live: impl Iterator<Item = usize>,
+) -> Vec<Vec<usize>> {
+    let live: Vec<usize> = live.collect();
+    if live.iter().any(|&i| reach_m(&specs[i]).is_none()) {
+        return live.into_iter().map(|i| vec![i]).collect();
+    }
+    // A uniform grid of cells twice the largest reach: two agents that could meet lie in
+    // the same or in neighbouring cells.
+    let largest_m = live
+        .iter()
+        .filter_map(|&i| reach_m(&specs[i]))
+        .fold(0.0_f64, f64::max);
+    let cell_m = (2.0 * largest_m).max(1e-6);
+    let cell_of = |p: &Point| -> (i64, i64) {
+        ((p.x / cell_m).floor() as i64, (p.y / cell_m).floor() as i64)
+    };
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    // For each cell, the agents placed so far with their groups.
+    let mut placed: BTreeMap<(i64, i64), Vec<(usize, usize)>> = BTreeMap::new();
+    for i in live {
+        let reach_i = reach_m(&specs[i]).unwrap_or(f64::INFINITY);
+        let p = bodies[i].position;
+        let (cx, cy) = cell_of(&p);
+        let mut taken: Vec<usize> = Vec::new();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for &(j, g) in placed.get(&(cx + dx, cy + dy)).into_iter().flatten() {
+                    let reach_j = reach_m(&specs[j]).unwrap_or(f64::INFINITY);
+                    if could_meet(&p, reach_i, &bodies[j].position, reach_j) {
+                        taken.push(g);
+                    }
+                }
+            }
+        }
+        let group = (0..groups.len())
+            .find(|g| !taken.contains(g))
+            .unwrap_or(groups.len());
+        if group == groups.len() {
+            groups.push(Vec::new());
+        }
+        groups[group].push(i);
+        placed.entry((cx, cy)).or_default().push((i, group));
+    }
+    groups
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::formation::Slot;
+
+    #[test]
+    fn no_two_agents_of_a_group_could_meet_and_every_live_agent_has_one_group() {
+        let mut spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.3);
+        spec.max_step_m = Some(0.4);
+        let n = 300;
+        let specs = vec![spec; n];
+        // A dense pseudo-random cloud.
+        let bodies: Vec<Body> = (0..n)
+            .map(|i| {
+                let t = i as f64;
+                Body {
+                    position: Point::new((t * 7.31).sin() * 8.0, (t * 3.17).cos() * 8.0),
+                    radius_m: 0.3,
+                }
+            })
+            .collect();
+        let alive: Vec<bool> = (0..n).map(|i| i % 17 != 3).collect();
+        let groups = turn_groups(TurnMode::Parallel, &specs, &bodies, &alive);
+        let mut seen = vec![0; n];
+        for g in &groups {
+            assert!(g.windows(2).all(|w| w[0] < w[1]), "agent order in {g:?}");
+            for (k, &i) in g.iter().enumerate() {
+                seen[i] += 1;
+                for &j in &g[..k] {
+                    let d = (bodies[i].position - bodies[j].position).norm();
+                    assert!(
+                        d > 0.4 + 0.4 + 0.3 + 0.3,
+                        "{i} and {j} share a group at {d} m"
+                    );
+                }
+            }
+        }
+        for i in 0..n {
+            assert_eq!(seen[i], usize::from(alive[i]), "agent {i}");
+        }
+        assert!(
+            groups.len() < alive.iter().filter(|a| **a).count(),
+            "some parallelism"
+        );
+    }
+}

@@ -1,0 +1,41 @@
+//! How the agents of a step take their turns: one at a time, or in groups that cannot
+//! meet.
+
+use serde::Deserialize;
+
+/// How the agents of a step take their turns (`[turns] mode` in a scenario).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TurnMode {
+    /// One agent moves at a time, in agent order, while every other stands still (the
+    /// paper's Assumption 6).
+    #[default]
+    Sequential,
+    /// Agents that cannot meet within the step move at once: each step the live agents
+    /// are split into groups ([`crate::groups::turn_groups`]); a group's agents plan
+    /// against the same snapshot and the groups follow one another. Needs a top speed.
+    Parallel,
+}
+
+impl TurnMode {
+    /// The name used in files and on the command line.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Sequential => "sequential",
+            Self::Parallel => "parallel",
+        }
+    }
+
+    /// The mode called `name`, if any.
+    ///
+    /// ```
+    /// use shared::vocabulary::TurnMode;
+    /// assert_eq!(TurnMode::from_name("parallel"), Some(TurnMode::Parallel));
+    /// assert_eq!(TurnMode::from_name("Parallel"), None);
+    /// ```
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Self::Sequential, Self::Parallel]
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+}
