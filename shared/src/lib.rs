@@ -12,6 +12,7 @@
 //! - [`reeds_shepp`] and [`dubins`]: the shortest such paths;
 //! - [`hybrid_astar`]: the formation centre's planner;
 //! - [`cbf`]: the control-barrier-function planners and their exact 2-D QP;
+//! - [`orca`]: the reactive baseline ORCA (RVO2, on `dodgy_2d`), cut to stay safe;
 //! - [`scenario`]: the TOML scenario model and its validation;
 //! - [`turn`]: one agent's turn: the paper's best-point planner, and every planner behind
 //!   one interface, shared by simulation and agents;
@@ -32,6 +33,7 @@ pub mod formation;
 pub mod geometry;
 pub mod groups;
 pub mod hybrid_astar;
+pub mod orca;
 mod ordered;
 pub mod record;
 pub mod reeds_shepp;
