@@ -27,7 +27,7 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
     let headers = reader.headers().expect("headers").clone();
     let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
     let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
-    assert_eq!(rows.len(), 3, "three planners on the paper example");
+    assert_eq!(rows.len(), 4, "four planners on the paper example");
     for r in &rows {
         assert_eq!(
             &r[col("collisions")],

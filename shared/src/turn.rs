@@ -10,6 +10,7 @@ use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, polyline_prefix};
+use crate::orca::OrcaPlanner;
 use crate::vocabulary::{
     AgentSpec, Body, CbfSettingsError, MAX_WAYPOINTS, Move, MoveStatus, PlannerKind, PlannerSpec,
 };
@@ -225,6 +226,8 @@ enum Controller {
     Cbf(CbfPlanner),
     /// The paper's failed LogSumExp barrier, for comparison.
     ZcbfLogSumExp(ZcbfLogSumExpPlanner),
+    /// ORCA, the reactive baseline.
+    Orca(OrcaPlanner),
 }
 
 impl TurnPlanner {
@@ -252,6 +255,14 @@ impl TurnPlanner {
                 cbf,
                 planner.lse_sharpness_per_m,
             )?),
+            // Its maximum speed is the top speed; without one, the barrier planners' step.
+            PlannerKind::Orca => Controller::Orca(OrcaPlanner::new(
+                field,
+                obstacles,
+                spec,
+                spec.max_step_m.unwrap_or(cbf.max_speed_m_per_s * cbf.dt_s),
+                spec.sensing_radius_m,
+            )),
         };
         Ok(Self {
             controller,
@@ -287,6 +298,7 @@ impl TurnPlanner {
             Controller::BestPoint(p) => p.plan_move(centre, me, others),
             Controller::Cbf(p) => p.plan_move(centre, me, others),
             Controller::ZcbfLogSumExp(p) => p.plan_move(centre, me, others),
+            Controller::Orca(p) => p.plan_move(centre, me, others),
         };
         if let Some(max_step_m) = self.spec.max_step_m
             && let Some(prefix) = polyline_prefix(&mv.waypoints, max_step_m)

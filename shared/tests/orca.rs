@@ -13,10 +13,7 @@ use shared::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
 /// The agent's slot is the formation centre itself.
 fn spec(radius_m: f64) -> AgentSpec {
-    AgentSpec {
-        slot: Slot::new(0.0, 0.0),
-        radius_m,
-    }
+    AgentSpec::new(Slot::new(0.0, 0.0), radius_m)
 }
 
 fn at(p: &Point) -> Pose {

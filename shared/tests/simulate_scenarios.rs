@@ -172,3 +172,29 @@ fn the_barrier_function_planner_never_breaks_clearance_on_any_shipped_scenario()
         assert_safe_without_faults(&scenario, &run);
     }
 }
+
+#[test]
+fn orca_never_breaks_clearance_or_its_top_speed_on_any_shipped_scenario() {
+    for file in scenario_files() {
+        let scenario = Scenario::load(&file)
+            .unwrap()
+            .with_planner(PlannerKind::Orca);
+        let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        // Its moves are cut before any contact: not one needed refusing.
+        assert_safe_without_faults(&scenario, &run);
+        if let Some(max_m) = scenario.agents[0].max_step_m {
+            assert!(
+                run.summary().max_move_m <= max_m + 1e-9,
+                "{}",
+                scenario.name
+            );
+        }
+        eprintln!(
+            "orca on {}: mean deviation {:.4} m, final {:.4} m, longest move {:.3} m",
+            scenario.name,
+            run.summary().mean_deviation_m,
+            run.summary().final_mean_deviation_m,
+            run.summary().max_move_m
+        );
+    }
+}

@@ -17,11 +17,14 @@ pub enum PlannerKind {
     /// The paper's failed zeroing barrier with a LogSumExp-smoothed max: kept to show its
     /// violations (the safety monitor refuses them).
     ZcbfLogsumexp,
+    /// The reactive baseline: optimal reciprocal collision avoidance (RVO2) towards the
+    /// slot, one step at the top speed ([`crate::orca`]).
+    Orca,
 }
 
 impl PlannerKind {
     /// Every planner, in code order.
-    pub const ALL: [PlannerKind; 3] = [Self::BestPoint, Self::Cbf, Self::ZcbfLogsumexp];
+    pub const ALL: [PlannerKind; 4] = [Self::BestPoint, Self::Cbf, Self::ZcbfLogsumexp, Self::Orca];
 
     /// The name used in files and on the command line.
     pub fn name(&self) -> &'static str {
@@ -29,6 +32,7 @@ impl PlannerKind {
             Self::BestPoint => "best-point",
             Self::Cbf => "cbf",
             Self::ZcbfLogsumexp => "zcbf-logsumexp",
+            Self::Orca => "orca",
         }
     }
 
