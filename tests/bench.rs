@@ -149,7 +149,7 @@ fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
 fn bench_refuses_bad_arguments_with_exit_code_2() {
     for args in [
         ["--agents", "0"],
-        ["--agents", "257"],
+        ["--agents", "1025"],
         ["--steps", "1"],
         ["--round-trips", "0"],
     ] {

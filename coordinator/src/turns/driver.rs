@@ -77,7 +77,7 @@ impl Driver<'_, '_> {
             self.spawn(i, false)?;
         }
         let all: Vec<usize> = (0..n).collect();
-        self.start_agents(0, &all, self.options.startup_timeout, false)?;
+        self.start_agents(0, &all, self.options.startup_timeout_for(n), false)?;
         self.progress.startup_s = started.elapsed().as_secs_f64();
         self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
             let pids: Vec<u32> = self.pids().into_iter().flatten().collect();

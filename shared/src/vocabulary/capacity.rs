@@ -3,7 +3,7 @@
 //! the planners refuse anything larger, so nothing is ever cut short in transit.
 
 /// Most agents a scenario may hold (the wire types' fixed capacity).
-pub const MAX_AGENTS: usize = 256;
+pub const MAX_AGENTS: usize = 1024;
 
 /// Most obstacles a scenario may hold (the wire types' fixed capacity).
 pub const MAX_OBSTACLES: usize = 16_384;
