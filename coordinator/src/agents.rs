@@ -209,6 +209,21 @@ impl AgentProcesses {
         }
     }
 
+    /// Wait until agent `agent`'s process has exited, without reaping it (the next
+    /// [`Self::poll`] does), at most `timeout`; true if it has exited.
+    pub fn wait_exited(&self, agent: usize, timeout: Duration) -> bool {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if self.children[agent].is_none() || self.has_exited(agent) {
+                return true;
+            }
+            if Instant::now() >= deadline {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
     /// Whether agent `agent`'s process has exited, without reaping it.
     fn has_exited(&self, agent: usize) -> bool {
         let Some(child) = &self.children[agent] else {

@@ -73,6 +73,39 @@ pub fn simulate(scenario: &Scenario) -> Result<Run, SimulateError> {
 
 /// Run the scenario along a given centre path (one pose per step).
 pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, SimulateError> {
+    simulate_along_with_deaths(scenario, centre_path, &[])
+}
+
+/// [`simulate_along`] where, for every `(agent, step)` of `deaths`, the agent dies at that
+/// step just before its group's turns (after the groups of the step are formed, with it
+/// still alive): it takes no turn, is frozen as an obstacle where it stands and leaves the
+/// formation ([`Recorder::freeze`]), recorded as the faults `killed` then `dead` of that
+/// step; its group mates still take their turns, planned against the same snapshot. A
+/// death of an agent already dead, or at a step without a turn, changes nothing.
+///
+/// This is what the coordinator does with `RunOptions::deaths` (the agent's process is
+/// killed before its group's turns are granted, so the death is always detected during
+/// its turn): the multi-process run equals this one to the bit, faults aside from their
+/// detail and detection time.
+///
+/// ```
+/// use shared::scenario::Scenario;
+/// use shared::simulate::{plan_centre_path, simulate_along_with_deaths};
+/// let scenario = Scenario::paper();
+/// let path = plan_centre_path(&scenario).unwrap();
+/// let run = simulate_along_with_deaths(&scenario, &path, &[(2, 40)]).unwrap();
+/// let kinds: Vec<(usize, usize, &str)> =
+///     run.faults.iter().map(|f| (f.agent, f.step, f.kind.as_str())).collect();
+/// assert_eq!(kinds, [(2, 40, "killed"), (2, 40, "dead")]);
+/// assert!(run.steps[40..].iter().all(|s| !s.agents[2].alive));
+/// assert!(run.steps[..40].iter().all(|s| s.agents[2].alive));
+/// assert_eq!(run.summary().collisions, 0);
+/// ```
+pub fn simulate_along_with_deaths(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    deaths: &[(usize, usize)],
+) -> Result<Run, SimulateError> {
     let planners = agent_planners(scenario)?;
     let mut recorder = Recorder::new(scenario, centre_path);
     for (step, centre) in centre_path.iter().enumerate().skip(1) {
@@ -84,9 +117,28 @@ pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, 
         );
         recorder.note_groups(groups.len());
         for group in groups {
+            for &agent in &group {
+                if deaths.contains(&(agent, step)) {
+                    recorder.note_fault(
+                        step,
+                        agent,
+                        "killed",
+                        "fault injection: killed before its group's turns".to_string(),
+                        None,
+                    );
+                    recorder.freeze(
+                        step,
+                        agent,
+                        "dead",
+                        "the agent process died during its turn".to_string(),
+                        None,
+                    );
+                }
+            }
             // Every agent of the group plans against the same snapshot.
             let moves: Vec<(usize, Move)> = group
                 .iter()
+                .filter(|&&agent| recorder.alive()[agent])
                 .map(|&agent| {
                     let me = recorder.bodies()[agent].position;
                     (

@@ -156,6 +156,7 @@ impl Driver<'_, '_> {
             .iter()
             .any(|a| a.sensing_radius_m.is_some())
             .then(|| SensedAgents::new(self.recorder.bodies()));
+        self.kill_before_turns(step, group);
         let mut granted = Vec::with_capacity(group.len());
         for &agent in group {
             // Nothing that arrived since the agent's last turn answers this one.

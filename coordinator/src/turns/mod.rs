@@ -35,6 +35,7 @@ use shared::scenario::Scenario;
 use wire::misbehave::Misbehave;
 use wire::{RunPrefix, RunRoot};
 
+mod deaths;
 mod driver;
 mod faults;
 mod judge;
@@ -69,6 +70,12 @@ pub struct RunOptions {
     /// Fault injection: kill agent `.0` with SIGKILL right after granting its turn at
     /// step `.1`.
     pub kills: Vec<(usize, usize)>,
+    /// Deterministic fault injection: agent `.0` dies at step `.1` before its turn. Its
+    /// process is killed with SIGKILL (and waited for) once the step's groups are formed,
+    /// just before its group's turns are granted, so the death is always detected during
+    /// its turn and its group mates still move: the run equals
+    /// [`shared::simulate::simulate_along_with_deaths`] to the bit.
+    pub deaths: Vec<(usize, usize)>,
     /// Test mode: start agent `.0` with `--misbehave .1` (its replacements behave).
     pub misbehave: Vec<(usize, Misbehave)>,
     /// Show a progress bar on stderr (only drawn on a terminal).
@@ -100,6 +107,7 @@ impl Default for RunOptions {
             max_missed_turns: 3,
             respawn: false,
             kills: Vec::new(),
+            deaths: Vec::new(),
             misbehave: Vec::new(),
             progress: true,
             idle_probe: None,

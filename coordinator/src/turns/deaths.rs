@@ -1,0 +1,44 @@
+//! Deterministic deaths ([`super::RunOptions::deaths`]): an agent killed before its
+//! group's turns are granted, so its death is always detected during its turn, as the
+//! reference simulation has it (`shared::simulate::simulate_along_with_deaths`).
+//!
+//! The kill of [`super::RunOptions::kills`] comes right after the grant instead, and races
+//! with the agent's answer: the move may get out first, and the death is then noticed at
+//! the next step. Here nothing races: the process is gone before any turn of its group is
+//! granted.
+
+use std::time::Duration;
+
+use super::driver::Driver;
+
+/// How long a SIGKILLed agent may take to be gone before the run goes on regardless (its
+/// death is then noticed a little later: during its turn, or at the next step).
+const DEATH_TIMEOUT: Duration = Duration::from_secs(5);
+
+impl Driver<'_, '_> {
+    /// Kill those live agents of `group` that are to die at `step`, and wait until each
+    /// process is gone (not reaped: waiting for its turn's answer finds it dead, as for
+    /// any agent that dies during its turn). Recorded as a `killed` fault.
+    pub(super) fn kill_before_turns(&mut self, step: usize, group: &[usize]) {
+        for &agent in group {
+            if !self.options.deaths.contains(&(agent, step)) || !self.recorder.alive()[agent] {
+                continue;
+            }
+            let Some(pid) = self.procs.signal_kill(agent) else {
+                continue;
+            };
+            if !self.procs.wait_exited(agent, DEATH_TIMEOUT) {
+                tracing::warn!(
+                    "step {step}: agent {agent} (process {pid}) still there {DEATH_TIMEOUT:?} after SIGKILL"
+                );
+            }
+            self.recorder.note_fault(
+                step,
+                agent,
+                "killed",
+                format!("fault injection: SIGKILL to process {pid} before its group's turns"),
+                None,
+            );
+        }
+    }
+}
