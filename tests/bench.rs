@@ -162,3 +162,86 @@ fn bench_refuses_bad_arguments_with_exit_code_2() {
         assert!(output.stdout.is_empty(), "{args:?}");
     }
 }
+
+#[test]
+fn bench_compares_sequential_and_parallel_turns_on_one_scenario() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let out_file = dir.path().join("turns.json");
+    let scenario = support::repo_root()
+        .join("scenarios")
+        .join("paper-top-speed.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("bench")
+        .arg("--turns-scenario")
+        .arg(&scenario)
+        .args([
+            "--turns-steps",
+            "6",
+            "--turns-rounds",
+            "2",
+            "--json",
+            "--out",
+        ])
+        .arg(&out_file)
+        .arg("--agent-bin")
+        .arg(support::agent_bin())
+        .output()
+        .expect("running coordinator bench");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "bench failed: {stderr}");
+    let report: Value = serde_json::from_slice(&output.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    // Only the turns were asked for: no latency runs, no histogram.
+    assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
+    assert!(report["histogram_svg"].is_null());
+    assert!(!out_file.with_extension("svg").exists());
+    let t = &report["turns"];
+    assert_eq!(t["scenario"], "paper-top-speed");
+    assert_eq!(t["agents"], 6);
+    assert_eq!(t["steps"], 6);
+    assert_eq!(t["rounds"], 2);
+    assert_eq!(
+        t["order"],
+        serde_json::json!(["sequential", "parallel", "parallel", "sequential"])
+    );
+    assert_eq!(t["max_step_m"], serde_json::json!([0.5, 0.5]));
+    for mode in ["sequential", "parallel"] {
+        let m = &t[mode];
+        assert_eq!(m["mode"], mode);
+        assert_eq!(m["steps_per_s_runs"].as_array().expect("runs").len(), 2);
+        assert!(number(m, "steps_per_s") > 0.0, "{m}");
+        check_distribution(m, "turn_us");
+        check_distribution(m, "compute_us");
+        assert_eq!(m["collisions"], 0, "{m}");
+        assert_eq!(m["faults"], 0, "{m}");
+        assert_eq!(m["completed"], true, "{m}");
+        assert!(number(m, "max_move_m") <= 0.5 + 1e-6, "{m}");
+    }
+    assert_eq!(number(&t["sequential"], "mean_groups_per_step"), 6.0);
+    let groups = number(&t["parallel"], "mean_groups_per_step");
+    assert!((1.0..6.0).contains(&groups), "{groups}");
+    let ratio = number(t, "parallel_vs_sequential_steps_per_s");
+    let expected = number(&t["parallel"], "steps_per_s") / number(&t["sequential"], "steps_per_s");
+    assert!(
+        (ratio - expected).abs() <= 1e-9 * expected,
+        "{ratio} vs {expected}"
+    );
+}
+
+#[test]
+fn bench_refuses_a_turns_scenario_without_a_top_speed_before_running() {
+    let paper = support::repo_root().join("scenarios").join("paper.toml");
+    for extra in [&["--turns-rounds", "1"][..], &["--turns-rounds", "0"][..]] {
+        let output = Command::new(support::coordinator_bin())
+            .arg("bench")
+            .arg("--turns-scenario")
+            .arg(&paper)
+            .args(extra)
+            .output()
+            .expect("running coordinator bench");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(output.stdout.is_empty(), "{extra:?}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+}

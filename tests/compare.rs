@@ -58,6 +58,106 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
             .expect("dev")
     };
     assert!(final_dev("best-point") < 0.05);
+    // The new columns come after the old ones: the paper's own (sequential) turns, a
+    // move length and a speed for every run.
+    assert_eq!(headers.len(), 15);
+    assert_eq!(
+        headers.iter().skip(12).collect::<Vec<_>>(),
+        ["turns", "max_move_m", "steps_per_s"]
+    );
+    for r in &rows {
+        assert_eq!(&r[col("turns")], "sequential");
+        assert!(r[col("max_move_m")].parse::<f64>().expect("max move") > 0.0);
+        assert!(r[col("steps_per_s")].parse::<f64>().expect("steps/s") > 0.0);
+    }
+    assert!(md.contains("| turns | max move (m) | steps/s |"));
+}
+
+#[test]
+fn compare_runs_every_planner_in_every_turn_mode_asked_for() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cmp");
+    let scenario = support::repo_root()
+        .join("scenarios")
+        .join("paper-top-speed.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("compare")
+        .arg(&scenario)
+        .args([
+            "--planners",
+            "best-point,cbf",
+            "--turns",
+            "sequential,parallel",
+            "--out",
+        ])
+        .arg(&out)
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        .output()
+        .expect("coordinator compare");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
+    let headers = reader.headers().expect("headers").clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
+    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
+    let got: Vec<(String, String)> = rows
+        .iter()
+        .map(|r| (r[col("turns")].to_string(), r[col("planner")].to_string()))
+        .collect();
+    let want: Vec<(String, String)> = [
+        ("sequential", "best-point"),
+        ("sequential", "cbf"),
+        ("parallel", "best-point"),
+        ("parallel", "cbf"),
+    ]
+    .iter()
+    .map(|(m, p)| (m.to_string(), p.to_string()))
+    .collect();
+    assert_eq!(got, want);
+    for r in &rows {
+        assert_eq!(&r[col("collisions")], "0", "{r:?}");
+        let max_move: f64 = r[col("max_move_m")].parse().expect("max move");
+        assert!(max_move <= 0.5 + 1e-6, "the top speed holds: {max_move}");
+    }
+    // Each run in a folder naming its mode, its resolved scenario in that mode.
+    for (mode, planner) in [("sequential", "cbf"), ("parallel", "best-point")] {
+        let run = out.join(format!("paper-top-speed-{planner}-{mode}"));
+        let text = std::fs::read_to_string(run.join("scenario.toml")).expect("scenario.toml");
+        assert!(text.contains(&format!("mode = \"{mode}\"")), "{mode}");
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(run.join("summary.json")).expect("summary"))
+                .expect("summary.json parses");
+        let groups = summary["mean_groups_per_step"].as_f64().expect("groups");
+        if mode == "parallel" {
+            assert!(groups < 6.0, "parallel groups: {groups}");
+        } else {
+            assert_eq!(groups, 6.0);
+        }
+    }
+    assert!(
+        stderr.contains("with best-point, parallel turns: completed"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn compare_refuses_parallel_turns_without_a_top_speed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cmp");
+    let paper = support::repo_root().join("scenarios").join("paper.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("compare")
+        .arg(&paper)
+        .args(["--turns", "parallel", "--out"])
+        .arg(&out)
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        .output()
+        .expect("coordinator compare");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("turns.mode"), "{stderr}");
+    assert!(!out.exists(), "nothing created");
 }
 
 /// The lines `compare` may print for `runs` runs: one per run, the table (header, rule,

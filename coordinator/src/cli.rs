@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use shared::vocabulary::PlannerKind;
+use shared::vocabulary::{PlannerKind, TurnMode};
 use wire::misbehave::Misbehave;
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
@@ -78,6 +78,10 @@ pub struct RunArgs {
     /// later).
     #[arg(long)]
     pub no_plots: bool,
+    /// In the animation, draw each live agent's sensing radius as a faint circle (when
+    /// the scenario has `formation.sensing_radius_m`).
+    #[arg(long)]
+    pub sensing_circles: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -91,6 +95,10 @@ pub struct CompareArgs {
     /// The planners to compare (comma-separated; default: all).
     #[arg(long, value_delimiter = ',', value_parser = parse_planner)]
     pub planners: Vec<PlannerKind>,
+    /// Turn modes to run every planner in (comma-separated: sequential, parallel;
+    /// default: each scenario's own `[turns] mode`). Parallel needs a top speed.
+    #[arg(long, value_name = "MODE", value_delimiter = ',', value_parser = parse_turn_mode)]
+    pub turns: Vec<TurnMode>,
     /// Output folder for `compare.csv`, `compare.md` and one folder per run (default
     /// `runs/compare-<UTC time>`). One that exists and is not empty is refused unless
     /// `--force`.
@@ -110,6 +118,11 @@ fn parse_planner(s: &str) -> Result<PlannerKind, String> {
         let names: Vec<&str> = PlannerKind::ALL.iter().map(PlannerKind::name).collect();
         format!("{s:?}: one of {}", names.join(", "))
     })
+}
+
+/// A turn mode name.
+fn parse_turn_mode(s: &str) -> Result<TurnMode, String> {
+    TurnMode::from_name(s).ok_or_else(|| format!("{s:?}: one of sequential, parallel"))
 }
 
 /// `AGENT@STEP`.
@@ -161,13 +174,18 @@ pub struct RenderArgs {
     /// A run directory written by `run` (scenario.toml, path.csv, trajectory.csv,
     /// moves.csv, summary.json).
     pub run_dir: PathBuf,
+    /// In the animation, draw each live agent's sensing radius as a faint circle (when
+    /// the scenario has `formation.sensing_radius_m`).
+    #[arg(long, visible_alias = "sensing")]
+    pub sensing_circles: bool,
 }
 
 /// Arguments of `bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Formation sizes to measure (repeatable or comma-separated).
-    #[arg(long, value_name = "N", value_delimiter = ',', default_values_t = [6, 200])]
+    /// Formation sizes to measure (repeatable or comma-separated; default 6,200, or none
+    /// with --turns-scenario).
+    #[arg(long, value_name = "N", value_delimiter = ',')]
     pub agents: Vec<usize>,
     /// Steps of the straight path (default: about 3000 turns, at least 40 steps).
     #[arg(long, value_name = "K")]
@@ -185,6 +203,18 @@ pub struct BenchArgs {
     /// histogram goes beside it, with the extension `.svg`.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Also compare sequential and parallel turns on this scenario (it needs a top
+    /// speed): it runs with its `[turns] mode` forced to each, same processes, same top
+    /// speed, alternating; steps per second, groups per step and turn latency of both.
+    #[arg(long, value_name = "SCENARIO")]
+    pub turns_scenario: Option<PathBuf>,
+    /// Runs of each turn mode with --turns-scenario, alternating (S P, P S, S P, ...).
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub turns_rounds: usize,
+    /// With --turns-scenario: run only the first K steps of its centre path (default:
+    /// the whole path).
+    #[arg(long, value_name = "K")]
+    pub turns_steps: Option<usize>,
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

@@ -1,18 +1,18 @@
-//! `coordinator compare SCENARIO...`: every planner on every scenario, through the same
-//! processes, protocol and safety monitor, tabulated side by side; each run's own files in
-//! a folder of their own.
+//! `coordinator compare SCENARIO...`: every planner on every scenario (and, with
+//! `--turns`, in every turn mode), through the same processes, protocol and safety
+//! monitor, tabulated side by side; each run's own files in a folder of their own.
 
 use std::path::Path;
 
 use anyhow::Context;
 use serde::Serialize;
 use shared::record::Run;
-use shared::vocabulary::PlannerKind;
+use shared::scenario::{Scenario, ScenarioError};
+use shared::vocabulary::{PlannerKind, TurnMode};
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;
 use crate::output;
-use crate::stats::Distribution;
 use crate::turns::{RunOptions, run_scenario};
 use crate::validate::load_and_plan;
 
@@ -43,6 +43,12 @@ pub struct Row {
     pub compute_p50_us: f64,
     /// Agent compute time per turn, 99th percentile, in microseconds.
     pub compute_p99_us: f64,
+    /// The turn mode run (`sequential` or `parallel`).
+    pub turns: String,
+    /// The longest single move of any agent, in metres (as in `summary.json`).
+    pub max_move_m: f64,
+    /// Steps per second of the step loop (as in `summary.json`).
+    pub steps_per_s: f64,
 }
 
 /// Agent-steps where a live agent off its slot did not move.
@@ -55,8 +61,32 @@ pub fn deadlocked_steps(run: &Run) -> usize {
         .count()
 }
 
-fn row(run: &Run, planner: PlannerKind, compute: &Distribution) -> Row {
+/// `scenario` with its turns taken in `mode`; parallel turns need a top speed for every
+/// agent, as in a scenario file (refused as `source: turns.mode: ...`, exit code 2).
+pub(crate) fn with_turn_mode(
+    scenario: &Scenario,
+    source: &str,
+    mode: TurnMode,
+) -> Result<Scenario, ScenarioError> {
+    if mode == TurnMode::Parallel
+        && let Some(i) = scenario.agents.iter().position(|a| a.max_step_m.is_none())
+    {
+        return Err(ScenarioError::Invalid {
+            file: source.to_string(),
+            field: "turns.mode".into(),
+            reason: format!(
+                "parallel turns need a top speed for every agent (formation.max_step_m), and agent {i} has none"
+            ),
+        });
+    }
+    let mut s = scenario.clone();
+    s.turns = mode;
+    Ok(s)
+}
+
+fn row(run: &Run, planner: PlannerKind, turns: TurnMode, timing: &output::Timing) -> Row {
     let s = run.summary();
+    let compute = &timing.compute_us;
     Row {
         scenario: s.scenario.clone(),
         planner: planner.name().to_string(),
@@ -70,17 +100,20 @@ fn row(run: &Run, planner: PlannerKind, compute: &Distribution) -> Row {
         deadlocked_steps: deadlocked_steps(run),
         compute_p50_us: compute.p50,
         compute_p99_us: compute.p99,
+        turns: turns.name().to_string(),
+        max_move_m: s.max_move_m,
+        steps_per_s: timing.steps_per_s,
     }
 }
 
 /// The table as Markdown.
 pub fn markdown(rows: &[Row]) -> String {
     let mut md = String::from(
-        "| scenario | planner | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | deadlocked agent-steps | compute p50 (us) | compute p99 (us) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | planner | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | deadlocked agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} |\n",
+            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} | {} | {:.4} | {:.1} |\n",
             r.scenario,
             r.planner,
             r.completed,
@@ -92,7 +125,10 @@ pub fn markdown(rows: &[Row]) -> String {
             r.final_mean_deviation_m,
             r.deadlocked_steps,
             r.compute_p50_us,
-            r.compute_p99_us
+            r.compute_p99_us,
+            r.turns,
+            r.max_move_m,
+            r.steps_per_s
         ));
     }
     md
@@ -106,12 +142,21 @@ fn csv_bytes(rows: &[Row]) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
-/// The folder name of one run of the comparison: `<scenario>-<planner>`, made of
+/// The folder name of one run of the comparison: `<scenario>-<planner>`, and
+/// `<scenario>-<planner>-<turns>` when the turn modes were asked for (`turns`), made of
 /// letters, digits, `-` and `_` only, with `-2`, `-3`, ... when two scenarios share a
 /// name.
-fn run_folder_name(scenario: &str, planner: PlannerKind, taken: &mut Vec<String>) -> String {
+fn run_folder_name(
+    scenario: &str,
+    planner: PlannerKind,
+    turns: Option<TurnMode>,
+    taken: &mut Vec<String>,
+) -> String {
     let clean = output::file_name_part(scenario);
-    let base = format!("{clean}-{}", planner.name());
+    let base = match turns {
+        None => format!("{clean}-{}", planner.name()),
+        Some(mode) => format!("{clean}-{}-{}", planner.name(), mode.name()),
+    };
     let name = (1..)
         .map(|k| {
             if k == 1 {
@@ -136,7 +181,7 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
     } else {
         args.planners.clone()
     };
-    // Validate every scenario before running anything.
+    // Validate every scenario, in every turn mode asked for, before running anything.
     let loaded = if args.scenarios.is_empty() {
         vec![load_and_plan(None)?]
     } else {
@@ -145,6 +190,27 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
             .map(|f| load_and_plan(Some(f)))
             .collect::<Result<Vec<_>, _>>()?
     };
+    // Each mode once, in the order given.
+    let mut modes: Vec<TurnMode> = Vec::new();
+    for &m in &args.turns {
+        if !modes.contains(&m) {
+            modes.push(m);
+        }
+    }
+    let runs = loaded
+        .iter()
+        .map(|l| {
+            let scenarios = if modes.is_empty() {
+                vec![(l.scenario.clone(), None)]
+            } else {
+                modes
+                    .iter()
+                    .map(|&m| Ok((with_turn_mode(&l.scenario, &l.source, m)?, Some(m))))
+                    .collect::<Result<Vec<_>, ScenarioError>>()?
+            };
+            Ok((l, scenarios))
+        })
+        .collect::<Result<Vec<_>, ScenarioError>>()?;
     let out = output::OutDir::check(
         args.out
             .clone()
@@ -160,42 +226,51 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
     let staging = out.begin()?;
     let mut rows = Vec::new();
     let mut taken = Vec::new();
-    for l in &loaded {
-        for &planner in &planners {
-            let scenario = l.scenario.with_planner(planner);
-            let folder = run_folder_name(&scenario.name, planner, &mut taken);
-            let outcome = run_scenario(&scenario, &l.centre_path, &options)
-                .map_err(|failure| CliError::Other(failure.error))?;
-            if outcome.interrupted {
-                return Err(CliError::Other(anyhow::anyhow!(
-                    "interrupted during {} with {}: nothing written",
-                    scenario.name,
-                    planner.name()
-                )));
+    for (l, scenarios) in &runs {
+        for (in_mode, asked) in scenarios {
+            for &planner in &planners {
+                let scenario = in_mode.with_planner(planner);
+                let folder = run_folder_name(&scenario.name, planner, *asked, &mut taken);
+                // The turn mode is named wherever it was asked for.
+                let label = match asked {
+                    None => format!("{} with {}", scenario.name, planner.name()),
+                    Some(m) => format!(
+                        "{} with {}, {} turns",
+                        scenario.name,
+                        planner.name(),
+                        m.name()
+                    ),
+                };
+                let outcome = run_scenario(&scenario, &l.centre_path, &options)
+                    .map_err(|failure| CliError::Other(failure.error))?;
+                if outcome.interrupted {
+                    return Err(CliError::Other(anyhow::anyhow!(
+                        "interrupted during {label}: nothing written"
+                    )));
+                }
+                output::write_run(
+                    &staging.path().join(&folder),
+                    &scenario,
+                    &l.source,
+                    &outcome.run,
+                    &outcome.timing,
+                )?;
+                let r = row(&outcome.run, planner, scenario.turns, &outcome.timing);
+                // One line per run, when it is done.
+                eprintln!(
+                    "{label}: {}, {} collisions, {} unsafe moves refused, {} faults, {:.1} steps/s -> {folder}/",
+                    if r.completed {
+                        "completed"
+                    } else {
+                        "not completed"
+                    },
+                    r.collisions,
+                    r.unsafe_moves,
+                    outcome.run.faults.len(),
+                    r.steps_per_s
+                );
+                rows.push(r);
             }
-            output::write_run(
-                &staging.path().join(&folder),
-                &scenario,
-                &l.source,
-                &outcome.run,
-                &outcome.timing,
-            )?;
-            let r = row(&outcome.run, planner, &outcome.timing.compute_us);
-            // One line per run, when it is done.
-            eprintln!(
-                "{} with {}: {}, {} collisions, {} unsafe moves refused, {} faults -> {folder}/",
-                scenario.name,
-                planner.name(),
-                if r.completed {
-                    "completed"
-                } else {
-                    "not completed"
-                },
-                r.collisions,
-                r.unsafe_moves,
-                outcome.run.faults.len()
-            );
-            rows.push(r);
         }
     }
     write(staging.path(), &rows)?;
@@ -219,11 +294,38 @@ mod tests {
     #[test]
     fn run_folders_are_plain_names_and_never_shared() {
         let mut taken = Vec::new();
-        let a = run_folder_name("paper example/1", PlannerKind::Cbf, &mut taken);
-        let b = run_folder_name("paper example/1", PlannerKind::Cbf, &mut taken);
-        let c = run_folder_name("paper example/1", PlannerKind::BestPoint, &mut taken);
+        let a = run_folder_name("paper example/1", PlannerKind::Cbf, None, &mut taken);
+        let b = run_folder_name("paper example/1", PlannerKind::Cbf, None, &mut taken);
+        let c = run_folder_name("paper example/1", PlannerKind::BestPoint, None, &mut taken);
+        let d = run_folder_name(
+            "paper example/1",
+            PlannerKind::Orca,
+            Some(TurnMode::Parallel),
+            &mut taken,
+        );
         assert_eq!(a, "paper_example_1-cbf");
         assert_eq!(b, "paper_example_1-cbf-2");
         assert_eq!(c, "paper_example_1-best-point");
+        assert_eq!(d, "paper_example_1-orca-parallel");
+    }
+
+    #[test]
+    fn parallel_turns_need_a_top_speed_and_sequential_never_does() {
+        let paper = Scenario::paper();
+        let err = with_turn_mode(&paper, "paper.toml", TurnMode::Parallel).unwrap_err();
+        assert_eq!(err.field(), "turns.mode");
+        assert!(
+            err.to_string().starts_with("paper.toml: turns.mode: "),
+            "{err}"
+        );
+        let seq = with_turn_mode(&paper, "paper.toml", TurnMode::Sequential).unwrap();
+        assert_eq!(seq.turns, TurnMode::Sequential);
+        let mut fast = paper.clone();
+        for a in &mut fast.agents {
+            a.max_step_m = Some(0.5);
+        }
+        let par = with_turn_mode(&fast, "x.toml", TurnMode::Parallel).unwrap();
+        assert_eq!(par.turns, TurnMode::Parallel);
+        assert_eq!(par.agents, fast.agents);
     }
 }

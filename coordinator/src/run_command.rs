@@ -69,7 +69,12 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         None
     } else {
         // The data files are complete already; a failed drawing costs only the pictures.
-        Some(crate::render::render_run_dir(staging.path()))
+        Some(crate::render::render_run_dir_with(
+            staging.path(),
+            crate::render::RenderOptions {
+                sensing_circles: args.sensing_circles,
+            },
+        ))
     };
     let dir = staging.commit()?;
     match plots {

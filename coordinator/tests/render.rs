@@ -278,6 +278,7 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
     std::fs::remove_file(dir.join("trajectory.csv")).expect("remove");
     let err = coordinator::render::execute(&RenderArgs {
         run_dir: dir.clone(),
+        sensing_circles: false,
     })
     .expect_err("missing file");
     assert!(matches!(err, CliError::Usage(_)), "{err:?}");
@@ -296,6 +297,7 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
     .expect("write");
     let msg = coordinator::render::execute(&RenderArgs {
         run_dir: dir.clone(),
+        sensing_circles: false,
     })
     .expect_err("malformed file")
     .to_string();
@@ -305,8 +307,11 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
     );
 
     let missing = dir.join("no-such-run");
-    let err =
-        coordinator::render::execute(&RenderArgs { run_dir: missing }).expect_err("no directory");
+    let err = coordinator::render::execute(&RenderArgs {
+        run_dir: missing,
+        sensing_circles: false,
+    })
+    .expect_err("no directory");
     assert_eq!(err.exit_code(), 2);
     assert!(
         !dir.join("plots").exists(),
@@ -335,4 +340,75 @@ fn a_simulated_paper_run_renders() {
         assert!(len > 1000, "{} is {len} bytes", p.display());
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The tiny run's scenario with a top speed, limited sensing and parallel turns.
+fn timed_scenario() -> String {
+    SCENARIO
+        .replace(
+            "agent_radius_m = 0.4\n",
+            "agent_radius_m = 0.4\nmax_step_m = 0.5\nsensing_radius_m = 2.5\n",
+        )
+        .replace(
+            "allow_reverse = false\n",
+            "allow_reverse = false\n\n[turns]\nmode = \"parallel\"\n",
+        )
+}
+
+#[test]
+fn titles_name_the_top_speed_the_sensing_and_parallel_turns() {
+    let dir = scratch("timed");
+    write_tiny_run(&dir);
+    std::fs::write(dir.join("scenario.toml"), timed_scenario()).expect("write scenario");
+    let written = render_run_dir(&dir).expect("render");
+    assert_eq!(written.len(), 9);
+    for stem in ["field", "formation", "deviation", "clearance"] {
+        let svg = std::fs::read_to_string(dir.join(format!("plots/{stem}.svg"))).expect("svg");
+        assert!(
+            svg.contains("top speed 0.5 m/step, sensing 2.5 m, parallel turns"),
+            "{stem}.svg"
+        );
+    }
+    // The paper's model has no such note.
+    let plain = scratch("untimed");
+    write_tiny_run(&plain);
+    render_run_dir(&plain).expect("render");
+    let svg = std::fs::read_to_string(plain.join("plots/field.svg")).expect("svg");
+    assert!(!svg.contains("top speed") && !svg.contains("parallel"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&plain);
+}
+
+#[test]
+fn sensing_circles_are_drawn_only_when_asked_and_the_scenario_has_a_radius() {
+    let dir = scratch("sensing");
+    write_tiny_run(&dir);
+    std::fs::write(dir.join("scenario.toml"), timed_scenario()).expect("write scenario");
+    let data = RunData::load(&dir).expect("load");
+    let m = metrics::per_step(&data);
+    let plain = Animation::new(&data, &m);
+    let circles = Animation::with_sensing_circles(&data, &m, true);
+    assert!(!plain.draws_sensing_circles());
+    assert!(circles.draws_sensing_circles());
+    let a = plain.write_gif(Vec::new()).expect("gif");
+    let b = circles.write_gif(Vec::new()).expect("gif");
+    assert_ne!(a, b, "the circles change the frames");
+
+    // Through the command: the flag draws them, the GIF decodes at its size.
+    coordinator::render::execute(&RenderArgs {
+        run_dir: dir.clone(),
+        sensing_circles: true,
+    })
+    .expect("render --sensing-circles");
+    let frames = decode_gif(&dir.join("plots/animation.gif"));
+    assert_eq!((frames[0].width, frames[0].height), circles.size_px());
+
+    // Without a sensing radius in the scenario the flag changes nothing.
+    let untimed = scratch("sensing-none");
+    write_tiny_run(&untimed);
+    let data = RunData::load(&untimed).expect("load");
+    let m = metrics::per_step(&data);
+    assert!(!Animation::with_sensing_circles(&data, &m, true).draws_sensing_circles());
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&untimed);
 }

@@ -17,6 +17,10 @@
 //!    steps of that same run, so the floor sees the same (shared, noisy) machine as the
 //!    turns.
 //!
+//! With `--turns-scenario FILE`, the same bench also runs that scenario with sequential
+//! and with parallel turns, alternating ([`turns`]), and reports both modes' steps per
+//! second, turn groups per step and turn latency side by side.
+//!
 //! The compute side alone is measured by the Criterion benchmarks in `shared/benches`.
 //! JSON goes to stdout (and `--out`), the table to stderr, the histogram to an SVG file.
 //! Speed is reported, never asserted.
@@ -25,6 +29,7 @@ pub mod floor;
 pub mod plot;
 pub mod report;
 pub mod scenario;
+pub mod turns;
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -64,9 +69,17 @@ const ECHO_DEADLINE: Duration = Duration::from_secs(2);
 /// Most steps: the generated field must stay within the largest field accepted.
 pub const MAX_BENCH_STEPS: usize = 20_000;
 
+/// Formation sizes measured when `--agents` is not given (none with `--turns-scenario`).
+pub const DEFAULT_AGENTS: [usize; 2] = [6, 200];
+
 /// Carry out `bench`.
 pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
-    if let Some(&n) = args.agents.iter().find(|&&n| n == 0 || n > MAX_AGENTS) {
+    let agents: Vec<usize> = match (&args.turns_scenario, args.agents.is_empty()) {
+        (Some(_), true) => Vec::new(),
+        (None, true) => DEFAULT_AGENTS.to_vec(),
+        (_, false) => args.agents.clone(),
+    };
+    if let Some(&n) = agents.iter().find(|&&n| n == 0 || n > MAX_AGENTS) {
         return Err(CliError::Usage(format!(
             "--agents {n}: a formation has 1 to {MAX_AGENTS} agents"
         )));
@@ -82,6 +95,17 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
     if args.round_trips == 0 {
         return Err(CliError::Usage("--round-trips: at least 1".into()));
     }
+    // The turns scenario is checked before anything runs (a bad one: exit code 2).
+    let turns_bench = args
+        .turns_scenario
+        .as_deref()
+        .map(|file| turns::TurnsBench {
+            file,
+            rounds: args.turns_rounds,
+            steps: args.turns_steps,
+            verbose: !args.json,
+        });
+    let turns_prepared = turns_bench.as_ref().map(turns::prepare).transpose()?;
     let bin = locate_agent_binary(args.agent_bin.as_deref())?;
     let out = args.out.clone().unwrap_or_else(default_out);
     let svg_path = out.with_extension("svg");
@@ -97,9 +121,10 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         round_trips: args.round_trips,
         warmup_round_trips: 0,
         histogram_svg: None,
+        turns: None,
     };
     let mut samples = Vec::new();
-    for &n in &args.agents {
+    for &n in &agents {
         let steps = args.steps.unwrap_or_else(|| scenario::default_steps(n));
         if !args.json {
             eprintln!("bench: {n} agents, {steps} steps ...");
@@ -112,18 +137,32 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         report.runs.push(run);
     }
 
-    let panels: Vec<plot::Panel<'_>> = report
-        .runs
-        .iter()
-        .zip(&samples)
-        .map(|(r, s)| s.panel(r))
-        .collect();
-    let svg = plot::histogram_svg(&panels).context("drawing the histogram")?;
+    if let (Some(b), Some(prepared)) = (&turns_bench, turns_prepared) {
+        if !args.json {
+            eprintln!(
+                "bench: {} in sequential and parallel turns, {} run(s) each ...",
+                b.file.display(),
+                b.rounds
+            );
+        }
+        report.turns = Some(turns::run(b, prepared, &bin)?);
+    }
+
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    write_atomically(&svg_path, svg.as_bytes())?;
-    report.histogram_svg = Some(svg_path.display().to_string());
+    // The latency histogram, when latency was measured.
+    if !report.runs.is_empty() {
+        let panels: Vec<plot::Panel<'_>> = report
+            .runs
+            .iter()
+            .zip(&samples)
+            .map(|(r, s)| s.panel(r))
+            .collect();
+        let svg = plot::histogram_svg(&panels).context("drawing the histogram")?;
+        write_atomically(&svg_path, svg.as_bytes())?;
+        report.histogram_svg = Some(svg_path.display().to_string());
+    }
     let mut json = serde_json::to_string_pretty(&report).context("formatting the report")?;
     json.push('\n');
     write_atomically(&out, json.as_bytes())?;

@@ -24,6 +24,9 @@ pub struct Report {
     pub warmup_round_trips: usize,
     /// The histogram, if written.
     pub histogram_svg: Option<String>,
+    /// Sequential against parallel turns (`--turns-scenario`); absent without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turns: Option<super::turns::TurnsReport>,
 }
 
 /// The figures of one formation size.
@@ -148,11 +151,19 @@ pub fn table(report: &Report) -> String {
     let load = report
         .load_average_1m
         .map_or(String::new(), |l| format!(", load average {l:.2}"));
-    let _ = writeln!(
-        s,
-        "coordinator bench: {} build, {} CPUs{load}; ping-pongs: {} round trips after {} warm-up",
-        report.build, report.cpus, report.round_trips, report.warmup_round_trips
-    );
+    if report.runs.is_empty() {
+        let _ = writeln!(
+            s,
+            "coordinator bench: {} build, {} CPUs{load}",
+            report.build, report.cpus
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "coordinator bench: {} build, {} CPUs{load}; ping-pongs: {} round trips after {} warm-up",
+            report.build, report.cpus, report.round_trips, report.warmup_round_trips
+        );
+    }
     for r in &report.runs {
         let _ = writeln!(
             s,
@@ -242,6 +253,9 @@ pub fn table(report: &Report) -> String {
             "  start-up {:.3} s; agent RSS p50 {:.0} KiB, max {:.0} KiB; run wall time {:.2} s",
             r.startup_s, r.agent_rss_kib.p50, r.agent_rss_kib.max, r.wall_s
         );
+    }
+    if let Some(t) = &report.turns {
+        s.push_str(&super::turns::table(t));
     }
     if let Some(svg) = &report.histogram_svg {
         let _ = writeln!(s, "\nhistogram: {svg}");

@@ -59,7 +59,13 @@ pub struct Animation<'a> {
     close_up_half_m: f64,
     margin_m: f64,
     frames: Vec<usize>,
+    /// Each live agent's sensing radius as a faint circle.
+    sensing_circles: bool,
 }
+
+/// Opacity of the sensing circles: faint, so a swarm's overlapping circles stay a haze
+/// behind the agents.
+const SENSING_ALPHA: f64 = 0.4;
 
 /// Side of the close-up panel's plot, at most, in pixels.
 const CLOSE_UP_MAX_PX: u32 = 440;
@@ -69,7 +75,19 @@ const CLOSE_UP_LEFT_PX: u32 = 56;
 impl<'a> Animation<'a> {
     /// Lay out the animation of `data` (`metrics` from [`super::metrics::per_step`]).
     pub fn new(data: &'a RunData, metrics: &'a [StepMetrics]) -> Self {
+        Self::with_sensing_circles(data, metrics, false)
+    }
+
+    /// [`Animation::new`], drawing each live agent's sensing radius as a faint circle
+    /// when `sensing_circles` is set and the scenario has one.
+    pub fn with_sensing_circles(
+        data: &'a RunData,
+        metrics: &'a [StepMetrics],
+        sensing_circles: bool,
+    ) -> Self {
         let s = &data.scenario;
+        let sensing_circles =
+            sensing_circles && s.agents.iter().any(|a| a.sensing_radius_m.is_some());
         let (margin_m, mut legend) = scene::obstacle_legend(s);
         legend.extend([
             LegendItem::new(
@@ -105,6 +123,16 @@ impl<'a> Animation<'a> {
                 "centre path",
             ),
         ]);
+        if sensing_circles {
+            legend.push(LegendItem::new(
+                Swatch::Disk {
+                    fill: alpha(palette::WHITE, 0.0),
+                    edge: Some(alpha(palette::SENSING, SENSING_ALPHA)),
+                    dashed: false,
+                },
+                "sensing radius",
+            ));
+        }
         if data
             .steps
             .iter()
@@ -120,7 +148,7 @@ impl<'a> Animation<'a> {
             ));
         }
         let header = Header {
-            title: format!("{}: formation run", s.name),
+            title: scene::title(format!("{}: formation run", s.name), s),
             // Written per frame; reserve its row.
             subtitle: Some(String::new()),
             legend,
@@ -167,7 +195,13 @@ impl<'a> Animation<'a> {
             close_up_half_m,
             margin_m,
             frames: frame_indices(data.steps.len(), MAX_FRAMES),
+            sensing_circles,
         }
+    }
+
+    /// Whether the sensing circles are drawn.
+    pub fn draws_sensing_circles(&self) -> bool {
+        self.sensing_circles
     }
 
     /// The close-up's layout around `centre` (metres).
@@ -303,7 +337,7 @@ impl<'a> Animation<'a> {
                 String::new()
             }
         );
-        let (origin, style) = Header::subtitle_place();
+        let (origin, style) = self.header.subtitle_place(self.layout.width_px);
         root.draw(&Text::new(text, origin, style))?;
         Ok(())
     }
@@ -351,6 +385,14 @@ impl<'a> Animation<'a> {
             } else {
                 let width = if close_up { 2 } else { 1 };
                 p.disk(c, r, None, Some(line(solid(palette::SLOT), width)))?;
+            }
+        }
+        if self.sensing_circles {
+            let edge = line(alpha(palette::SENSING, SENSING_ALPHA), 1);
+            for (a, spec) in step.agents.iter().zip(&self.data.scenario.agents) {
+                if let (true, Some(r)) = (a.alive, spec.sensing_radius_m) {
+                    p.disk((a.position.x, a.position.y), r, None, Some(edge))?;
+                }
             }
         }
         for (a, &r) in step.agents.iter().zip(&radii) {

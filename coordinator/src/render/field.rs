@@ -55,7 +55,7 @@ impl<'a> FieldFigure<'a> {
             LegendItem::new(pose_swatch(palette::GOAL), "goal pose"),
         ]);
         let header = Header {
-            title: format!("{}: obstacle field and centre path", s.name),
+            title: scene::title(format!("{}: obstacle field and centre path", s.name), s),
             subtitle: Some(format!(
                 "{} x {} m field, {} obstacles; {} centre steps of {} m, turning radius {} m{}",
                 fmt_m(s.field.width_m),

@@ -112,7 +112,7 @@ impl<'a> FormationFigure<'a> {
             "too many agents to label"
         };
         let header = Header {
-            title: format!("{}: formation at the start pose", s.name),
+            title: scene::title(format!("{}: formation at the start pose", s.name), s),
             subtitle: Some(format!(
                 "{n} agents around the centre ({}, {}) m, heading {}°; {labels}",
                 fmt_m(start.x_m),

@@ -9,7 +9,11 @@
 //!   formation's mean (Fig. 9), faults marked;
 //! - `clearance.png`/`.svg`: the smallest agent-agent and agent-obstacle clearance at
 //!   every step against the zero line, faults marked;
-//! - `animation.gif`: the whole run (the paper's video; Fig. 8 at every frame).
+//! - `animation.gif`: the whole run (the paper's video; Fig. 8 at every frame), with each
+//!   agent's sensing radius as a faint circle on request ([`RenderOptions`]).
+//!
+//! Titles name what the run's model adds to the paper's: the top speed, the sensing
+//! radius and parallel turns, when the scenario has them (`scene::model_note`).
 //!
 //! Colours come from the Okabe-Ito palette ([`palette`]); text uses an embedded font
 //! ([`font`]), so no system font library is needed.
@@ -42,16 +46,38 @@ pub use data::{RunData, RunDirError};
 /// The folder inside a run directory that receives the plots.
 pub const PLOTS_DIR: &str = "plots";
 
+/// What to draw beyond the default.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// In the animation, each live agent's sensing radius as a faint circle (when the
+    /// scenario has one).
+    pub sensing_circles: bool,
+}
+
 /// Render every figure and the animation of the run in `dir` into `dir/plots/`; returns
 /// the files written.
 pub fn render_run_dir(dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    render_run_dir_with(dir, RenderOptions::default())
+}
+
+/// [`render_run_dir`] with `options`.
+pub fn render_run_dir_with(dir: &Path, options: RenderOptions) -> anyhow::Result<Vec<PathBuf>> {
     let data = RunData::load(dir)?;
-    render_data(&data, &dir.join(PLOTS_DIR))
+    render_data_with(&data, &dir.join(PLOTS_DIR), options)
 }
 
 /// Render every figure and the animation of `data` into `out` (created if needed);
 /// returns the files written.
 pub fn render_data(data: &RunData, out: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    render_data_with(data, out, RenderOptions::default())
+}
+
+/// [`render_data`] with `options`.
+pub fn render_data_with(
+    data: &RunData,
+    out: &Path,
+    options: RenderOptions,
+) -> anyhow::Result<Vec<PathBuf>> {
     font::ensure_registered()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let metrics = metrics::per_step(data);
@@ -76,7 +102,7 @@ pub fn render_data(data: &RunData, out: &Path) -> anyhow::Result<Vec<PathBuf>> {
         "clearance",
         &series::SeriesFigure::clearance(data, &metrics),
     )?);
-    let gif = animation::Animation::new(data, &metrics)
+    let gif = animation::Animation::with_sensing_circles(data, &metrics, options.sensing_circles)
         .write_gif(Vec::new())
         .context("drawing animation.gif")?;
     let gif_path = out.join("animation.gif");
@@ -90,7 +116,10 @@ pub fn render_data(data: &RunData, out: &Path) -> anyhow::Result<Vec<PathBuf>> {
 pub fn execute(args: &RenderArgs) -> Result<(), CliError> {
     let data = RunData::load(&args.run_dir).map_err(|e| CliError::Usage(e.to_string()))?;
     let out = args.run_dir.join(PLOTS_DIR);
-    let written = render_data(&data, &out)?;
+    let options = RenderOptions {
+        sensing_circles: args.sensing_circles,
+    };
+    let written = render_data_with(&data, &out, options)?;
     eprintln!("rendered {} files -> {}", written.len(), out.display());
     Ok(())
 }

@@ -59,6 +59,8 @@ pub const CLEARANCE_AGENTS: RGBColor = BLUE;
 pub const CLEARANCE_OBSTACLES: RGBColor = ORANGE;
 /// The collision region below zero clearance.
 pub const COLLISION: RGBColor = VERMILLION;
+/// An agent's sensing radius (drawn faint, on request).
+pub const SENSING: RGBColor = REDDISH_PURPLE;
 /// Faults marked on a time axis.
 pub const FAULT: RGBColor = REDDISH_PURPLE;
 

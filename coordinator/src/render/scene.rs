@@ -11,6 +11,8 @@ use plotters::prelude::{
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
 use shared::geometry::Disk;
+use shared::scenario::Scenario;
+use shared::vocabulary::TurnMode;
 
 use super::canvas::Backend;
 use super::font;
@@ -320,6 +322,8 @@ pub struct Header {
 
 const PAD_PX: i32 = 16;
 const TITLE_ROW_PX: u32 = 36;
+/// Every further line of a title too long for one, in pixels.
+const TITLE_MORE_ROW_PX: u32 = 28;
 const SUBTITLE_ROW_PX: u32 = 22;
 const LEGEND_ROW_PX: u32 = 24;
 const SWATCH_W_PX: i32 = 30;
@@ -333,6 +337,32 @@ fn small_style() -> TextStyle<'static> {
 }
 
 impl Header {
+    /// The title in lines that fit a canvas `width_px` wide (broken between words; a
+    /// single word too long stays on its line).
+    fn title_lines(&self, width_px: u32) -> Vec<String> {
+        let style = title_style();
+        let limit = (width_px as i32 - 2 * PAD_PX).max(0) as u32;
+        let mut lines: Vec<String> = Vec::new();
+        for word in self.title.split(' ') {
+            match lines.last_mut() {
+                Some(last) if font::measure(&format!("{last} {word}"), &style).0 <= limit => {
+                    last.push(' ');
+                    last.push_str(word);
+                }
+                _ => lines.push(word.to_string()),
+            }
+        }
+        if lines.is_empty() {
+            lines.push(String::new());
+        }
+        lines
+    }
+
+    /// Height of the title on a canvas `width_px` wide, in pixels.
+    fn title_px(&self, width_px: u32) -> u32 {
+        TITLE_ROW_PX + (self.title_lines(width_px).len() as u32 - 1) * TITLE_MORE_ROW_PX
+    }
+
     /// Where each legend entry goes (x, row) for a canvas `width_px` wide.
     fn places(&self, width_px: u32) -> Vec<(i32, u32)> {
         let style = small_style();
@@ -354,11 +384,11 @@ impl Header {
             .collect()
     }
 
-    /// Where the subtitle starts (its top-left corner), in pixels, and its style: for
-    /// figures that write a changing subtitle themselves.
-    pub fn subtitle_place() -> ((i32, i32), TextStyle<'static>) {
+    /// Where the subtitle starts (its top-left corner) on a canvas `width_px` wide, in
+    /// pixels, and its style: for figures that write a changing subtitle themselves.
+    pub fn subtitle_place(&self, width_px: u32) -> ((i32, i32), TextStyle<'static>) {
         (
-            (PAD_PX, TITLE_ROW_PX as i32),
+            (PAD_PX, self.title_px(width_px) as i32),
             small_style().color(&palette::TEXT_MUTED),
         )
     }
@@ -366,7 +396,7 @@ impl Header {
     /// Height of the header on a canvas `width_px` wide, in pixels.
     pub fn height_px(&self, width_px: u32) -> u32 {
         let rows = self.places(width_px).last().map_or(0, |&(_, r)| r + 1);
-        TITLE_ROW_PX
+        self.title_px(width_px)
             + self.subtitle.as_ref().map_or(0, |_| SUBTITLE_ROW_PX)
             + rows * LEGEND_ROW_PX
             + 8
@@ -375,8 +405,11 @@ impl Header {
     /// Draw the header at the top of `root`.
     pub fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
         let (width_px, _) = root.dim_in_pixel();
-        root.draw(&Text::new(self.title.clone(), (PAD_PX, 10), title_style()))?;
-        let mut top = TITLE_ROW_PX as i32;
+        for (k, text) in self.title_lines(width_px).into_iter().enumerate() {
+            let y = 10 + (k as u32 * TITLE_MORE_ROW_PX) as i32;
+            root.draw(&Text::new(text, (PAD_PX, y), title_style()))?;
+        }
+        let mut top = self.title_px(width_px) as i32;
         if let Some(sub) = &self.subtitle {
             root.draw(&Text::new(
                 sub.clone(),
@@ -495,6 +528,53 @@ pub fn obstacle_legend(scenario: &shared::scenario::Scenario) -> (f64, Vec<Legen
     (max, legend)
 }
 
+/// What a run's model adds to the paper's, for titles: the top speed (when the
+/// scenario has one), the sensing radius (when it has one) and parallel turns; `None`
+/// for the paper's model. For example `top speed 0.6 m/step, sensing 4 m, parallel
+/// turns`.
+pub fn model_note(s: &Scenario) -> Option<String> {
+    let mut parts = Vec::new();
+    let speeds: Vec<f64> = s.agents.iter().filter_map(|a| a.max_step_m).collect();
+    if !speeds.is_empty() {
+        let lo = speeds.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = speeds.iter().copied().fold(0.0, f64::max);
+        let range = if lo == hi {
+            fmt_m(lo)
+        } else {
+            format!("{}-{}", fmt_m(lo), fmt_m(hi))
+        };
+        let unlimited = s.agents.len() - speeds.len();
+        parts.push(if unlimited == 0 {
+            format!("top speed {range} m/step")
+        } else {
+            let agents = if unlimited == 1 { "agent" } else { "agents" };
+            format!("top speed {range} m/step ({unlimited} {agents} unlimited)")
+        });
+    }
+    let sensing: Vec<f64> = s.agents.iter().filter_map(|a| a.sensing_radius_m).collect();
+    if !sensing.is_empty() {
+        let lo = sensing.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = sensing.iter().copied().fold(0.0, f64::max);
+        parts.push(if lo == hi {
+            format!("sensing {} m", fmt_m(lo))
+        } else {
+            format!("sensing {}-{} m", fmt_m(lo), fmt_m(hi))
+        });
+    }
+    if s.turns == TurnMode::Parallel {
+        parts.push("parallel turns".to_string());
+    }
+    (!parts.is_empty()).then(|| parts.join(", "))
+}
+
+/// `base` with the run's [`model_note`] after it, in parentheses, when there is one.
+pub fn title(base: String, s: &Scenario) -> String {
+    match model_note(s) {
+        Some(note) => format!("{base} ({note})"),
+        None => base,
+    }
+}
+
 /// A length in metres, shortest form up to millimetres (`0.25`, `2`, `1.125`).
 pub fn fmt_m(v: f64) -> String {
     let s = format!("{v:.3}");
@@ -521,4 +601,36 @@ pub fn anchor_towards(dir_rad: f64) -> Pos {
         VPos::Center
     };
     Pos::new(h, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_model_note_names_what_the_scenario_adds() {
+        let paper = Scenario::paper();
+        assert_eq!(model_note(&paper), None);
+        assert_eq!(title("t".into(), &paper), "t");
+        let mut s = paper.clone();
+        for a in &mut s.agents {
+            a.max_step_m = Some(0.5);
+        }
+        assert_eq!(model_note(&s).as_deref(), Some("top speed 0.5 m/step"));
+        s.agents[1].max_step_m = Some(0.3);
+        s.turns = TurnMode::Parallel;
+        assert_eq!(
+            title("t".into(), &s),
+            "t (top speed 0.3-0.5 m/step, parallel turns)"
+        );
+        s.agents[2].max_step_m = None;
+        for a in &mut s.agents {
+            a.sensing_radius_m = Some(4.0);
+        }
+        s.turns = TurnMode::Sequential;
+        assert_eq!(
+            model_note(&s).as_deref(),
+            Some("top speed 0.3-0.5 m/step (1 agent unlimited), sensing 4 m")
+        );
+    }
 }

@@ -12,7 +12,7 @@ use super::font;
 use super::geom::{View, Xy};
 use super::metrics::{self, StepMetrics};
 use super::palette;
-use super::scene::{Header, LegendItem, Swatch, alpha, fill, fmt_m, line, solid};
+use super::scene::{self, Header, LegendItem, Swatch, alpha, fill, fmt_m, line, solid};
 
 /// Canvas width of a time series, in pixels.
 pub const WIDTH_PX: u32 = 1200;
@@ -135,7 +135,10 @@ impl<'a> SeriesFigure<'a> {
         ];
         legend.extend(fault_legend(&data.faults));
         let header = Header {
-            title: format!("{}: deviation from the formation slots", data.scenario.name),
+            title: scene::title(
+                format!("{}: deviation from the formation slots", data.scenario.name),
+                &data.scenario,
+            ),
             subtitle: Some(format!(
                 "distance ||x_i - x_i*|| of each live agent from its ideal slot; mean over the run {} m{}",
                 fmt_m4(mean_of_means),
@@ -237,7 +240,10 @@ impl<'a> SeriesFigure<'a> {
             })
             .count();
         let header = Header {
-            title: format!("{}: minimum clearance per step", data.scenario.name),
+            title: scene::title(
+                format!("{}: minimum clearance per step", data.scenario.name),
+                &data.scenario,
+            ),
             subtitle: Some(format!(
                 "distance minus both radii, from the recorded positions; {}{}",
                 if overlaps == 0 {

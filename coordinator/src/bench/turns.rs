@@ -1,0 +1,383 @@
+//! `coordinator bench --turns-scenario FILE`: sequential against parallel turns on one
+//! scenario, in the same bench run. The scenario runs through the real [`run_scenario`]
+//! with its `[turns] mode` forced to each mode in turn (same agents, same processes
+//! count, same top speed), alternating `S P`, `P S`, `S P`, ... so a machine that gets
+//! busier or quieter during the bench weighs on both modes alike.
+
+use std::path::Path;
+use std::time::Duration;
+
+use serde::Serialize;
+use shared::geometry::Pose;
+use shared::scenario::Scenario;
+use shared::vocabulary::TurnMode;
+
+use crate::compare::with_turn_mode;
+use crate::error::CliError;
+use crate::stats::Distribution;
+use crate::turns::{RunOptions, RunOutcome, run_scenario};
+use crate::validate::load_and_plan;
+
+/// The comparison (`turns` in the report).
+#[derive(Clone, Debug, Serialize)]
+pub struct TurnsReport {
+    /// The scenario's `name`.
+    pub scenario: String,
+    /// The scenario file as given.
+    pub file: String,
+    /// The scenario's own `[turns] mode`.
+    pub scenario_mode: &'static str,
+    /// Agents (one process each, in both modes).
+    pub agents: usize,
+    /// Steps of the centre path run (each run).
+    pub steps: usize,
+    /// The smallest and the largest top speed of the agents, metres per step.
+    pub max_step_m: [f64; 2],
+    /// Runs of each mode.
+    pub rounds: usize,
+    /// The runs in the order they were made (`sequential`, `parallel`, ...).
+    pub order: Vec<&'static str>,
+    /// The figures of the sequential runs.
+    pub sequential: ModeReport,
+    /// The figures of the parallel runs.
+    pub parallel: ModeReport,
+    /// `parallel.steps_per_s / sequential.steps_per_s`.
+    pub parallel_vs_sequential_steps_per_s: f64,
+    /// `parallel.turn_us.p50 / sequential.turn_us.p50`.
+    pub parallel_vs_sequential_turn_p50: f64,
+}
+
+/// The figures of one turn mode over its runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModeReport {
+    /// `sequential` or `parallel`.
+    pub mode: &'static str,
+    /// Steps per second of the step loop (start-up excluded): the median of the runs.
+    pub steps_per_s: f64,
+    /// Steps per second of each run, in the order they were made.
+    pub steps_per_s_runs: Vec<f64>,
+    /// Turn groups per step (one per live agent in sequential mode): mean over the runs.
+    pub mean_groups_per_step: f64,
+    /// Turn latency, every run pooled, step 1 (warm-up) left out, microseconds.
+    pub turn_us: Distribution,
+    /// The agents' compute time per turn, pooled the same way, microseconds.
+    pub compute_us: Distribution,
+    /// The longest single move of any run, metres.
+    pub max_move_m: f64,
+    /// The largest mean deviation of a run, metres.
+    pub mean_deviation_m: f64,
+    /// Collisions over every run (0 when safe).
+    pub collisions: usize,
+    /// Faults over every run (0 for clean runs).
+    pub faults: usize,
+    /// Whether every run went through the whole path it was given.
+    pub completed: bool,
+    /// Wall time of each run, start-up included, seconds.
+    pub wall_s: Vec<f64>,
+}
+
+/// What the bench asked for: the file, the runs of each mode, the steps.
+pub struct TurnsBench<'a> {
+    /// The scenario file.
+    pub file: &'a Path,
+    /// Runs of each mode.
+    pub rounds: usize,
+    /// At most this many steps of the centre path.
+    pub steps: Option<usize>,
+    /// Progress lines on stderr.
+    pub verbose: bool,
+}
+
+/// The scenario in both modes, with its path.
+#[derive(Debug)]
+pub struct Prepared {
+    /// Turns forced to sequential.
+    pub sequential: Scenario,
+    /// Turns forced to parallel.
+    pub parallel: Scenario,
+    /// The centre path, cut to the steps asked for.
+    pub path: Vec<Pose>,
+    /// The file as given.
+    pub source: String,
+    /// The scenario's own mode.
+    pub own: TurnMode,
+}
+
+/// The scenario in both modes with its path, checked before anything runs: a bad file,
+/// a scenario without a top speed (parallel turns need one) or bad counts are refused
+/// (exit code 2).
+pub fn prepare(b: &TurnsBench<'_>) -> Result<Prepared, CliError> {
+    if b.rounds == 0 {
+        return Err(CliError::Usage("--turns-rounds: at least 1".into()));
+    }
+    if b.steps.is_some_and(|k| k < 2) {
+        return Err(CliError::Usage(
+            "--turns-steps: at least 2 (the first step is a warm-up)".into(),
+        ));
+    }
+    let loaded = load_and_plan(Some(b.file))?;
+    let seq = with_turn_mode(&loaded.scenario, &loaded.source, TurnMode::Sequential)?;
+    let par = with_turn_mode(&loaded.scenario, &loaded.source, TurnMode::Parallel)?;
+    let mut path = loaded.centre_path;
+    if let Some(k) = b.steps {
+        path.truncate(k + 1);
+    }
+    Ok(Prepared {
+        sequential: seq,
+        parallel: par,
+        path,
+        source: loaded.source,
+        own: loaded.scenario.turns,
+    })
+}
+
+/// Run the comparison `b`, prepared as `prepared` ([`prepare`]), with the agent
+/// executable `bin`.
+pub fn run(b: &TurnsBench<'_>, prepared: Prepared, bin: &Path) -> Result<TurnsReport, CliError> {
+    let Prepared {
+        sequential: seq,
+        parallel: par,
+        path,
+        source,
+        own,
+    } = prepared;
+    let options = RunOptions {
+        agent_bin: Some(bin.to_path_buf()),
+        // Generous: a noisy machine must not turn a slow turn into a fault.
+        turn_deadline: Duration::from_secs(2),
+        progress: false,
+        ..RunOptions::default()
+    };
+    let mut order = Vec::with_capacity(2 * b.rounds);
+    let (mut seq_runs, mut par_runs) = (Vec::new(), Vec::new());
+    for round in 0..b.rounds {
+        let pair = if round % 2 == 0 {
+            [TurnMode::Sequential, TurnMode::Parallel]
+        } else {
+            [TurnMode::Parallel, TurnMode::Sequential]
+        };
+        for mode in pair {
+            let scenario = if mode == TurnMode::Parallel {
+                &par
+            } else {
+                &seq
+            };
+            let outcome = run_scenario(scenario, &path, &options)
+                .map_err(|failure| CliError::Other(failure.error))?;
+            if outcome.interrupted {
+                return Err(CliError::Other(anyhow::anyhow!("interrupted")));
+            }
+            if b.verbose {
+                eprintln!(
+                    "bench: {} turns, round {} of {}: {:.2} steps/s, {:.2} groups per step, turn p50 {:.1} us",
+                    mode.name(),
+                    round + 1,
+                    b.rounds,
+                    outcome.timing.steps_per_s,
+                    outcome.run.summary().mean_groups_per_step,
+                    outcome.timing.turn_latency_us.p50
+                );
+            }
+            order.push(mode.name());
+            if mode == TurnMode::Parallel {
+                par_runs.push(outcome);
+            } else {
+                seq_runs.push(outcome);
+            }
+        }
+    }
+    let sequential = mode_report(TurnMode::Sequential, &seq_runs);
+    let parallel = mode_report(TurnMode::Parallel, &par_runs);
+    let speeds: Vec<f64> = seq.agents.iter().filter_map(|a| a.max_step_m).collect();
+    Ok(TurnsReport {
+        scenario: seq.name.clone(),
+        file: source,
+        scenario_mode: own.name(),
+        agents: seq.agents.len(),
+        steps: path.len().saturating_sub(1),
+        max_step_m: [
+            speeds.iter().copied().fold(f64::INFINITY, f64::min),
+            speeds.iter().copied().fold(0.0, f64::max),
+        ],
+        rounds: b.rounds,
+        order,
+        parallel_vs_sequential_steps_per_s: super::ratio(
+            parallel.steps_per_s,
+            sequential.steps_per_s,
+        ),
+        parallel_vs_sequential_turn_p50: super::ratio(parallel.turn_us.p50, sequential.turn_us.p50),
+        sequential,
+        parallel,
+    })
+}
+
+/// The comparison as a table for people.
+pub fn table(t: &TurnsReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let [lo, hi] = t.max_step_m;
+    let speed = if lo == hi {
+        format!("{lo} m/step")
+    } else {
+        format!("{lo} to {hi} m/step")
+    };
+    let _ = writeln!(
+        s,
+        "\nturns: {} ({}, its own mode {}), {} agents ({} processes in both modes), {} steps, top speed {speed}; {} of each mode, in the order {}",
+        t.scenario,
+        t.file,
+        t.scenario_mode,
+        t.agents,
+        t.agents,
+        t.steps,
+        if t.rounds == 1 {
+            "1 run".to_string()
+        } else {
+            format!("{} runs", t.rounds)
+        },
+        t.order
+            .iter()
+            .map(|m| if *m == "parallel" { "P" } else { "S" })
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let _ = writeln!(
+        s,
+        "  {:<12}{:>10}{:>14}{:>14}{:>14}{:>16}{:>8}{:>12}",
+        "mode",
+        "steps/s",
+        "groups/step",
+        "turn p50 us",
+        "turn p99 us",
+        "compute p50 us",
+        "faults",
+        "collisions"
+    );
+    for m in [&t.sequential, &t.parallel] {
+        let _ = writeln!(
+            s,
+            "  {:<12}{:>10.2}{:>14.2}{:>14.1}{:>14.1}{:>16.1}{:>8}{:>12}",
+            m.mode,
+            m.steps_per_s,
+            m.mean_groups_per_step,
+            m.turn_us.p50,
+            m.turn_us.p99,
+            m.compute_us.p50,
+            m.faults,
+            m.collisions
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  parallel / sequential: {:.2}x steps/s, {:.2}x turn latency p50 (steps/s per run: sequential {}, parallel {})",
+        t.parallel_vs_sequential_steps_per_s,
+        t.parallel_vs_sequential_turn_p50,
+        runs_list(&t.sequential.steps_per_s_runs),
+        runs_list(&t.parallel.steps_per_s_runs)
+    );
+    s
+}
+
+fn runs_list(v: &[f64]) -> String {
+    v.iter()
+        .map(|x| format!("{x:.2}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The figures of `mode` over `runs`.
+fn mode_report(mode: TurnMode, runs: &[RunOutcome]) -> ModeReport {
+    let summaries: Vec<_> = runs.iter().map(|o| o.run.summary()).collect();
+    let steps_per_s_runs: Vec<f64> = runs.iter().map(|o| o.timing.steps_per_s).collect();
+    // Every agent's first turn is a warm-up, as in the latency bench.
+    let measured = || {
+        runs.iter()
+            .flat_map(|o| o.turn_samples.iter())
+            .filter(|t| t.step > 1)
+    };
+    ModeReport {
+        mode: mode.name(),
+        steps_per_s: median(&steps_per_s_runs),
+        mean_groups_per_step: summaries
+            .iter()
+            .map(|s| s.mean_groups_per_step)
+            .sum::<f64>()
+            / summaries.len().max(1) as f64,
+        turn_us: Distribution::of_iter(measured().map(|t| t.latency_us)),
+        compute_us: Distribution::of_iter(measured().map(|t| t.compute_us)),
+        max_move_m: summaries.iter().map(|s| s.max_move_m).fold(0.0, f64::max),
+        mean_deviation_m: summaries
+            .iter()
+            .map(|s| s.mean_deviation_m)
+            .fold(0.0, f64::max),
+        collisions: summaries.iter().map(|s| s.collisions).sum(),
+        faults: summaries.iter().map(|s| s.faults.len()).sum(),
+        completed: summaries.iter().all(|s| s.completed),
+        wall_s: runs.iter().map(|o| o.timing.wall_s).collect(),
+        steps_per_s_runs,
+    }
+}
+
+/// The median (the mean of the middle two for an even count; 0 for none).
+fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        (v[m - 1] + v[m]) / 2.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scenarios() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join("scenarios")
+    }
+
+    #[test]
+    fn median_of_odd_even_and_no_values() {
+        assert_eq!(median(&[]), 0.0);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0]), 2.5);
+    }
+
+    #[test]
+    fn a_scenario_without_a_top_speed_is_refused_before_anything_runs() {
+        let file = scenarios().join("paper.toml");
+        let b = TurnsBench {
+            file: &file,
+            rounds: 1,
+            steps: None,
+            verbose: false,
+        };
+        let err = prepare(&b).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(err.to_string().contains("turns.mode"), "{err}");
+    }
+
+    #[test]
+    fn both_modes_share_agents_and_top_speed_and_the_path_is_cut() {
+        let file = scenarios().join("paper-top-speed.toml");
+        let b = TurnsBench {
+            file: &file,
+            rounds: 1,
+            steps: Some(5),
+            verbose: false,
+        };
+        let p = prepare(&b).unwrap();
+        assert_eq!(p.sequential.turns, TurnMode::Sequential);
+        assert_eq!(p.parallel.turns, TurnMode::Parallel);
+        assert_eq!(p.sequential.agents, p.parallel.agents);
+        assert!(p.sequential.agents.iter().all(|a| a.max_step_m.is_some()));
+        assert_eq!(p.path.len(), 6);
+    }
+}
