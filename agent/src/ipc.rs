@@ -14,8 +14,7 @@ use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::vocabulary::Move;
 use wire::{
-    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Mission, Role, StateKind,
-    World,
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Role, StateKind, World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
@@ -54,12 +53,12 @@ pub struct IpcTransport {
     liveness: Duration,
     parent: Pid,
     node: Node<ipc::Service>,
-    mission_sub: Subscriber<ipc::Service, Mission, ()>,
     world_sub: Subscriber<ipc::Service, World, ()>,
     state_pub: Publisher<ipc::Service, AgentState, ()>,
     turn_listener: Listener<ipc::Service>,
     done_notifier: Notifier<ipc::Service>,
-    mission: Option<MissionView>,
+    /// The scenario as run, read from the run's mission file when the channel opens.
+    mission: MissionView,
     /// When the current turn's event woke the agent ([`wire::monotonic_ns`]).
     woke_ns: u64,
     tamper: Tamper,
@@ -93,13 +92,16 @@ impl IpcTransport {
         // SIGINT interrupt a blocking wait instead of killing the process mid-write.
         let _ = node.wait(Duration::ZERO);
 
+        // Read (and validated) before the handshake: the first turn does not pay for it.
+        let scenario = wire::read_mission(prefix).context("the mission file")?;
+        let mission = MissionView {
+            field: scenario.field,
+            obstacles: scenario.obstacles,
+            agents: scenario.agents,
+            planner: scenario.planner,
+        };
         let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
-        let mission = node
-            .service_builder(&name(&names.mission)?)
-            .publish_subscribe::<Mission>()
-            .open()
-            .with_context(|| format!("opening {}", names.mission))?;
         let world = node
             .service_builder(&name(&names.world)?)
             .publish_subscribe::<World>()
@@ -116,19 +118,15 @@ impl IpcTransport {
             .open()
             .with_context(|| format!("opening {}", names.turn))?;
         let done = node
-            .service_builder(&name(&names.done)?)
+            .service_builder(&name(wire::DONE_SERVICE)?)
             .event()
             .open()
-            .with_context(|| format!("opening {}", names.done))?;
+            .with_context(|| format!("opening {}", wire::DONE_SERVICE))?;
 
         Ok(Self {
             agent,
             liveness,
             parent,
-            mission_sub: mission
-                .subscriber_builder()
-                .create()
-                .context("mission subscriber")?,
             world_sub: world
                 .subscriber_builder()
                 .create()
@@ -142,9 +140,14 @@ impl IpcTransport {
                 .create()
                 .context("state publisher")?,
             turn_listener: turn.listener_builder().create().context("turn listener")?,
-            done_notifier: done.notifier_builder().create().context("done notifier")?,
+            // The run's one done service, rung with this agent's index.
+            done_notifier: done
+                .notifier_builder()
+                .default_event_id(EventId::new(agent))
+                .create()
+                .context("done notifier")?,
             node,
-            mission: None,
+            mission,
             woke_ns: 0,
             tamper,
             sent: 0,
@@ -279,33 +282,7 @@ impl Transport for IpcTransport {
     }
 
     fn mission(&mut self) -> anyhow::Result<MissionView> {
-        while let Some(m) = self
-            .mission_sub
-            .receive()
-            .context("receiving the mission")?
-        {
-            if m.obstacles.len() > shared::vocabulary::MAX_OBSTACLES
-                || m.agents.len() > shared::vocabulary::MAX_AGENTS
-            {
-                bail!(
-                    "a mission with {} obstacles and {} agents, beyond the capacity",
-                    m.obstacles.len(),
-                    m.agents.len()
-                );
-            }
-            let planner = m
-                .planner()
-                .with_context(|| format!("unknown planner code {} in the mission", m.planner))?;
-            self.mission = Some(MissionView {
-                field: m.field(),
-                obstacles: m.obstacles(),
-                agents: m.agents(),
-                planner,
-            });
-        }
-        self.mission
-            .clone()
-            .context("no mission was published before the first turn")
+        Ok(self.mission.clone())
     }
 
     fn publish_move(

@@ -8,7 +8,7 @@ use std::any::Any;
 
 use anyhow::Context;
 use iceoryx2::prelude::*;
-use wire::{AgentServiceNames, AgentState, Mission, Role, StateKind, World};
+use wire::{AgentServiceNames, AgentState, Role, StateKind, World};
 
 use wire::misbehave::Misbehave;
 
@@ -69,12 +69,15 @@ fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> any
         .open()
         .with_context(|| format!("opening {}", names.state))?;
     let done = node
-        .service_builder(&service_name(&names.done)?)
+        .service_builder(&service_name(wire::DONE_SERVICE)?)
         .event()
         .open()
-        .with_context(|| format!("opening {}", names.done))?;
+        .with_context(|| format!("opening {}", wire::DONE_SERVICE))?;
     let publisher = state.publisher_builder().create();
-    let notifier = done.notifier_builder().create();
+    let notifier = done
+        .notifier_builder()
+        .default_event_id(iceoryx2::prelude::EventId::new(victim))
+        .create();
     // Keep the services open even if no port could be had: the victim got there first.
     held.push(Box::new(state));
     held.push(Box::new(done));
@@ -116,30 +119,22 @@ fn grab<P: 'static, E>(
     count
 }
 
-/// Open every other agent's five services and as many ports on each as the run allows.
+/// Open every other agent's services and as many ports on each as the run allows.
 fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
     let node = rogue_node(prefix, held)?;
     let mut ports = 0usize;
     for victim in (0..shared::vocabulary::MAX_AGENTS).filter(|&v| v != me) {
         let names = AgentServiceNames::new(victim, 0);
-        let Ok(mission) = node
-            .service_builder(&service_name(&names.mission)?)
-            .publish_subscribe::<Mission>()
+        let Ok(world) = node
+            .service_builder(&service_name(&names.world)?)
+            .publish_subscribe::<World>()
             .open()
         else {
             // The first agent without a channel: past the last agent.
             break;
         };
-        ports += grab(held, || mission.subscriber_builder().create());
-        held.push(Box::new(mission));
-        if let Ok(world) = node
-            .service_builder(&service_name(&names.world)?)
-            .publish_subscribe::<World>()
-            .open()
-        {
-            ports += grab(held, || world.subscriber_builder().create());
-            held.push(Box::new(world));
-        }
+        ports += grab(held, || world.subscriber_builder().create());
+        held.push(Box::new(world));
         if let Ok(state) = node
             .service_builder(&service_name(&names.state)?)
             .publish_subscribe::<AgentState>()
@@ -148,7 +143,7 @@ fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Resul
             ports += grab(held, || state.publisher_builder().create());
             held.push(Box::new(state));
         }
-        for name in [&names.turn, &names.done] {
+        for name in [&names.turn] {
             let Ok(event) = node.service_builder(&service_name(name)?).event().open() else {
                 continue;
             };
@@ -156,6 +151,14 @@ fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Resul
             ports += grab(held, || event.listener_builder().create());
             held.push(Box::new(event));
         }
+    }
+    if let Ok(done) = node
+        .service_builder(&service_name(wire::DONE_SERVICE)?)
+        .event()
+        .open()
+    {
+        ports += grab(held, || done.notifier_builder().create());
+        held.push(Box::new(done));
     }
     tracing::warn!("agent {me}: hoarding {ports} ports on other agents' services");
     held.push(Box::new(node));

@@ -62,19 +62,20 @@ pub fn locate_agent_binary(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
 }
 
 /// Open files the coordinator holds per agent, measured with iceoryx2 0.10 (`ls
-/// /proc/PID/fd` while 64, 200 and 780 agents run: 1 609, 5 010 and 19 509, 25 per
-/// agent exactly):
-/// each of the five services of a channel keeps its static config, dynamic config and
-/// port tag open (15); the data segments of the mission, world and state publishers and
-/// their three connections (6); the two event services' sockets and event segments (4).
-const FDS_PER_AGENT: u64 = 25;
+/// /proc/PID/fd` while 200 agents run: 3 014, 15 per agent exactly): each of the three
+/// services of a channel (world, state, turn) keeps its static config, dynamic config and
+/// port tag open (9); the world publisher's data segment, the state connection and their
+/// counterparts (4); the turn notifier's socket and event segment (2). The mission is a
+/// file and the done event one shared service, not services per agent: with them it
+/// was 25 per agent, and 1 000 agents did not fit a hard limit of 20 000.
+const FDS_PER_AGENT: u64 = 15;
 /// Open files the coordinator holds whatever the number of agents (about 10 measured),
 /// with room for the files it opens while it runs (/proc, outputs).
 const FDS_BASE: u64 = 64;
 
 /// Raise this process's open-file limit so that a run of `agents` agents fits: the soft
 /// limit goes to the hard limit, and when even the hard limit is too small (1 000 agents
-/// need 25 064 files, more than a hard limit of 20 000 allows) the hard limit is raised
+/// need 15 064 files) the hard limit is raised
 /// too, which a process with `CAP_SYS_RESOURCE` may do up to `fs.nr_open`. A run
 /// that still does not fit is refused here, before anything is created: past the limit
 /// iceoryx2 cannot open an agent's connections, and the agents would fail their

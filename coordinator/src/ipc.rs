@@ -1,6 +1,6 @@
 //! The coordinator's side of the iceoryx2 protocol (see [`wire`]): it creates
-//! every agent's channel with one port on each side, publishes the mission and the
-//! worlds, rings turns, and takes the agents' states in, each checked and tagged with the
+//! every agent's channel with one port on each side, publishes the worlds (the mission
+//! goes to the agents as a file, [`wire::write_mission`]), rings turns, and takes the agents' states in, each checked and tagged with the
 //! process that published it.
 
 use std::time::{Duration, Instant};
@@ -22,8 +22,8 @@ use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::vocabulary::Body;
 use wire::{
-    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState, Mission,
-    Role, StateKind, StateMsg, World,
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState, Role,
+    StateKind, StateMsg, World,
 };
 
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
@@ -80,16 +80,12 @@ pub struct Grant {
 /// them).
 struct Channel {
     generation: u32,
-    mission_service: PubSubFactory<ipc::Service, Mission, ()>,
     world_service: PubSubFactory<ipc::Service, World, ()>,
     state_service: PubSubFactory<ipc::Service, AgentState, ()>,
     turn_service: EventFactory<ipc::Service>,
-    done_service: EventFactory<ipc::Service>,
-    mission_pub: Publisher<ipc::Service, Mission, ()>,
     world_pub: Publisher<ipc::Service, World, ()>,
     state_sub: Subscriber<ipc::Service, AgentState, ()>,
     turn_notifier: Notifier<ipc::Service>,
-    done_listener: Listener<ipc::Service>,
 }
 
 /// Nodes a channel's service admits: the coordinator, the agent, and one more, so that
@@ -101,6 +97,11 @@ const CHANNEL_MAX_NODES: usize = 3;
 /// not overflow: once full, further samples are refused at the publisher, so the
 /// first answer to a turn is the one read.
 const STATE_BUFFER: usize = 2;
+
+/// Notifier ports the run's done service admits per agent: the agent's own, its
+/// replacements', and room for a misbehaving process to be seen rather than to block an
+/// honest one.
+const DONE_NOTIFIERS_PER_AGENT: usize = 4;
 
 /// The coordinator's node and every agent's channel for one run.
 pub struct CoordinatorIpc {
@@ -114,6 +115,10 @@ pub struct CoordinatorIpc {
     /// Draws the turns' tokens; seeded from the OS random source.
     tokens: ChaCha20Rng,
     seq: u64,
+    /// The run's done service ([`wire::DONE_SERVICE`]): every agent's notifier, rung with
+    /// its index, and this listener.
+    done_service: EventFactory<ipc::Service>,
+    done_listener: Listener<ipc::Service>,
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
@@ -167,7 +172,6 @@ fn os_seed() -> anyhow::Result<[u8; 32]> {
 impl Channel {
     fn open(node: &Node<ipc::Service>, agent: usize, generation: u32) -> anyhow::Result<Self> {
         let names = AgentServiceNames::new(agent, generation);
-        let mission_service = downlink::<Mission>(node, &names.mission)?;
         let world_service = downlink::<World>(node, &names.world)?;
         let state_service = node
             .service_builder(&service_name(&names.state)?)
@@ -181,14 +185,8 @@ impl Channel {
             .create()
             .with_context(|| format!("creating {}", names.state))?;
         let turn_service = event_service(node, &names.turn)?;
-        let done_service = event_service(node, &names.done)?;
         Ok(Self {
             generation,
-            mission_pub: mission_service
-                .publisher_builder()
-                .max_loaned_samples(1)
-                .create()
-                .with_context(|| format!("mission publisher of agent {agent}"))?,
             world_pub: world_service
                 .publisher_builder()
                 .max_loaned_samples(1)
@@ -203,15 +201,9 @@ impl Channel {
                 .default_event_id(EventId::new(EVENT_TURN))
                 .create()
                 .with_context(|| format!("turn notifier of agent {agent}"))?,
-            done_listener: done_service
-                .listener_builder()
-                .create()
-                .with_context(|| format!("done listener of agent {agent}"))?,
-            mission_service,
             world_service,
             state_service,
             turn_service,
-            done_service,
         })
     }
 
@@ -224,11 +216,9 @@ impl Channel {
             }
             CallbackProgression::Continue
         };
-        let _ = self.mission_service.nodes(&mut add);
         let _ = self.world_service.nodes(&mut add);
         let _ = self.state_service.nodes(&mut add);
         let _ = self.turn_service.nodes(&mut add);
-        let _ = self.done_service.nodes(&mut add);
         pids.sort_unstable();
         pids.dedup();
         pids
@@ -236,8 +226,8 @@ impl Channel {
 }
 
 impl CoordinatorIpc {
-    /// Create the node and a channel for each of `agents` agents in run `prefix`, and
-    /// publish `scenario` as every agent's mission.
+    /// Create the node and a channel for each of `scenario`'s agents in run `prefix`
+    /// (the mission file is written beforehand, [`wire::write_mission`]).
     pub fn create(prefix: &str, scenario: &Scenario) -> anyhow::Result<Self> {
         let agents = scenario.agents.len();
         let config = wire::ipc_config(prefix, Role::Coordinator)?;
@@ -252,6 +242,21 @@ impl CoordinatorIpc {
         // Install iceoryx2's signal handlers now: Ctrl-C and SIGTERM then interrupt waits
         // and are polled with `termination_requested`, so outputs are flushed.
         let _ = node.wait(Duration::ZERO);
+        let done_service = node
+            .service_builder(&service_name(wire::DONE_SERVICE)?)
+            .event()
+            .max_listeners(1)
+            // Every agent and every replacement, with room to spare: a process holding
+            // more than one is found by `hoarders`.
+            .max_notifiers(DONE_NOTIFIERS_PER_AGENT * agents.max(1))
+            .max_nodes(DONE_NOTIFIERS_PER_AGENT * agents.max(1) + 1)
+            .event_id_max_value(agents.max(1))
+            .create()
+            .with_context(|| format!("creating {}", wire::DONE_SERVICE))?;
+        let done_listener = done_service
+            .listener_builder()
+            .create()
+            .context("the done listener")?;
         let mut ipc = Self {
             prefix: prefix.to_string(),
             config,
@@ -260,16 +265,18 @@ impl CoordinatorIpc {
             next_generation: vec![0; agents],
             tokens: ChaCha20Rng::from_seed(os_seed()?),
             seq: 0,
+            done_service,
+            done_listener,
         };
         for agent in 0..agents {
-            ipc.open_channel(agent, scenario)?;
+            ipc.open_channel(agent)?;
         }
         Ok(ipc)
     }
 
-    /// Open a new channel for `agent` (closing its old one) and publish its mission;
-    /// returns the channel's generation, which the agent's process must be given.
-    pub fn open_channel(&mut self, agent: usize, scenario: &Scenario) -> anyhow::Result<u32> {
+    /// Open a new channel for `agent` (closing its old one); returns the channel's
+    /// generation, which the agent's process must be given.
+    pub fn open_channel(&mut self, agent: usize) -> anyhow::Result<u32> {
         let slot = self
             .next_generation
             .get_mut(agent)
@@ -278,11 +285,6 @@ impl CoordinatorIpc {
         *slot += 1;
         self.channels[agent] = None;
         let channel = Channel::open(&self.node, agent, generation)?;
-        let mut sample = wire::loan_default(&channel.mission_pub).context("loaning the mission")?;
-        sample.payload_mut().fill(scenario)?;
-        sample
-            .send()
-            .with_context(|| format!("sending the mission to agent {agent}"))?;
         self.channels[agent] = Some(channel);
         Ok(generation)
     }
@@ -313,13 +315,10 @@ impl CoordinatorIpc {
             .is_err_and(|e| matches!(e, iceoryx2::node::NodeWaitFailure::TerminationRequest))
     }
 
-    /// Connect to `agent`'s subscribers that appeared since the last send and hand them
-    /// history (the mission); call after its ready handshake.
+    /// Connect to `agent`'s subscriber that appeared since the last send; call after its
+    /// ready handshake.
     pub fn update_connections(&self, agent: usize) -> anyhow::Result<()> {
         let c = self.channel(agent)?;
-        c.mission_pub
-            .update_connections()
-            .with_context(|| format!("mission connections of agent {agent}"))?;
         c.world_pub
             .update_connections()
             .with_context(|| format!("world connections of agent {agent}"))?;
@@ -436,19 +435,45 @@ impl CoordinatorIpc {
         if now >= until {
             return false;
         }
-        let Ok(c) = self.channel(agent) else {
-            std::thread::sleep(until - now);
-            return false;
-        };
-        match c.done_listener.timed_wait(|_| {}, until - now) {
-            Ok(events) => events > 0 || Instant::now() < until,
-            Err(ListenerWaitError::InterruptSignal) => false,
-            Err(e) => {
-                tracing::debug!("waiting for agent {agent}: {e:?}");
-                std::thread::sleep(until.saturating_duration_since(Instant::now()));
-                false
+        // Every agent rings the one done service with its own index; a ring for another
+        // agent is taken off and waited past (that agent's state is looked at directly
+        // before anyone waits for it, so nothing is lost).
+        loop {
+            let mut done = false;
+            let now = Instant::now();
+            if now >= until {
+                return false;
+            }
+            match self
+                .done_listener
+                .timed_wait(|event| done |= event.id.as_value() == agent, until - now)
+            {
+                Ok(_) if done => return true,
+                Ok(0) => return Instant::now() < until,
+                Ok(_) => continue,
+                Err(ListenerWaitError::InterruptSignal) => return false,
+                Err(e) => {
+                    tracing::debug!("waiting for agent {agent}: {e:?}");
+                    std::thread::sleep(until.saturating_duration_since(Instant::now()));
+                    return false;
+                }
             }
         }
+    }
+
+    /// Processes holding more than one notifier on the run's done service: an agent needs
+    /// one; more is hoarding the service's ports.
+    pub fn done_hoarders(&self) -> Vec<u32> {
+        let mut per_pid: std::collections::BTreeMap<u32, usize> = Default::default();
+        self.done_service.dynamic_config().list_notifiers(|n| {
+            *per_pid.entry(pid_of_id(n.node_id.value())).or_default() += 1;
+            CallbackProgression::Continue
+        });
+        per_pid
+            .into_iter()
+            .filter(|&(_, n)| n > 1)
+            .map(|(pid, _)| pid)
+            .collect()
     }
 
     /// Processes other than the coordinator and `owner_pid` attached to `agent`'s

@@ -192,10 +192,15 @@ impl Driver<'_, '_> {
                     None,
                 );
             }
-            granted.push((agent, grant, at, at_ns));
+            granted.push((agent, self.procs.pid(agent), grant, at, at_ns));
         }
         let mut moves = Vec::with_capacity(granted.len());
-        for (agent, grant, at, at_ns) in granted {
+        for (agent, pid, grant, at, at_ns) in granted {
+            // Handled already while a group mate's answer was awaited (killed for
+            // intruding, say, and maybe replaced): not this turn's agent any more.
+            if !self.recorder.alive()[agent] || self.procs.pid(agent) != pid {
+                continue;
+            }
             let slot = self.scenario.agents[agent].slot.ideal_position(centre);
             match self.wait_answer(step, agent, grant, at)? {
                 Answer::Move(msg) => {
@@ -250,6 +255,8 @@ impl Driver<'_, '_> {
                 }
             }
         }
+        // A mate frozen after its move was judged does not move.
+        moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
         settle_group(self.recorder, step, moves);
         Ok(false)
     }

@@ -71,6 +71,12 @@ impl Driver<'_, '_> {
                 self.on_intruder(step, agent, intruder, "opened the services of")?;
             }
         }
+        // The shared done service: one notifier per agent process; more is hoarding.
+        for pid in self.ipc.done_hoarders() {
+            if let Some(culprit) = self.procs.agent_of_pid(pid) {
+                self.on_intruder(step, culprit, pid, "hoarded the done service's ports, as")?;
+            }
+        }
         Ok(())
     }
 

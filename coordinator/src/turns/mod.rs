@@ -258,6 +258,10 @@ pub fn run_scenario_with(
         Ok(root) => root,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
+    // The scenario as run, for the agents to read at start-up.
+    if let Err(e) = wire::write_mission(&prefix, scenario) {
+        return Err(fail(e.into(), &recorder, progress));
+    }
     let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
         Ok(ipc) => ipc,
         Err(e) => {

@@ -172,7 +172,7 @@ impl Driver<'_, '_> {
     pub(super) fn respawn(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
         let opened = self
             .ipc
-            .open_channel(agent, self.scenario)
+            .open_channel(agent)
             .and_then(|_| self.spawn(agent, true));
         if let Err(e) = opened {
             tracing::warn!("agent {agent}: the replacement did not start: {e:#}");

@@ -35,6 +35,7 @@ mod config;
 mod loan;
 mod message;
 pub mod misbehave;
+mod mission_file;
 mod prefix;
 mod run_folder;
 mod services;
@@ -47,12 +48,16 @@ pub use clock::monotonic_ns;
 pub use config::{Role, ipc_config};
 pub use loan::loan_default;
 pub use message::{
-    AgentState, CapacityError, MAX_COMPUTE_NS, MalformedState, Mission, StateKind, StateMsg,
-    WireAgent, WireBody, WireDisk, WirePoint, WirePose, World,
+    AgentState, CapacityError, MAX_COMPUTE_NS, MalformedState, StateKind, StateMsg, WireBody,
+    WirePoint, WirePose, World,
+};
+pub use mission_file::{
+    MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionFileError, mission_path, read_mission,
+    write_mission,
 };
 pub use prefix::{MAX_PREFIX_LEN, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{
     RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private, remove_run_root,
     run_root,
 };
-pub use services::{AgentServiceNames, EVENT_ECHO, EVENT_QUIT, EVENT_TURN};
+pub use services::{AgentServiceNames, DONE_SERVICE, EVENT_ECHO, EVENT_QUIT, EVENT_TURN};

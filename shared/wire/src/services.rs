@@ -1,28 +1,30 @@
 //! The names of one agent's channel and the events rung on it.
 //!
-//! Every agent has a channel of its own: five services below the run's prefix (set in the
+//! Every agent has a channel of its own: three services below the run's prefix (set in the
 //! iceoryx2 config, [`crate::ipc_config`]), named after the agent and the generation of its
-//! process (0 for the first, one more for every replacement):
-//! - `mission`: publish-subscribe, history 1: the static scenario;
+//! process (0 for the first, one more for every replacement); the static scenario comes
+//! as a file in the run's private folder ([`crate::read_mission`]):
 //! - `world`: publish-subscribe, coordinator to agent: the world of its turn, with the
 //!   turn's token;
 //! - `turn`: event, coordinator to agent: "your turn" / "quit" / "echo";
-//! - `state`: publish-subscribe, agent to coordinator: its handshake and its moves;
-//! - `done`: event, agent to coordinator: "my state is published".
+//! - `state`: publish-subscribe, agent to coordinator: its handshake and its moves.
+//!
+//! One service is shared by the run, [`DONE_SERVICE`]: event, agents to coordinator,
+//! "my state is published", rung with the agent's index as the event id. A service per
+//! agent would cost the coordinator five open files per agent for the whole run, and its
+//! open-file limit is what bounds the number of agents. An agent ringing another's id
+//! only wakes the coordinator early: it then looks at that agent's own state channel,
+//! which holds nothing of the ringer's.
 
-/// The names of the five services of one agent's channel (see the crate documentation).
+/// The names of the three services of one agent's channel (see the crate documentation).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct AgentServiceNames {
-    /// Coordinator to agent, history 1: the [`Mission`](crate::Mission).
-    pub mission: String,
     /// Coordinator to agent: the [`World`](crate::World) of each turn.
     pub world: String,
     /// Event, coordinator to agent: [`EVENT_TURN`], [`EVENT_QUIT`], [`EVENT_ECHO`].
     pub turn: String,
     /// Agent to coordinator: its [`AgentState`](crate::AgentState) (handshake, moves, echoes).
     pub state: String,
-    /// Event, agent to coordinator: a state is published.
-    pub done: String,
 }
 
 impl AgentServiceNames {
@@ -31,11 +33,9 @@ impl AgentServiceNames {
     pub fn new(agent: usize, generation: u32) -> Self {
         let base = format!("formation/agent/{agent}/{generation}");
         Self {
-            mission: format!("{base}/mission"),
             world: format!("{base}/world"),
             turn: format!("{base}/turn"),
             state: format!("{base}/state"),
-            done: format!("{base}/done"),
         }
     }
 }
@@ -47,6 +47,9 @@ pub const EVENT_QUIT: usize = 2;
 /// Event id on a turn service: answer at once with an empty [`StateKind::Echo`](crate::StateKind::Echo) state,
 /// without reading the world or planning (`coordinator bench`: the wake-up alone).
 pub const EVENT_ECHO: usize = 3;
+/// The run's one done service: event, agents to coordinator, "my state is published",
+/// the event id being the agent's index.
+pub const DONE_SERVICE: &str = "formation/done";
 
 #[cfg(test)]
 mod tests {
@@ -57,15 +60,7 @@ mod tests {
         let a = AgentServiceNames::new(3, 0);
         let b = AgentServiceNames::new(3, 1);
         let c = AgentServiceNames::new(4, 0);
-        let all = |n: &AgentServiceNames| {
-            [
-                n.mission.clone(),
-                n.world.clone(),
-                n.turn.clone(),
-                n.state.clone(),
-                n.done.clone(),
-            ]
-        };
+        let all = |n: &AgentServiceNames| [n.world.clone(), n.turn.clone(), n.state.clone()];
         let mut names: Vec<String> = [all(&a), all(&b), all(&c)].concat();
         let count = names.len();
         names.sort();

@@ -3,12 +3,10 @@
 
 mod capacity;
 mod geometry;
-mod mission;
 mod state;
 mod world;
 
 pub use capacity::CapacityError;
 pub use geometry::{WirePoint, WirePose};
-pub use mission::{Mission, WireAgent, WireDisk};
 pub use state::{AgentState, MAX_COMPUTE_NS, MalformedState, StateKind, StateMsg};
 pub use world::{WireBody, World};

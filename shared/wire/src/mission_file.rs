@@ -1,0 +1,181 @@
+//! The mission (the scenario as run) handed to the agents as a file in the run's private
+//! folder, not over a shared-memory service: it is read once, at start-up, and a service
+//! per agent would hold five open files per agent in the coordinator for the whole run
+//! (the coordinator's open-file limit is what bounds the number of agents).
+//!
+//! The file is the scenario's resolved TOML form ([`Scenario::to_resolved_toml`]), which
+//! loads back to the same scenario bit for bit; it is written under a temporary name and
+//! renamed, mode 0600, in the folder only this user can reach ([`check_run_root`]), before
+//! any agent starts. An agent reads it with the same checks as a file a user hands in:
+//! regular file, owned by this user, mode 0600, at most [`MAX_MISSION_BYTES`], then
+//! parsed and validated like any scenario.
+
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+
+use shared::scenario::{Scenario, ScenarioError};
+
+use crate::run_folder::{RunFilesError, check_run_root, effective_uid, run_root};
+
+/// The mission file's name in the run folder.
+pub const MISSION_FILE_NAME: &str = "mission.toml";
+
+/// Largest mission file an agent reads: far more than the largest scenario the
+/// capacities allow (16 384 obstacles and 1 024 agents take about 1.5 MB).
+pub const MAX_MISSION_BYTES: u64 = 16 << 20;
+
+/// Why the mission file cannot be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum MissionFileError {
+    /// There is no private run folder (no /dev/shm on this machine).
+    #[error("run {0}: no private run folder (/dev/shm) to hand the mission over in")]
+    NoRunFolder(String),
+    /// The run folder is not what the coordinator made.
+    #[error(transparent)]
+    Folder(#[from] RunFilesError),
+    /// The scenario has no resolved form (only a scenario built by hand can meet this).
+    #[error("the scenario cannot be written as a file: {0}")]
+    NotRepresentable(String),
+    /// The file is not a regular file of this user with mode 0600, or is too large.
+    #[error("{}: {why}: refusing it", path.display())]
+    Untrusted {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        why: String,
+    },
+    /// The file system refused an operation.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+    /// The file is not a valid scenario.
+    #[error("the mission file is not a valid scenario: {0}")]
+    Invalid(#[from] ScenarioError),
+}
+
+/// The mission file of run `prefix` (`None` without a run folder).
+pub fn mission_path(prefix: &str) -> Option<PathBuf> {
+    run_root(prefix).map(|root| root.join(MISSION_FILE_NAME))
+}
+
+/// Write `scenario` as run `prefix`'s mission file (the coordinator, before any agent
+/// starts).
+pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<PathBuf, MissionFileError> {
+    use std::io::Write as _;
+    use std::os::unix::fs::OpenOptionsExt;
+    let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
+    if let Some(folder) = path.parent() {
+        check_run_root(folder)?;
+    }
+    let text = scenario
+        .to_resolved_toml("the coordinator")
+        .map_err(|e| MissionFileError::NotRepresentable(e.to_string()))?;
+    let temporary = path.with_extension("toml.tmp");
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| MissionFileError::Io { path, source }
+    };
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .mode(0o600)
+        .open(&temporary)
+        .map_err(io(&temporary))?;
+    file.write_all(text.as_bytes()).map_err(io(&temporary))?;
+    drop(file);
+    std::fs::rename(&temporary, &path).map_err(io(&path))?;
+    Ok(path)
+}
+
+/// Read and validate run `prefix`'s mission file (an agent, at start-up).
+pub fn read_mission(prefix: &str) -> Result<Scenario, MissionFileError> {
+    use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+    let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
+    if let Some(folder) = path.parent() {
+        check_run_root(folder)?;
+    }
+    let untrusted = |why: String| MissionFileError::Untrusted {
+        path: path.clone(),
+        why,
+    };
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NOFOLLOW)
+        .open(&path)
+        .map_err(|source| MissionFileError::Io {
+            path: path.clone(),
+            source,
+        })?;
+    let meta = file.metadata().map_err(|source| MissionFileError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    if !meta.file_type().is_file() {
+        return Err(untrusted("not a regular file".into()));
+    }
+    if meta.uid() != effective_uid() {
+        return Err(untrusted(format!("owned by user {}", meta.uid())));
+    }
+    if meta.mode() & 0o7777 != 0o600 {
+        return Err(untrusted(format!(
+            "mode {:04o}, not 0600",
+            meta.mode() & 0o7777
+        )));
+    }
+    if meta.len() > MAX_MISSION_BYTES {
+        return Err(untrusted(format!(
+            "{} bytes, more than {MAX_MISSION_BYTES}",
+            meta.len()
+        )));
+    }
+    let mut text = String::new();
+    file.take(MAX_MISSION_BYTES)
+        .read_to_string(&mut text)
+        .map_err(|source| MissionFileError::Io {
+            path: path.clone(),
+            source,
+        })?;
+    Ok(Scenario::parse(&text, &path.display().to_string())?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{RunPrefix, RunRoot};
+
+    #[test]
+    fn a_mission_round_trips_the_scenario_exactly_and_a_tampered_file_is_refused() {
+        let prefix = RunPrefix::new_random().expect("prefix").to_string();
+        let root = RunRoot::create(&prefix).expect("run folder");
+        if root.path().is_none() {
+            return; // no /dev/shm: nowhere to hand a mission over
+        }
+        let mut scenario = Scenario::paper();
+        scenario.agents[1].max_step_m = Some(0.25);
+        let path = write_mission(&prefix, &scenario).expect("written");
+        assert_eq!(read_mission(&prefix).expect("read"), scenario);
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o644)).expect("chmod");
+        assert!(matches!(
+            read_mission(&prefix),
+            Err(MissionFileError::Untrusted { .. })
+        ));
+        std::fs::remove_file(&path).expect("rm");
+        std::os::unix::fs::symlink("/etc/passwd", &path).expect("symlink");
+        assert!(matches!(
+            read_mission(&prefix),
+            Err(MissionFileError::Io { .. })
+        ));
+        std::fs::remove_file(&path).expect("rm");
+        std::fs::write(&path, "name = 1").expect("write");
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600)).expect("chmod");
+        assert!(matches!(
+            read_mission(&prefix),
+            Err(MissionFileError::Invalid(_))
+        ));
+    }
+}
