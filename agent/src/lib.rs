@@ -43,9 +43,9 @@ pub struct Args {
     #[arg(long, default_value_t = 10_000)]
     pub liveness_ms: u64,
     /// Test mode: misbehave or attack on purpose (the coordinator must survive it):
-    /// nan, teleport, through-obstacle, silent, garbage, raw-length, raw-length-ready,
-    /// replay, early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork,
-    /// exit-before-ready.
+    /// nan, teleport, through-obstacle, silent, garbage, overspeed, raw-length,
+    /// raw-length-ready, replay, early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard,
+    /// fork, exit-before-ready.
     #[arg(long)]
     pub misbehave: Option<Misbehave>,
     /// Benchmark mode (`coordinator bench`): answer the latency floor's iceoryx2

@@ -2,7 +2,7 @@
 //! the coordinator's safety monitor refuses every one of them.
 
 use shared::geometry::{Disk, Point, Vector};
-use shared::vocabulary::{Move, MoveStatus};
+use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 use wire::misbehave::Misbehave;
 
 /// `argv[0]` of the children [`Misbehave::Fork`] starts for run `prefix`, so that tests
@@ -97,6 +97,16 @@ pub fn corrupt(
                 status,
             ))
         }
+        Misbehave::Overspeed => {
+            let waypoints = overspeed(&honest.waypoints);
+            Some((
+                Move {
+                    waypoints,
+                    ..honest
+                },
+                status,
+            ))
+        }
         Misbehave::RawLength
         | Misbehave::RawLengthReady
         | Misbehave::Replay
@@ -124,6 +134,35 @@ pub fn corrupt(
     }
 }
 
+/// Most passes [`Misbehave::Overspeed`] makes over the honest path.
+const OVERSPEED_PASSES: usize = 9;
+
+/// [`Misbehave::Overspeed`]: `path` followed forth, back, forth... an odd number of
+/// times (at most [`OVERSPEED_PASSES`], as many as [`MAX_WAYPOINTS`] holds), so it ends
+/// where `path` ends; a path of one point is left as it is.
+fn overspeed(path: &[Point]) -> Vec<Point> {
+    let segments = path.len().saturating_sub(1);
+    if segments == 0 {
+        return path.to_vec();
+    }
+    let fit = (MAX_WAYPOINTS - 1) / segments;
+    let passes = OVERSPEED_PASSES.min(fit);
+    let passes = if passes.is_multiple_of(2) {
+        passes - 1
+    } else {
+        passes
+    };
+    let mut out = vec![path[0]];
+    for pass in 0..passes {
+        if pass.is_multiple_of(2) {
+            out.extend_from_slice(&path[1..]);
+        } else {
+            out.extend(path[..segments].iter().rev());
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -139,5 +178,50 @@ mod tests {
         };
         let got = corrupt(Misbehave::Fork, honest.clone(), &me, &[], 7);
         assert_eq!(got, Some((honest.clone(), honest.status as u32)));
+    }
+
+    #[test]
+    fn the_overspeed_mode_retraces_the_honest_path_and_ends_where_it_ends() {
+        let me = Point::new(1.0, 2.0);
+        let path = vec![me, Point::new(1.3, 2.4), Point::new(1.6, 2.4)];
+        let honest = Move {
+            slot: Point::new(3.0, 4.0),
+            best: Point::new(1.6, 2.4),
+            status: MoveStatus::AtSlot,
+            waypoints: path.clone(),
+        };
+        let (fast, status) =
+            corrupt(Misbehave::Overspeed, honest.clone(), &me, &[], 7).expect("a move");
+        assert_eq!(status, honest.status as u32);
+        assert_eq!(
+            (fast.slot, fast.best, fast.status),
+            (honest.slot, honest.best, honest.status)
+        );
+        let length = |p: &[Point]| -> f64 { p.windows(2).map(|w| (w[1] - w[0]).norm()).sum() };
+        assert!((length(&fast.waypoints) - 9.0 * length(&path)).abs() < 1e-12);
+        assert_eq!(fast.waypoints.first(), Some(&me));
+        assert_eq!(fast.waypoints.last(), path.last());
+        // Only the honest path's points, and every step between two neighbours of it.
+        for w in fast.waypoints.windows(2) {
+            assert!(
+                path.windows(2).any(|p| p == w || p == [w[1], w[0]]),
+                "{w:?}"
+            );
+        }
+        // Within the waypoint capacity, an odd number of passes.
+        let long: Vec<Point> = (0..200)
+            .map(|i| Point::new(f64::from(i) * 0.01, 0.0))
+            .collect();
+        let stretched = overspeed(&long);
+        assert!(stretched.len() <= MAX_WAYPOINTS);
+        assert_eq!(stretched.len(), 200, "one pass: no room for three");
+        let mid: Vec<Point> = (0..100)
+            .map(|i| Point::new(f64::from(i) * 0.01, 0.0))
+            .collect();
+        let stretched = overspeed(&mid);
+        assert_eq!(stretched.len(), 1 + 99 * 5);
+        assert_eq!(stretched.last(), mid.last());
+        // Standing still stays standing still.
+        assert_eq!(overspeed(&[me]), vec![me]);
     }
 }

@@ -69,8 +69,8 @@ pub struct RunArgs {
     #[arg(long = "kill-agent", value_name = "AGENT@STEP", value_parser = parse_kill)]
     pub kill_agent: Vec<(usize, usize)>,
     /// Test mode: agent AGENT misbehaves or attacks on purpose: nan, teleport,
-    /// through-obstacle, silent, garbage (unsafe moves); raw-length, raw-length-ready,
-    /// replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
+    /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
+    /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
     /// exit-before-ready (attacks on the protocol); repeatable, e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
     pub misbehave: Vec<(usize, Misbehave)>,

@@ -2,7 +2,7 @@
 //! (`agent --misbehave MODE`, `coordinator run --misbehave AGENT=MODE`), so users and the
 //! integration tests can check that the coordinator survives every one of them.
 //!
-//! The first five publish unsafe or nonsensical moves through the normal protocol (the
+//! The first six publish unsafe or nonsensical moves through the normal protocol (the
 //! safety monitor must refuse them); the others attack the protocol itself, as a
 //! compromised or buggy agent process could.
 
@@ -22,6 +22,11 @@ pub enum Misbehave {
     Silent,
     /// Nonsense: an unknown status code and random-looking waypoints.
     Garbage,
+    /// Too fast: follow the honest path forth and back again (9 passes, fewer if the
+    /// waypoint capacity asks), ending where the honest move ends. The move covers the
+    /// honest move's ground and nothing else, so it is safe but for its length, which
+    /// is beyond a top speed whenever the honest move is longer than a ninth of it.
+    Overspeed,
     /// Write the waypoint count of every move raw, beyond the capacity (513, 2^40,
     /// `u64::MAX` in turn).
     RawLength,
@@ -62,12 +67,13 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 15] = [
+    pub const ALL: [Self; 16] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
         Self::Silent,
         Self::Garbage,
+        Self::Overspeed,
         Self::RawLength,
         Self::RawLengthReady,
         Self::Replay,
@@ -89,6 +95,7 @@ impl Misbehave {
             Self::ThroughObstacle => "through-obstacle",
             Self::Silent => "silent",
             Self::Garbage => "garbage",
+            Self::Overspeed => "overspeed",
             Self::RawLength => "raw-length",
             Self::RawLengthReady => "raw-length-ready",
             Self::Replay => "replay",
