@@ -175,8 +175,16 @@ fn wait_for_agents(pid: u32, count: usize) {
     }
 }
 
-fn large_scenario() -> PathBuf {
-    support::repo_root().join("scenarios/large.toml")
+/// The 64-agent block of `scenarios/large.toml` with four times as many steps, written
+/// into `dir`: long enough (several seconds even when start-up is quick) that a kill
+/// or a signal sent a second or two after the agents start lands in the middle of the run.
+fn large_scenario_in(dir: &std::path::Path) -> PathBuf {
+    let text = std::fs::read_to_string(support::repo_root().join("scenarios/large.toml"))
+        .expect("large.toml");
+    assert!(text.contains("step_m = 0.5\n"), "large.toml's step changed");
+    let path = dir.join("large-long.toml");
+    std::fs::write(&path, text.replace("step_m = 0.5\n", "step_m = 0.125\n")).expect("write");
+    path
 }
 
 #[test]
@@ -185,7 +193,7 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
         let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
-        let scenario = large_scenario();
+        let scenario = large_scenario_in(dir.path());
         let child = coordinator(&[scenario.to_str().expect("utf-8 path")], &out)
             .spawn()
             .expect("start");
@@ -211,7 +219,7 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
 #[test]
 fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_cleans_up() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scenario = large_scenario();
+    let scenario = large_scenario_in(dir.path());
     let mut child: Child = coordinator(
         &[scenario.to_str().expect("utf-8 path")],
         &dir.path().join("a"),
@@ -257,7 +265,7 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
     for signal in [Signal::SIGTERM, Signal::SIGINT] {
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
-        let scenario = large_scenario();
+        let scenario = large_scenario_in(dir.path());
         let mut command = coordinator(&[scenario.to_str().expect("utf-8 path")], &out);
         // Like a terminal: the coordinator leads its own process group, and the signal
         // goes to the whole group (agents run in groups of their own).
