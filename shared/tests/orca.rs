@@ -2,6 +2,8 @@
 //! whole segment (by the plain-geometry check with the true radii), the step bound, and
 //! the independence from bodies beyond the sensing radius.
 
+mod support;
+
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -213,32 +215,13 @@ fn world(seed: u64) -> World {
         sensing_radius_m,
         start: Point::origin(),
     };
-    for _ in 0..2000 {
-        let angle = rng.random_range(0.0..std::f64::consts::TAU);
-        let towards = Vector::new(angle.cos(), angle.sin());
-        let p = match rng.random_range(0..4) {
-            0 if !w.obstacles.is_empty() => {
-                let d = w.obstacles[rng.random_range(0..w.obstacles.len())];
-                d.centre + (d.radius_m + radius_m) * towards
-            }
-            1 if !w.others.is_empty() => {
-                let o = w.others[rng.random_range(0..w.others.len())];
-                o.position + (o.radius_m + radius_m) * towards
-            }
-            2 => Point::new(
-                radius_m,
-                rng.random_range(radius_m..field.height_m - radius_m),
-            ),
-            _ => Point::new(
-                rng.random_range(0.0..field.width_m),
-                rng.random_range(0.0..field.height_m),
-            ),
-        };
-        // Safe, as the invariant has it (touching within rounding is safe).
-        if point_clearance_m(&w, &p) >= -1e-12 {
-            w.start = p;
-            return w;
-        }
+    // Safe, as the invariant has it (touching within rounding is safe).
+    let start = support::draw_start(&mut rng, &field, &w.obstacles, &w.others, radius_m, |p| {
+        point_clearance_m(&w, p) >= -1e-12
+    });
+    if let Some(p) = start {
+        w.start = p;
+        return w;
     }
     w.obstacles.clear();
     w.others.clear();
