@@ -182,24 +182,7 @@ fn world(seed: u64) -> World {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let field = Field::new(rng.random_range(4.0..30.0), rng.random_range(4.0..30.0));
     let radius_m = rng.random_range(0.1..1.0);
-    let obstacles: Vec<Disk> = (0..rng.random_range(0..25))
-        .map(|_| {
-            Disk::new(
-                rng.random_range(0.0..field.width_m),
-                rng.random_range(0.0..field.height_m),
-                rng.random_range(0.2..2.5),
-            )
-        })
-        .collect();
-    let others: Vec<Body> = (0..rng.random_range(0..7))
-        .map(|_| Body {
-            position: Point::new(
-                rng.random_range(0.0..field.width_m),
-                rng.random_range(0.0..field.height_m),
-            ),
-            radius_m: rng.random_range(0.1..1.0),
-        })
-        .collect();
+    let (obstacles, others) = support::random_bodies(&mut rng, &field);
     let max_step_m = rng.random_range(0.05..2.0);
     let sensing_radius_m = if rng.random_range(0..5) == 0 {
         None

@@ -199,24 +199,7 @@ fn world(seed: u64) -> World {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let field = Field::new(rng.random_range(4.0..40.0), rng.random_range(4.0..40.0));
     let radius_m = rng.random_range(0.1..1.0);
-    let obstacles: Vec<Disk> = (0..rng.random_range(0..25))
-        .map(|_| {
-            Disk::new(
-                rng.random_range(0.0..field.width_m),
-                rng.random_range(0.0..field.height_m),
-                rng.random_range(0.2..2.5),
-            )
-        })
-        .collect();
-    let others: Vec<Body> = (0..rng.random_range(0..7))
-        .map(|_| Body {
-            position: Point::new(
-                rng.random_range(0.0..field.width_m),
-                rng.random_range(0.0..field.height_m),
-            ),
-            radius_m: rng.random_range(0.1..1.0),
-        })
-        .collect();
+    let (obstacles, others) = support::random_bodies(&mut rng, &field);
     let dt_s = rng.random_range(0.05..2.0);
     let max_speed_m_per_s = rng.random_range(0.1..4.0);
     let settings = CbfSettings {

@@ -42,3 +42,27 @@ pub fn draw_start(
     }
     None
 }
+
+/// Up to 24 obstacles (radius 0.2 to 2.5 m) and up to 6 other agents (radius 0.1 to
+/// 1 m) placed at random in `field`; they may overlap one another.
+pub fn random_bodies(rng: &mut impl Rng, field: &Field) -> (Vec<Disk>, Vec<Body>) {
+    let obstacles: Vec<Disk> = (0..rng.random_range(0..25))
+        .map(|_| {
+            Disk::new(
+                rng.random_range(0.0..field.width_m),
+                rng.random_range(0.0..field.height_m),
+                rng.random_range(0.2..2.5),
+            )
+        })
+        .collect();
+    let others: Vec<Body> = (0..rng.random_range(0..7))
+        .map(|_| Body {
+            position: Point::new(
+                rng.random_range(0.0..field.width_m),
+                rng.random_range(0.0..field.height_m),
+            ),
+            radius_m: rng.random_range(0.1..1.0),
+        })
+        .collect();
+    (obstacles, others)
+}
