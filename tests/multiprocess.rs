@@ -4,7 +4,7 @@
 
 mod support;
 
-use coordinator::turns::{RunOptions, run_scenario};
+use coordinator::turns::{RunOptions, WaitMode, run_scenario};
 use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
@@ -13,7 +13,12 @@ use shared::simulate::{plan_centre_path, simulate_along};
 /// healthy agent that the loaded test machine schedules late from counting as missed
 /// (dead agents are still noticed at once through their process).
 fn options() -> RunOptions {
+    options_waiting(WaitMode::default())
+}
+
+fn options_waiting(wait: WaitMode) -> RunOptions {
     RunOptions {
+        wait,
         agent_bin: Some(support::agent_bin()),
         turn_deadline: std::time::Duration::from_secs(10),
         progress: false,
@@ -55,6 +60,58 @@ fn run_and_compare(scenario: &Scenario) -> Run {
     assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
     assert!(outcome.timing.turn_latency_us.count > 0);
     run
+}
+
+/// Sleeping and spinning hand the turns over differently, never decide differently: in
+/// sequential and parallel turns, both equal the reference to the bit.
+#[test]
+fn both_wait_modes_match_the_reference_to_the_bit() {
+    let parallel = Scenario::load(&support::repo_root().join("tests/data/swarm16-parallel.toml"))
+        .expect("swarm16-parallel.toml");
+    for scenario in [Scenario::paper(), parallel] {
+        let path = plan_centre_path(&scenario).expect("centre path");
+        let reference = simulate_along(&scenario, &path).expect("reference simulation");
+        for wait in [WaitMode::Block, WaitMode::Spin] {
+            let outcome =
+                run_scenario(&scenario, &path, &options_waiting(wait)).expect("multi-process run");
+            assert_eq!(
+                outcome.run.steps, reference.steps,
+                "{} {wait:?}",
+                scenario.name
+            );
+            assert!(support::leftovers(&outcome.prefix).is_empty());
+        }
+    }
+}
+
+/// On one core a spinning coordinator yields to the agent it waits for, and a spinning
+/// agent to the one computing: `--wait spin` pinned to a single CPU still completes, safe,
+/// with no missed turn.
+#[test]
+fn spinning_on_one_core_starves_nobody() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let mut c = support::coordinator(&["--wait", "spin"], &out);
+    // SAFETY: only an async-signal-safe system call between fork and exec.
+    unsafe {
+        c.pre_exec(|| {
+            let mut one = nix::sched::CpuSet::new();
+            one.set(0).map_err(std::io::Error::from)?;
+            nix::sched::sched_setaffinity(nix::unistd::Pid::from_raw(0), &one)
+                .map_err(std::io::Error::from)
+        });
+    }
+    let output = c.output().expect("coordinator");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let s = support::summary(&out);
+    assert_eq!(s["completed"], true);
+    assert_eq!(s["collisions"], 0);
+    assert_eq!(s["faults"].as_array().map(Vec::len), Some(0), "{s:#}");
 }
 
 #[test]

@@ -14,7 +14,8 @@ use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::vocabulary::Move;
 use wire::{
-    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, Role, StateKind, World,
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN, Role,
+    StateKind, World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
@@ -46,6 +47,10 @@ fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
     // right after the array, inside the sample.
     unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };
 }
+
+/// How long an agent told it is next ([`EVENT_PREPARE`]) spins on its world before it
+/// sleeps again: a few turns' worth.
+const PREPARE_SPIN: Duration = Duration::from_millis(2);
 
 /// The agent's iceoryx2 ports: its own channel ([`AgentServiceNames`]).
 pub struct IpcTransport {
@@ -234,16 +239,31 @@ impl Transport for IpcTransport {
                 return Ok(Command::Quit);
             }
             let waited = Instant::now();
-            let (mut turn, mut echo, mut quit) = (false, false, false);
+            let (mut turn, mut echo, mut quit, mut prepare) = (false, false, false, false);
             let woke = self.turn_listener.timed_wait(
                 |event| match event.id.as_value() {
                     EVENT_TURN => turn = true,
                     EVENT_ECHO => echo = true,
                     EVENT_QUIT => quit = true,
+                    EVENT_PREPARE => prepare = true,
                     _ => {}
                 },
                 self.liveness,
             );
+            if prepare && !turn && !quit {
+                // Next in line: look at the world without sleeping for a while, so the
+                // grant costs no wake-up; then back to the blocking wait (the turn's own
+                // ring, if it came meanwhile, is then taken off at once).
+                let until = Instant::now() + PREPARE_SPIN;
+                while Instant::now() < until {
+                    if let Some(t) = self.read_world()? {
+                        self.woke_ns = wire::monotonic_ns();
+                        return Ok(Command::Turn(t));
+                    }
+                    std::thread::yield_now();
+                }
+                continue;
+            }
             if echo {
                 self.woke_ns = wire::monotonic_ns();
                 let woke_ns = self.woke_ns;

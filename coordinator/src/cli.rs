@@ -6,6 +6,8 @@ use clap::{Args, Parser, Subcommand};
 use shared::vocabulary::{PlannerKind, TurnMode};
 use wire::misbehave::Misbehave;
 
+use crate::turns::WaitMode;
+
 /// Decentralized formation control with collision avoidance: each agent its own process,
 /// talking over iceoryx2 shared memory.
 #[derive(Debug, Parser)]
@@ -25,6 +27,9 @@ pub enum Command {
     Plan(PlanArgs),
     /// Run a scenario with one agent process per agent and write the outputs.
     Run(RunArgs),
+    /// Run a scenario in this process with the reference simulation (no agent process)
+    /// and time it: the yardstick of the multi-process run (JSON on stdout).
+    Simulate(SimulateArgs),
     /// Run every planner on every scenario and tabulate safety, deviation, deadlocks and
     /// compute time (CSV and Markdown).
     Compare(CompareArgs),
@@ -85,6 +90,26 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// How turns are handed over: `block` (both sides sleep between turns: no CPU spent
+    /// waiting, two wake-ups per turn), `spin` (the coordinator spins on the state and the
+    /// next agent on its world, for at most a millisecond or two: no wake-up on the
+    /// turn's path, up to two busy cores while turns go on), `auto` (spin with two
+    /// cores or more, block on one).
+    #[arg(long, value_enum, default_value_t = WaitMode::Auto)]
+    pub wait: WaitMode,
+}
+
+/// Arguments of `simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// The scenario file (TOML); the embedded paper example when omitted.
+    pub scenario: Option<PathBuf>,
+    /// The controller, overriding the scenario's `planner`.
+    #[arg(long, value_parser = parse_planner)]
+    pub planner: Option<PlannerKind>,
+    /// Time this many runs and report each (the first is often slower: caches).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub repeat: u32,
 }
 
 /// Arguments of `compare`.

@@ -22,8 +22,8 @@ use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::vocabulary::Body;
 use wire::{
-    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_QUIT, EVENT_TURN, MalformedState, Role,
-    StateKind, StateMsg, World,
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN,
+    MalformedState, Role, StateKind, StateMsg, World,
 };
 
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
@@ -360,6 +360,23 @@ impl CoordinatorIpc {
             .notify()
             .with_context(|| format!("ringing agent {agent}'s turn"))?;
         Ok(())
+    }
+
+    /// Tell `agent` its turn comes next, so it spins on its world instead of sleeping
+    /// (`--wait spin`).
+    pub fn notify_prepare(&self, agent: usize) -> anyhow::Result<()> {
+        self.channel(agent)?
+            .turn_notifier
+            .notify_with_custom_event_id(EventId::new(EVENT_PREPARE))
+            .with_context(|| format!("ringing agent {agent}'s prepare"))?;
+        Ok(())
+    }
+
+    /// Take every pending ring off the run's done service without waiting: when the
+    /// coordinator spins on the states instead of waiting on the rings, they would pile
+    /// up in the listener's buffer.
+    pub fn drain_done(&self) {
+        let _ = self.done_listener.try_wait(|_| {});
     }
 
     /// Ring `agent`'s echo and wait until `deadline` for its empty answer from process

@@ -14,6 +14,7 @@ mod plan;
 mod procfs;
 pub mod render;
 mod run_command;
+mod simulate_command;
 mod stale_runs;
 mod stats;
 pub mod turns;
@@ -27,6 +28,7 @@ pub fn run_cli(cli: cli::Cli) -> Result<(), CliError> {
         cli::Command::Validate(args) => validate::execute(&args),
         cli::Command::Plan(args) => plan::execute(&args),
         cli::Command::Run(args) => run_command::execute(&args),
+        cli::Command::Simulate(args) => simulate_command::execute(&args),
         cli::Command::Compare(args) => compare::execute(&args),
         cli::Command::Render(args) => render::execute(&args),
         cli::Command::Bench(args) => bench::execute(&args),

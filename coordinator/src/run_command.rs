@@ -49,6 +49,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         kills: args.kill_agent.clone(),
         misbehave: args.misbehave.clone(),
         progress: !args.quiet,
+        wait: args.wait,
         ..RunOptions::default()
     };
     // A failed run still writes what it recorded, marked not completed.

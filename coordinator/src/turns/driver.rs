@@ -9,11 +9,13 @@ use shared::groups::turn_groups;
 use shared::record::Recorder;
 use shared::scenario::Scenario;
 use shared::sensing::SensedAgents;
-use shared::vocabulary::MoveStatus;
+use shared::vocabulary::{MoveStatus, TurnMode};
 use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
 
 use super::judge::{Judged, judge_answer, judge_move, settle_group};
-use super::{BetweenSteps, LIVENESS_SLICE, Progress, RunOptions, TurnSample, progress_bar};
+use super::{
+    BetweenSteps, LIVENESS_SLICE, Progress, RunOptions, SPIN_BUDGET, TurnSample, progress_bar,
+};
 use crate::agents::{AgentProcesses, Exit};
 use crate::ipc::{CoordinatorIpc, Grant, Incoming, TurnSplit};
 use crate::monitor::SafetyMonitor;
@@ -45,6 +47,8 @@ pub(super) struct Driver<'a, 's> {
     pub(super) progress: &'a mut Progress,
     /// Consecutive missed turns per agent.
     pub(super) missed: Vec<u32>,
+    /// Spin rather than sleep while a turn is short ([`super::WaitMode`]).
+    pub(super) spin: bool,
     /// Called after every step.
     pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
 }
@@ -108,8 +112,19 @@ impl Driver<'_, '_> {
                 self.recorder.alive(),
             );
             self.recorder.note_groups(groups.len());
-            for group in &groups {
-                if self.take_group(&monitor, step, group, centre)? {
+            for (k, group) in groups.iter().enumerate() {
+                // Who comes next, told ahead when spinning: the next group of the step,
+                // or after the last one, the first live agent (next step's first turn
+                // in sequential mode).
+                let first = self.recorder.alive().iter().position(|a| *a);
+                let next: &[usize] = match (groups.get(k + 1), &first) {
+                    (Some(g), _) => g,
+                    (None, Some(f)) if self.scenario.turns == TurnMode::Sequential => {
+                        std::slice::from_ref(f)
+                    }
+                    _ => &[],
+                };
+                if self.take_group(&monitor, step, group, next, centre)? {
                     break 'steps;
                 }
             }
@@ -148,6 +163,7 @@ impl Driver<'_, '_> {
         monitor: &SafetyMonitor,
         step: usize,
         group: &[usize],
+        next: &[usize],
         centre: &Pose,
     ) -> anyhow::Result<bool> {
         let sensing = self
@@ -193,6 +209,14 @@ impl Driver<'_, '_> {
                 );
             }
             granted.push((agent, self.procs.pid(agent), grant, at, at_ns));
+        }
+        if self.spin {
+            // The agents of the next group spin on their world while this one computes.
+            for &agent in next {
+                if self.recorder.alive()[agent] && !group.contains(&agent) {
+                    let _ = self.ipc.notify_prepare(agent);
+                }
+            }
         }
         let mut moves = Vec::with_capacity(granted.len());
         for (agent, pid, grant, at, at_ns) in granted {
@@ -258,6 +282,9 @@ impl Driver<'_, '_> {
         // A mate frozen after its move was judged does not move.
         moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
         settle_group(self.recorder, step, moves);
+        if self.spin {
+            self.ipc.drain_done();
+        }
         Ok(false)
     }
 
@@ -347,6 +374,12 @@ impl Driver<'_, '_> {
             }
             if let Some(a) = found {
                 break a;
+            }
+            // Spinning: look again at once (yielding the core to whoever needs it) until
+            // the budget is spent, then wait as usual; liveness is looked at then.
+            if self.spin && granted.elapsed() < SPIN_BUDGET {
+                std::thread::yield_now();
+                continue;
             }
             if self.ipc.termination_requested() {
                 break Answer::Interrupted;

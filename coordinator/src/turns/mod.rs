@@ -52,6 +52,38 @@ use crate::stats::Distribution;
 /// How often the coordinator checks an agent's process while it waits for its move.
 const LIVENESS_SLICE: Duration = Duration::from_millis(10);
 
+/// How the coordinator waits for a move, and how an agent waits for its turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum WaitMode {
+    /// Sleep in a blocking event wait on both sides: no CPU spent waiting, two wake-ups
+    /// per turn (the agent's and the coordinator's).
+    Block,
+    /// The coordinator spins (yielding) on the agent's state for up to [`SPIN_BUDGET`]
+    /// before sleeping, and the agent whose turn comes next is told so and spins on its
+    /// world meanwhile: no wake-up on the turn's path, at the price of up to two busy
+    /// cores while turns go on. Agents not next in line still sleep.
+    Spin,
+    /// `Spin` on a machine with two cores or more, `Block` on one core (where a spinning
+    /// process would take the core from the one it waits for).
+    #[default]
+    Auto,
+}
+
+impl WaitMode {
+    /// Whether to spin on this machine.
+    pub fn spins(&self) -> bool {
+        match self {
+            Self::Block => false,
+            Self::Spin => true,
+            Self::Auto => std::thread::available_parallelism().is_ok_and(|n| n.get() >= 2),
+        }
+    }
+}
+
+/// How long the coordinator spins on an agent's state before it sleeps (`--wait spin`):
+/// a turn computes in tens of microseconds; a longer one pays a wake-up as before.
+pub const SPIN_BUDGET: Duration = Duration::from_millis(1);
+
 /// How a run is carried out.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
@@ -80,6 +112,8 @@ pub struct RunOptions {
     pub misbehave: Vec<(usize, Misbehave)>,
     /// Show a progress bar on stderr (only drawn on a terminal).
     pub progress: bool,
+    /// How turns are handed over: sleeping, spinning, or chosen by the core count.
+    pub wait: WaitMode,
     /// Benchmark hook: after the ready handshake, hold every agent idle this long (no
     /// turn) and measure the CPU time they used meanwhile ([`RunOutcome::idle_cpu`]).
     pub idle_probe: Option<Duration>,
@@ -110,6 +144,7 @@ impl Default for RunOptions {
             deaths: Vec::new(),
             misbehave: Vec::new(),
             progress: true,
+            wait: WaitMode::default(),
             idle_probe: None,
         }
     }
@@ -280,6 +315,7 @@ pub fn run_scenario_with(
             recorder: &mut recorder,
             progress: &mut progress,
             missed: vec![0; n],
+            spin: options.wait.spins(),
             between_steps,
         }
         .drive(centre_path, started)

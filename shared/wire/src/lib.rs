@@ -60,4 +60,6 @@ pub use run_folder::{
     RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private, remove_run_root,
     run_root,
 };
-pub use services::{AgentServiceNames, DONE_SERVICE, EVENT_ECHO, EVENT_QUIT, EVENT_TURN};
+pub use services::{
+    AgentServiceNames, DONE_SERVICE, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN,
+};

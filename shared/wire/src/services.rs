@@ -6,7 +6,7 @@
 //! as a file in the run's private folder ([`crate::read_mission`]):
 //! - `world`: publish-subscribe, coordinator to agent: the world of its turn, with the
 //!   turn's token;
-//! - `turn`: event, coordinator to agent: "your turn" / "quit" / "echo";
+//! - `turn`: event, coordinator to agent: "your turn" / "quit" / "echo" / "you are next";
 //! - `state`: publish-subscribe, agent to coordinator: its handshake and its moves.
 //!
 //! One service is shared by the run, [`DONE_SERVICE`]: event, agents to coordinator,
@@ -47,6 +47,11 @@ pub const EVENT_QUIT: usize = 2;
 /// Event id on a turn service: answer at once with an empty [`StateKind::Echo`](crate::StateKind::Echo) state,
 /// without reading the world or planning (`coordinator bench`: the wake-up alone).
 pub const EVENT_ECHO: usize = 3;
+/// Event id on a turn service: your turn comes next (the agent before you has just been
+/// granted its turn); spin on the world for a little while instead of sleeping, so the
+/// grant does not pay for a wake-up (`coordinator run --wait spin`).
+pub const EVENT_PREPARE: usize = 4;
+
 /// The run's one done service: event, agents to coordinator, "my state is published",
 /// the event id being the agent's index.
 pub const DONE_SERVICE: &str = "formation/done";
