@@ -245,3 +245,54 @@ fn bench_refuses_a_turns_scenario_without_a_top_speed_before_running() {
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
 }
+
+#[test]
+fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let out_file = dir.path().join("loops.json");
+    let scenario = support::repo_root().join("tests/data/swarm16-parallel.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("bench")
+        .arg("--loop-scenario")
+        .arg(&scenario)
+        .args(["--loop-rounds", "1", "--json", "--out"])
+        .arg(&out_file)
+        .arg("--agent-bin")
+        .arg(support::agent_bin())
+        .output()
+        .expect("running coordinator bench");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "bench failed: {stderr}");
+    let report: Value = serde_json::from_slice(&output.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
+    let l = &report["loops"];
+    assert_eq!(l["agents"], 16);
+    assert_eq!(l["simulate_s"].as_array().map(Vec::len), Some(1));
+    assert!(l["simulate_median_s"].as_f64().expect("simulate") > 0.0);
+    for wait in ["block", "spin"] {
+        let w = &l[wait];
+        assert_eq!(w["wait"], wait);
+        assert_eq!(w["collisions"], 0, "{wait}");
+        assert_eq!(w["faults"], 0, "{wait}");
+        let loop_s = w["loop_median_s"].as_f64().expect("loop");
+        let ratio = w["vs_simulate"].as_f64().expect("ratio");
+        // The ratio is the two times divided, whatever they are.
+        let simulate_s = l["simulate_median_s"].as_f64().expect("simulate");
+        assert!(
+            (ratio - loop_s / simulate_s).abs() < 1e-9 * ratio.max(1.0),
+            "{wait}"
+        );
+        assert!(w["turn_us"]["count"].as_u64().expect("count") > 0, "{wait}");
+        let turn_p50 = w["turn_us"]["p50"].as_f64().expect("p50");
+        let ipc_p50 = w["ipc_overhead_us"]["p50"].as_f64().expect("ipc p50");
+        assert!(ipc_p50 <= turn_p50, "{wait}: overhead is part of the turn");
+    }
+    // A bad scenario is refused before anything runs.
+    let bad = Command::new(support::coordinator_bin())
+        .args(["bench", "--loop-scenario", "no-such-file.toml"])
+        .output()
+        .expect("running coordinator bench");
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(bad.stdout.is_empty());
+}

@@ -240,6 +240,15 @@ pub struct BenchArgs {
     /// the whole path).
     #[arg(long, value_name = "K")]
     pub turns_steps: Option<usize>,
+    /// Also measure the cost of decentralisation on this scenario: `simulate()` in this
+    /// process against the multi-process step loop with `--wait block` and `--wait spin`,
+    /// alternating; loop times, their ratio to `simulate()`, turn latency and IPC
+    /// overhead of both.
+    #[arg(long, value_name = "SCENARIO")]
+    pub loop_scenario: Option<PathBuf>,
+    /// Rounds with --loop-scenario (each: simulate(), a blocking run, a spinning run).
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub loop_rounds: usize,
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

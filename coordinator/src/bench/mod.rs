@@ -26,6 +26,7 @@
 //! Speed is reported, never asserted.
 
 pub mod floor;
+pub mod loops;
 pub mod plot;
 pub mod report;
 pub mod scenario;
@@ -74,9 +75,10 @@ pub const DEFAULT_AGENTS: [usize; 2] = [6, 200];
 
 /// Carry out `bench`.
 pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
-    let agents: Vec<usize> = match (&args.turns_scenario, args.agents.is_empty()) {
-        (Some(_), true) => Vec::new(),
-        (None, true) => DEFAULT_AGENTS.to_vec(),
+    let scenario_only = args.turns_scenario.is_some() || args.loop_scenario.is_some();
+    let agents: Vec<usize> = match (scenario_only, args.agents.is_empty()) {
+        (true, true) => Vec::new(),
+        (false, true) => DEFAULT_AGENTS.to_vec(),
         (_, false) => args.agents.clone(),
     };
     if let Some(&n) = agents.iter().find(|&&n| n == 0 || n > MAX_AGENTS) {
@@ -106,6 +108,11 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             verbose: !args.json,
         });
     let turns_prepared = turns_bench.as_ref().map(turns::prepare).transpose()?;
+    let loop_prepared = args
+        .loop_scenario
+        .as_deref()
+        .map(|file| loops::prepare(file, args.loop_rounds))
+        .transpose()?;
     let bin = locate_agent_binary(args.agent_bin.as_deref())?;
     let out = args.out.clone().unwrap_or_else(default_out);
     let svg_path = out.with_extension("svg");
@@ -122,6 +129,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         warmup_round_trips: 0,
         histogram_svg: None,
         turns: None,
+        loops: None,
     };
     let mut samples = Vec::new();
     for &n in &agents {
@@ -146,6 +154,16 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             );
         }
         report.turns = Some(turns::run(b, prepared, &bin)?);
+    }
+    if let (Some(file), Some(loaded)) = (&args.loop_scenario, loop_prepared) {
+        if !args.json {
+            eprintln!(
+                "bench: {}: simulate() against the step loop, blocking and spinning, {} round(s) ...",
+                file.display(),
+                args.loop_rounds
+            );
+        }
+        report.loops = Some(loops::run(loaded, args.loop_rounds, &bin, !args.json)?);
     }
 
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

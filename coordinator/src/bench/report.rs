@@ -27,6 +27,10 @@ pub struct Report {
     /// Sequential against parallel turns (`--turns-scenario`); absent without it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub turns: Option<super::turns::TurnsReport>,
+    /// The step loop against `simulate()`, blocking and spinning (`--loop-scenario`);
+    /// absent without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub loops: Option<super::loops::LoopsReport>,
 }
 
 /// The figures of one formation size.
@@ -256,6 +260,9 @@ pub fn table(report: &Report) -> String {
     }
     if let Some(t) = &report.turns {
         s.push_str(&super::turns::table(t));
+    }
+    if let Some(l) = &report.loops {
+        s.push_str(&super::loops::table(l));
     }
     if let Some(svg) = &report.histogram_svg {
         let _ = writeln!(s, "\nhistogram: {svg}");

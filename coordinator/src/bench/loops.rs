@@ -1,0 +1,228 @@
+//! `coordinator bench --loop-scenario FILE`: the cost of decentralisation on one
+//! scenario, in one bench run: the in-process reference (`simulate()`, every agent in the
+//! coordinator's process) against the multi-process step loop with turns handed over by
+//! sleeping (`--wait block`) and by spinning (`--wait spin`), alternating `simulate B S`,
+//! `simulate S B`, ... so a machine that gets busier or quieter weighs on all alike.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+use shared::simulate::simulate_along;
+
+use crate::error::CliError;
+use crate::stats::Distribution;
+use crate::turns::{RunOptions, RunOutcome, WaitMode, run_scenario};
+use crate::validate::{Loaded, load_and_plan};
+
+/// The comparison (`loops` in the report).
+#[derive(Clone, Debug, Serialize)]
+pub struct LoopsReport {
+    /// The scenario's `name`.
+    pub scenario: String,
+    /// The scenario file as given.
+    pub file: String,
+    /// Agents (one process each in the multi-process runs).
+    pub agents: usize,
+    /// Steps of the centre path.
+    pub steps: usize,
+    /// Rounds (each: one `simulate()`, one blocking run, one spinning run).
+    pub rounds: usize,
+    /// `simulate()`'s wall time, each round, seconds.
+    pub simulate_s: Vec<f64>,
+    /// Their median.
+    pub simulate_median_s: f64,
+    /// The multi-process runs, turns handed over by sleeping.
+    pub block: WaitReport,
+    /// The multi-process runs, turns handed over by spinning.
+    pub spin: WaitReport,
+}
+
+/// The figures of one wait mode over its runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct WaitReport {
+    /// `block` or `spin`.
+    pub wait: &'static str,
+    /// Step-loop wall time of each run (start-up excluded), seconds.
+    pub loop_s: Vec<f64>,
+    /// Their median.
+    pub loop_median_s: f64,
+    /// `loop_median_s / simulate_median_s`: what the processes and the IPC cost.
+    pub vs_simulate: f64,
+    /// Turn latency (world published to move held), every run pooled, step 1 (warm-up)
+    /// left out, microseconds.
+    pub turn_us: Distribution,
+    /// The agents' own compute time per turn, pooled the same way, microseconds.
+    pub compute_us: Distribution,
+    /// Turn latency minus compute, per turn: the IPC overhead, microseconds.
+    pub ipc_overhead_us: Distribution,
+    /// Collisions over every run (0 when safe).
+    pub collisions: usize,
+    /// Faults over every run (0 for clean runs).
+    pub faults: usize,
+}
+
+/// The scenario of `--loop-scenario FILE`, checked (with the rounds) before anything
+/// runs: a bad file or `--loop-rounds 0` is refused with exit code 2.
+pub fn prepare(file: &Path, rounds: usize) -> Result<Loaded, CliError> {
+    if rounds == 0 {
+        return Err(CliError::Usage("--loop-rounds: at least 1".into()));
+    }
+    Ok(load_and_plan(Some(file))?)
+}
+
+/// Run the comparison on `loaded` ([`prepare`]), `rounds` rounds, with the agent
+/// executable `bin`.
+pub fn run(
+    loaded: Loaded,
+    rounds: usize,
+    bin: &Path,
+    verbose: bool,
+) -> Result<LoopsReport, CliError> {
+    let Loaded {
+        scenario,
+        centre_path,
+        source,
+        ..
+    } = loaded;
+    let options = |wait| RunOptions {
+        agent_bin: Some(bin.to_path_buf()),
+        // Generous: a noisy machine must not turn a slow turn into a fault.
+        turn_deadline: Duration::from_secs(2),
+        progress: false,
+        wait,
+        ..RunOptions::default()
+    };
+    let mut simulate_s = Vec::with_capacity(rounds);
+    let (mut block, mut spin) = (Vec::new(), Vec::new());
+    for round in 0..rounds {
+        let started = Instant::now();
+        simulate_along(&scenario, &centre_path)
+            .map_err(|e| CliError::Other(anyhow::anyhow!("the reference simulation: {e}")))?;
+        simulate_s.push(started.elapsed().as_secs_f64());
+        let pair = if round % 2 == 0 {
+            [WaitMode::Block, WaitMode::Spin]
+        } else {
+            [WaitMode::Spin, WaitMode::Block]
+        };
+        for wait in pair {
+            let outcome = run_scenario(&scenario, &centre_path, &options(wait))
+                .map_err(|failure| CliError::Other(failure.error))?;
+            if outcome.interrupted {
+                return Err(CliError::Other(anyhow::anyhow!("interrupted")));
+            }
+            if verbose {
+                eprintln!(
+                    "bench: {:?} wait, round {} of {rounds}: step loop {:.3} s (simulate() {:.3} s), turn p50 {:.1} us",
+                    wait,
+                    round + 1,
+                    loop_s(&outcome),
+                    simulate_s[round],
+                    outcome.timing.turn_latency_us.p50
+                );
+            }
+            if wait == WaitMode::Spin {
+                spin.push(outcome);
+            } else {
+                block.push(outcome);
+            }
+        }
+    }
+    let simulate_median_s = median(&simulate_s);
+    Ok(LoopsReport {
+        scenario: scenario.name.clone(),
+        file: source,
+        agents: scenario.agents.len(),
+        steps: centre_path.len().saturating_sub(1),
+        rounds,
+        block: wait_report("block", &block, simulate_median_s),
+        spin: wait_report("spin", &spin, simulate_median_s),
+        simulate_s,
+        simulate_median_s,
+    })
+}
+
+/// The step loop's wall time of a run, seconds.
+fn loop_s(o: &RunOutcome) -> f64 {
+    let steps = o.run.steps.len().saturating_sub(1) as f64;
+    if o.timing.steps_per_s > 0.0 {
+        steps / o.timing.steps_per_s
+    } else {
+        0.0
+    }
+}
+
+fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => 0.0,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+fn wait_report(wait: &'static str, runs: &[RunOutcome], simulate_s: f64) -> WaitReport {
+    let loops: Vec<f64> = runs.iter().map(loop_s).collect();
+    let measured = runs
+        .iter()
+        .flat_map(|o| o.turn_samples.iter().filter(|t| t.step > 1));
+    let (mut turn, mut compute, mut overhead) = (Vec::new(), Vec::new(), Vec::new());
+    for t in measured {
+        turn.push(t.latency_us);
+        compute.push(t.compute_us);
+        overhead.push(t.latency_us - t.compute_us);
+    }
+    let loop_median_s = median(&loops);
+    WaitReport {
+        wait,
+        loop_s: loops,
+        loop_median_s,
+        vs_simulate: super::ratio(loop_median_s, simulate_s),
+        turn_us: Distribution::of(&turn),
+        compute_us: Distribution::of(&compute),
+        ipc_overhead_us: Distribution::of(&overhead),
+        collisions: runs.iter().map(|o| o.run.summary().collisions).sum(),
+        faults: runs.iter().map(|o| o.run.faults.len()).sum(),
+    }
+}
+
+/// The comparison as a table for people.
+pub fn table(l: &LoopsReport) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "\nloop: {} ({}), {} agents, {} steps, {} round(s); simulate() median {:.3} s",
+        l.scenario, l.file, l.agents, l.steps, l.rounds, l.simulate_median_s
+    );
+    let _ = writeln!(
+        s,
+        "  {:<8}{:>12}{:>14}{:>14}{:>14}{:>16}{:>16}{:>8}{:>12}",
+        "wait",
+        "loop s",
+        "vs simulate",
+        "turn p50 us",
+        "turn p99 us",
+        "ipc p50 us",
+        "ipc p99 us",
+        "faults",
+        "collisions"
+    );
+    for w in [&l.block, &l.spin] {
+        let _ = writeln!(
+            s,
+            "  {:<8}{:>12.3}{:>13.2}x{:>14.1}{:>14.1}{:>16.1}{:>16.1}{:>8}{:>12}",
+            w.wait,
+            w.loop_median_s,
+            w.vs_simulate,
+            w.turn_us.p50,
+            w.turn_us.p99,
+            w.ipc_overhead_us.p50,
+            w.ipc_overhead_us.p99,
+            w.faults,
+            w.collisions
+        );
+    }
+    s
+}
