@@ -270,6 +270,10 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
     assert_eq!(l["agents"], 16);
     assert_eq!(l["simulate_s"].as_array().map(Vec::len), Some(1));
     assert!(l["simulate_median_s"].as_f64().expect("simulate") > 0.0);
+    // Both floors measured, the busy-polled one without any wake-up.
+    for floor in ["floor_spin_us", "floor_block_us"] {
+        assert!(l[floor]["count"].as_u64().expect("count") > 0, "{floor}");
+    }
     for wait in ["block", "spin"] {
         let w = &l[wait];
         assert_eq!(w["wait"], wait);

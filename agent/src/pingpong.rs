@@ -11,6 +11,10 @@
 //!   with blocking reads and writes a reply of the asked length, until the header
 //!   [`BENCH_SOCKET_DONE`] sends it back to the iceoryx2 ping-pong.
 //!
+//! - iceoryx2 busy-polled (on [`BENCH_EVENT_SPIN`]): the process spins on the ping
+//!   subscriber and publishes each pong at once, no event either way, until the ping
+//!   [`BENCH_SPIN_DONE`]: the floor of publish-subscribe without any wake-up.
+//!
 //! The coordinator alternates the two in blocks, so both see the same machine.
 //! [`EVENT_QUIT`], a closed socket, SIGTERM or the coordinator's death end the process.
 
@@ -26,8 +30,9 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::getppid;
 use wire::{
-    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
-    BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+    BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
+    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE, BenchPing, EVENT_QUIT, EVENT_TURN,
+    Role,
 };
 
 /// Serve the ping-pong of run `prefix` (and the socket at `uds`, if given).
@@ -101,11 +106,12 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
             return Ok(());
         }
         let waited = Instant::now();
-        let (mut ping, mut socket, mut quit) = (false, false, false);
+        let (mut ping, mut socket, mut quit, mut spin) = (false, false, false, false);
         let woke = ping_listener.timed_wait(
             |event| match event.id.as_value() {
                 EVENT_TURN => ping = true,
                 BENCH_EVENT_SOCKET => socket = true,
+                BENCH_EVENT_SPIN => spin = true,
                 EVENT_QUIT => quit = true,
                 _ => {}
             },
@@ -113,6 +119,31 @@ pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Resu
         );
         match woke {
             Ok(_) if quit => return Ok(()),
+            Ok(_) if spin => {
+                // Busy-poll until the closing ping, or for at most a liveness period of
+                // silence (the coordinator gone or stuck).
+                let mut heard = Instant::now();
+                loop {
+                    if let Some(s) = ping_sub.receive().context("receiving a ping")? {
+                        let seq = s.seq;
+                        drop(s);
+                        pong_pub
+                            .send_copy(BenchPing {
+                                seq,
+                                payload: [seq; 3],
+                            })
+                            .context("sending a pong")?;
+                        if seq == BENCH_SPIN_DONE {
+                            break;
+                        }
+                        heard = Instant::now();
+                    } else if heard.elapsed() >= liveness {
+                        break;
+                    } else {
+                        std::hint::spin_loop();
+                    }
+                }
+            }
             Ok(_) if socket => {
                 let stream = stream
                     .as_mut()

@@ -24,8 +24,9 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use wire::{
-    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
-    BENCH_SOCKET_DONE, BenchPing, EVENT_QUIT, EVENT_TURN, Role,
+    BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
+    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE, BenchPing, EVENT_QUIT, EVENT_TURN,
+    Role,
 };
 
 use crate::agents::{AgentProcesses, Exit};
@@ -93,6 +94,21 @@ impl Ports {
     }
 
     /// Wait, as a turn does, until pong `seq` has arrived or `deadline` passes.
+    /// Busy-poll the pong subscriber for the pong `seq`.
+    fn spin_pong(&self, seq: u64, deadline: Instant) -> anyhow::Result<()> {
+        loop {
+            while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
+                if s.seq == seq {
+                    return Ok(());
+                }
+            }
+            if Instant::now() >= deadline {
+                bail!("no pong {seq} from the ping-pong process in time");
+            }
+            std::hint::spin_loop();
+        }
+    }
+
     fn wait_pong(&self, seq: u64, deadline: Instant) -> anyhow::Result<()> {
         loop {
             while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
@@ -211,6 +227,41 @@ impl PingPongSession {
             ports.wait_pong(seq, t0 + ROUND_TRIP_DEADLINE)?;
             let us = t0.elapsed().as_secs_f64() * 1e6;
             if k >= warmup {
+                out.push(us);
+            }
+        }
+        Ok(out)
+    }
+
+    /// `count` busy-polled iceoryx2 round trips (no event either way: the ping-pong
+    /// process spins on its subscriber, this one on the pong) after `warmup` unrecorded
+    /// ones, microseconds: the floor of publish-subscribe between two processes.
+    pub fn iceoryx2_spin(&mut self, warmup: usize, count: usize) -> anyhow::Result<Vec<f64>> {
+        let ports = self.ports.as_ref().context("the session is closed")?;
+        ports
+            .ping
+            .notify_with_custom_event_id(EventId::new(BENCH_EVENT_SPIN))
+            .context("switching to the busy-poll ping-pong")?;
+        let mut out = Vec::with_capacity(count);
+        for k in 0..=warmup + count {
+            // The last ping closes the busy-poll ping-pong.
+            let seq = if k == warmup + count {
+                BENCH_SPIN_DONE
+            } else {
+                self.seq += 1;
+                self.seq
+            };
+            let t0 = Instant::now();
+            ports
+                .ping_pub
+                .send_copy(BenchPing {
+                    seq,
+                    payload: [seq; 3],
+                })
+                .context("sending a ping")?;
+            ports.spin_pong(seq, t0 + ROUND_TRIP_DEADLINE)?;
+            let us = t0.elapsed().as_secs_f64() * 1e6;
+            if k >= warmup && seq != BENCH_SPIN_DONE {
                 out.push(us);
             }
         }

@@ -15,6 +15,11 @@ use crate::stats::Distribution;
 use crate::turns::{RunOptions, RunOutcome, WaitMode, run_scenario};
 use crate::validate::{Loaded, load_and_plan};
 
+/// Round trips of each floor per round, after [`FLOOR_WARMUP`] unrecorded ones.
+const FLOOR_ROUND_TRIPS: usize = 2000;
+/// Round trips made and dropped before each floor's recorded ones.
+const FLOOR_WARMUP: usize = 200;
+
 /// The comparison (`loops` in the report).
 #[derive(Clone, Debug, Serialize)]
 pub struct LoopsReport {
@@ -32,6 +37,12 @@ pub struct LoopsReport {
     pub simulate_s: Vec<f64>,
     /// Their median.
     pub simulate_median_s: f64,
+    /// Round trips between two processes over iceoryx2 publish-subscribe, both sides
+    /// busy-polling (no event): the floor a spinning hand-over can reach, microseconds.
+    pub floor_spin_us: Distribution,
+    /// The same round trips with an event each way (both sides sleep): the floor of the
+    /// blocking hand-over, microseconds.
+    pub floor_block_us: Distribution,
     /// The multi-process runs, turns handed over by sleeping.
     pub block: WaitReport,
     /// The multi-process runs, turns handed over by spinning.
@@ -95,7 +106,19 @@ pub fn run(
     };
     let mut simulate_s = Vec::with_capacity(rounds);
     let (mut block, mut spin) = (Vec::new(), Vec::new());
+    let mut session = super::floor::PingPongSession::start(bin).map_err(CliError::Other)?;
+    let (mut floor_spin, mut floor_block) = (Vec::new(), Vec::new());
     for round in 0..rounds {
+        floor_spin.extend(
+            session
+                .iceoryx2_spin(FLOOR_WARMUP, FLOOR_ROUND_TRIPS)
+                .map_err(CliError::Other)?,
+        );
+        floor_block.extend(
+            session
+                .iceoryx2(FLOOR_WARMUP, FLOOR_ROUND_TRIPS)
+                .map_err(CliError::Other)?,
+        );
         let started = Instant::now();
         simulate_along(&scenario, &centre_path)
             .map_err(|e| CliError::Other(anyhow::anyhow!("the reference simulation: {e}")))?;
@@ -128,8 +151,11 @@ pub fn run(
             }
         }
     }
+    session.finish().map_err(CliError::Other)?;
     let simulate_median_s = median(&simulate_s);
     Ok(LoopsReport {
+        floor_spin_us: Distribution::of(&floor_spin),
+        floor_block_us: Distribution::of(&floor_block),
         scenario: scenario.name.clone(),
         file: source,
         agents: scenario.agents.len(),
@@ -195,6 +221,11 @@ pub fn table(l: &LoopsReport) -> String {
         s,
         "\nloop: {} ({}), {} agents, {} steps, {} round(s); simulate() median {:.3} s",
         l.scenario, l.file, l.agents, l.steps, l.rounds, l.simulate_median_s
+    );
+    let _ = writeln!(
+        s,
+        "  floor between two processes: busy-polled publish-subscribe p50 {:.2} us p99 {:.2} us; with an event each way p50 {:.1} us p99 {:.1} us",
+        l.floor_spin_us.p50, l.floor_spin_us.p99, l.floor_block_us.p50, l.floor_block_us.p99
     );
     let _ = writeln!(
         s,

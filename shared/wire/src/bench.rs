@@ -16,6 +16,12 @@ pub const BENCH_PONG_EVENT: &str = "bench/pong-event";
 pub const BENCH_EVENT_SOCKET: usize = 3;
 /// Request length in a socket frame header meaning "back to the iceoryx2 ping-pong".
 pub const BENCH_SOCKET_DONE: u32 = u32::MAX;
+/// Event id on [`BENCH_PING_EVENT`]: busy-poll the ping subscriber and publish each pong
+/// at once, no event either way (the busy-poll publish-subscribe floor), until the ping
+/// [`BENCH_SPIN_DONE`] comes (answered, then back to the blocking ping-pong).
+pub const BENCH_EVENT_SPIN: usize = 4;
+/// The `seq` of the ping that ends the busy-poll ping-pong.
+pub const BENCH_SPIN_DONE: u64 = u64::MAX;
 
 /// The small sample of the benchmark floor's ping-pong, each way.
 #[repr(C)]

@@ -41,8 +41,8 @@ mod run_folder;
 mod services;
 
 pub use bench::{
-    BENCH_EVENT_SOCKET, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE,
-    BENCH_SOCKET_DONE, BenchPing,
+    BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
+    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE, BenchPing,
 };
 pub use clock::monotonic_ns;
 pub use config::{Role, ipc_config};
