@@ -210,6 +210,14 @@ impl AgentProcesses {
         }
     }
 
+    /// Whether any child of this process (an agent, or an orphan handed to it) has
+    /// exited and is not reaped yet, or that cannot be told: one `waitid` call, reaping
+    /// nothing. False means every agent's process still runs.
+    pub fn any_child_exited(&self) -> bool {
+        let flags = WaitPidFlag::WEXITED | WaitPidFlag::WNOHANG | WaitPidFlag::WNOWAIT;
+        !matches!(waitid(Id::All, flags), Ok(WaitStatus::StillAlive))
+    }
+
     /// Wait until agent `agent`'s process has exited, without reaping it (the next
     /// [`Self::poll`] does), at most `timeout`; true if it has exited.
     pub fn wait_exited(&self, agent: usize, timeout: Duration) -> bool {

@@ -63,6 +63,11 @@ pub enum Refusal {
     },
 }
 
+/// How much farther than the radii sum a body's centre may lie outside a segment's box
+/// and still be handed to parry's query ([`SafetyMonitor::check`]): far more than any
+/// rounding, far less than any spacing.
+const PREFILTER_SLACK_M: f64 = 1e-3;
+
 /// Obstacles in a parry BVH, and the field.
 pub struct SafetyMonitor {
     field: Field,
@@ -165,6 +170,18 @@ impl SafetyMonitor {
                 }
             }
             for (other, body) in bodies.iter().enumerate() {
+                // A body whose centre lies farther than the radii sum outside the
+                // segment's box cannot meet it: skipped without the parry query (with
+                // [`PREFILTER_SLACK_M`] to spare, so no body the query would find is).
+                let c = &body.position;
+                let out = body.radius_m + radius_m + PREFILTER_SLACK_M;
+                if c.x < a.x.min(b.x) - out
+                    || c.x > a.x.max(b.x) + out
+                    || c.y < a.y.min(b.y) - out
+                    || c.y > a.y.max(b.y) + out
+                {
+                    continue;
+                }
                 if other != agent && hits(&body.position, body.radius_m) {
                     return Err(Refusal::Agent {
                         segment,

@@ -358,12 +358,11 @@ impl<'a> Recorder<'a> {
     /// speed and its best point.
     fn check_alone(&self, agent: usize, mv: &Move) -> Result<(), Violation> {
         let body = self.bodies[agent];
-        let others = self.others(agent);
-        safety::check_move(
+        safety::check_move_of(
             &self.scenario.field,
             &self.obstacles,
-            &others,
-            body.radius_m,
+            &self.bodies,
+            agent,
             &body.position,
             &mv.waypoints,
             MAX_WAYPOINTS,
@@ -499,11 +498,10 @@ impl<'a> Recorder<'a> {
                 },
                 waypoints: vec![body.position],
             });
-            let others = self.others(i);
             // Obstacles farther than the largest radii sum cannot be the nearest overlap;
             // look a little farther so clearance is reported for near misses too.
             let (to_obstacle, to_other) =
-                safety::clearances_m(&body, &self.obstacles, &others, reach_m + 10.0);
+                safety::clearances_of_m(&self.bodies, i, &self.obstacles, reach_m + 10.0);
             agents.push(AgentStep {
                 position: body.position,
                 slot,

@@ -99,6 +99,54 @@ pub fn check_move(
     waypoints: &[Point],
     max_waypoints: usize,
 ) -> Result<(), Violation> {
+    check_move_skipping(
+        field,
+        obstacles,
+        others,
+        None,
+        radius_m,
+        from,
+        waypoints,
+        max_waypoints,
+    )
+}
+
+/// [`check_move`] for body `agent` of `bodies` against every other body of `bodies`
+/// (without copying them out): [`Violation::HitsBody`] numbers the bodies as
+/// [`check_move`] would number `bodies` without `agent`.
+pub fn check_move_of(
+    field: &Field,
+    obstacles: &DiskGrid,
+    bodies: &[Body],
+    agent: usize,
+    from: &Point,
+    waypoints: &[Point],
+    max_waypoints: usize,
+) -> Result<(), Violation> {
+    check_move_skipping(
+        field,
+        obstacles,
+        bodies,
+        Some(agent),
+        bodies[agent].radius_m,
+        from,
+        waypoints,
+        max_waypoints,
+    )
+}
+
+/// [`check_move`] against `bodies` but the one at index `skip`, if any.
+#[allow(clippy::too_many_arguments)]
+fn check_move_skipping(
+    field: &Field,
+    obstacles: &DiskGrid,
+    bodies: &[Body],
+    skip: Option<usize>,
+    radius_m: f64,
+    from: &Point,
+    waypoints: &[Point],
+    max_waypoints: usize,
+) -> Result<(), Violation> {
     if waypoints.is_empty() || waypoints.len() > max_waypoints {
         return Err(Violation::BadLength {
             count: waypoints.len(),
@@ -146,9 +194,17 @@ pub fn check_move(
         if let ControlFlow::Break(v) = hit {
             return Err(v);
         }
-        for (body, o) in others.iter().enumerate() {
+        for (j, o) in bodies.iter().enumerate() {
+            if Some(j) == skip {
+                continue;
+            }
             let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.position, a, b);
             if overlap_m > SAFETY_TOLERANCE_M {
+                // Numbered as in the list of the others (`bodies` without `skip`).
+                let body = match skip {
+                    Some(s) if j > s => j - 1,
+                    _ => j,
+                };
                 return Err(Violation::HitsBody {
                     segment,
                     body,
@@ -169,14 +225,38 @@ pub fn clearances_m(
     others: &[Body],
     reach_m: f64,
 ) -> (f64, f64) {
+    clearances_skipping_m(body, obstacles, others, None, reach_m)
+}
+
+/// [`clearances_m`] of body `agent` of `bodies` against the other bodies of `bodies`
+/// (without copying them out).
+pub fn clearances_of_m(
+    bodies: &[Body],
+    agent: usize,
+    obstacles: &DiskGrid,
+    reach_m: f64,
+) -> (f64, f64) {
+    clearances_skipping_m(&bodies[agent], obstacles, bodies, Some(agent), reach_m)
+}
+
+fn clearances_skipping_m(
+    body: &Body,
+    obstacles: &DiskGrid,
+    bodies: &[Body],
+    skip: Option<usize>,
+    reach_m: f64,
+) -> (f64, f64) {
     let mut to_obstacle = f64::INFINITY;
     let _ = obstacles.visit_near(&body.position, reach_m, |_, o| {
         to_obstacle =
             to_obstacle.min((body.position - o.centre).norm() - o.radius_m - body.radius_m);
         ControlFlow::<()>::Continue(())
     });
-    let to_other = others
+    let to_other = bodies
         .iter()
+        .enumerate()
+        .filter(|(j, _)| Some(*j) != skip)
+        .map(|(_, o)| o)
         .map(|o| (body.position - o.position).norm() - o.radius_m - body.radius_m)
         .fold(f64::INFINITY, f64::min);
     (to_obstacle, to_other)

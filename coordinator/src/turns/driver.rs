@@ -100,7 +100,11 @@ impl Driver<'_, '_> {
         'steps: for (step, centre) in centre_path.iter().enumerate().skip(1) {
             // Agents that died while waiting for their turn are noticed now.
             let checked = Instant::now();
-            for agent in 0..n {
+            // One wait call tells whether any child has exited (or an agent has no
+            // process any more); only then is each agent looked at (one call each).
+            let any_exited = self.procs.any_child_exited()
+                || (0..n).any(|a| self.recorder.alive()[a] && self.procs.pid(a).is_none());
+            for agent in (0..n).filter(|_| any_exited) {
                 if self.recorder.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
                     self.on_death(step, agent, checked.elapsed(), "exited between turns")?;
                 }
@@ -129,6 +133,12 @@ impl Driver<'_, '_> {
                 }
             }
             self.recorder.end_step(step);
+            if self.spin {
+                // Once a step, not once a group: iceoryx2 sends one datagram per ring
+                // only while the listener has been drained since, so rings left pending
+                // cost neither the agents a send nor this process a receive per turn.
+                self.ipc.drain_done();
+            }
             bar.inc(1);
             let pids = self.pids();
             (self.between_steps)(BetweenSteps {
@@ -282,9 +292,6 @@ impl Driver<'_, '_> {
         // A mate frozen after its move was judged does not move.
         moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
         settle_group(self.recorder, step, moves);
-        if self.spin {
-            self.ipc.drain_done();
-        }
         Ok(false)
     }
 
