@@ -536,6 +536,28 @@ impl CoordinatorIpc {
                 wire::run_root(&self_prefix)
             )
         })?;
+        // What iceoryx2's dead-node cleanup can miss (a segment of a process killed while
+        // it was connecting, seen once under load): every file of this run left in
+        // /dev/shm. The prefix is this run's alone and its processes are gone.
+        remove_leftover_shm_files(&self_prefix);
         Ok(())
+    }
+}
+
+/// Remove this user's regular files in /dev/shm whose names start with run `prefix`.
+fn remove_leftover_shm_files(prefix: &str) {
+    use std::os::unix::fs::MetadataExt;
+    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
+        return;
+    };
+    let euid = wire::effective_uid();
+    for e in entries.flatten() {
+        let ours = e
+            .metadata()
+            .is_ok_and(|m| m.uid() == euid && m.file_type().is_file());
+        if ours && e.file_name().to_string_lossy().starts_with(prefix) {
+            tracing::debug!("removing a leftover of the run: {}", e.path().display());
+            let _ = std::fs::remove_file(e.path());
+        }
     }
 }

@@ -28,11 +28,17 @@ impl Driver<'_, '_> {
         let deadline = Instant::now() + timeout;
         let mut pending: Vec<usize> = agents.to_vec();
         let mut failed: Vec<(usize, String)> = Vec::new();
+        // The process each agent started with: one quarantined meanwhile and replaced
+        // (with `respawn`) had its replacement's handshake taken by the respawn itself.
+        let started_as: Vec<Option<u32>> = (0..self.scenario.agents.len())
+            .map(|a| self.procs.pid(a))
+            .collect();
         while !pending.is_empty() {
             for agent in pending.clone() {
                 let pid = self.procs.pid(agent);
-                if pid.is_none() || self.ipc.generation(agent).is_none() {
-                    // Quarantined while the others started.
+                if pid.is_none() || pid != started_as[agent] || self.ipc.generation(agent).is_none()
+                {
+                    // Quarantined while the others started (and maybe replaced).
                     pending.retain(|&a| a != agent);
                     continue;
                 }
@@ -89,7 +95,10 @@ impl Driver<'_, '_> {
                 }
             }
             // Quarantined agents (impersonators) are no longer waited for.
-            pending.retain(|&a| self.procs.pid(a).is_some());
+            pending.retain(|&a| {
+                let pid = self.procs.pid(a);
+                pid.is_some() && pid == started_as[a]
+            });
             for agent in pending.clone() {
                 if self.procs.poll(agent) == Exit::Exited {
                     failed.push((agent, "it exited before its handshake".to_string()));
