@@ -325,7 +325,8 @@ impl CoordinatorIpc {
         Ok(())
     }
 
-    /// Publish the world for `agent`'s turn at `step`, with a fresh token.
+    /// Publish the world for `agent`'s turn at `step`, with a fresh token: the agents of
+    /// `visible` (increasing), or every agent when `None`.
     pub fn publish_world(
         &mut self,
         step: usize,
@@ -333,7 +334,7 @@ impl CoordinatorIpc {
         centre: &Pose,
         bodies: &[Body],
         alive: &[bool],
-        visible: &[usize],
+        visible: Option<&[usize]>,
     ) -> anyhow::Result<Grant> {
         self.seq += 1;
         let grant = Grant {
@@ -348,7 +349,10 @@ impl CoordinatorIpc {
         w.token = grant.token;
         w.turn_agent = agent as u32;
         w.centre = (*centre).into();
-        w.set_bodies(bodies, alive, visible.iter().copied())?;
+        match visible {
+            Some(v) => w.set_bodies(bodies, alive, v.iter().copied())?,
+            None => w.set_bodies(bodies, alive, 0..bodies.len())?,
+        }
         sample.send().context("sending the world")?;
         Ok(grant)
     }
@@ -536,28 +540,11 @@ impl CoordinatorIpc {
                 wire::run_root(&self_prefix)
             )
         })?;
-        // What iceoryx2's dead-node cleanup can miss (a segment of a process killed while
-        // it was connecting, seen once under load): every file of this run left in
-        // /dev/shm. The prefix is this run's alone and its processes are gone.
-        remove_leftover_shm_files(&self_prefix);
-        Ok(())
-    }
-}
-
-/// Remove this user's regular files in /dev/shm whose names start with run `prefix`.
-fn remove_leftover_shm_files(prefix: &str) {
-    use std::os::unix::fs::MetadataExt;
-    let Ok(entries) = std::fs::read_dir("/dev/shm") else {
-        return;
-    };
-    let euid = wire::effective_uid();
-    for e in entries.flatten() {
-        let ours = e
-            .metadata()
-            .is_ok_and(|m| m.uid() == euid && m.file_type().is_file());
-        if ours && e.file_name().to_string_lossy().starts_with(prefix) {
-            tracing::debug!("removing a leftover of the run: {}", e.path().display());
-            let _ = std::fs::remove_file(e.path());
+        // What iceoryx2's dead-node cleanup can miss (seen once under load).
+        let swept = wire::remove_run_files_in_shm(&self_prefix);
+        if swept > 0 {
+            tracing::debug!("removed {swept} leftover file(s) of the run from /dev/shm");
         }
+        Ok(())
     }
 }

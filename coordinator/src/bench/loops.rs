@@ -11,7 +11,7 @@ use serde::Serialize;
 use shared::simulate::simulate_along;
 
 use crate::error::CliError;
-use crate::stats::Distribution;
+use crate::stats::{Distribution, median};
 use crate::turns::{RunOptions, RunOutcome, WaitMode, run_scenario};
 use crate::validate::{Loaded, load_and_plan};
 
@@ -175,16 +175,6 @@ fn loop_s(o: &RunOutcome) -> f64 {
         steps / o.timing.steps_per_s
     } else {
         0.0
-    }
-}
-
-fn median(values: &[f64]) -> f64 {
-    let mut v = values.to_vec();
-    v.sort_by(f64::total_cmp);
-    match v.len() {
-        0 => 0.0,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
     }
 }
 

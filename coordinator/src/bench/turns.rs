@@ -14,7 +14,7 @@ use shared::vocabulary::TurnMode;
 
 use crate::compare::with_turn_mode;
 use crate::error::CliError;
-use crate::stats::Distribution;
+use crate::stats::{Distribution, median};
 use crate::turns::{RunOptions, RunOutcome, run_scenario};
 use crate::validate::load_and_plan;
 
@@ -318,21 +318,6 @@ fn mode_report(mode: TurnMode, runs: &[RunOutcome]) -> ModeReport {
     }
 }
 
-/// The median (the mean of the middle two for an even count; 0 for none).
-fn median(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        (v[m - 1] + v[m]) / 2.0
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -341,13 +326,6 @@ mod tests {
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("..")
             .join("scenarios")
-    }
-
-    #[test]
-    fn median_of_odd_even_and_no_values() {
-        assert_eq!(median(&[]), 0.0);
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0]), 2.5);
     }
 
     #[test]

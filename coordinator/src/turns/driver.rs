@@ -49,6 +49,8 @@ pub(super) struct Driver<'a, 's> {
     pub(super) missed: Vec<u32>,
     /// Spin rather than sleep while a turn is short ([`super::WaitMode`]).
     pub(super) spin: bool,
+    /// Whether any agent has a sensing radius (then each world lists what it senses).
+    pub(super) senses: bool,
     /// Called after every step.
     pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
 }
@@ -120,13 +122,14 @@ impl Driver<'_, '_> {
                 // Who comes next, told ahead when spinning: the next group of the step,
                 // or after the last one, the first live agent (next step's first turn
                 // in sequential mode).
-                let first = self.recorder.alive().iter().position(|a| *a);
-                let next: &[usize] = match (groups.get(k + 1), &first) {
-                    (Some(g), _) => g,
-                    (None, Some(f)) if self.scenario.turns == TurnMode::Sequential => {
-                        std::slice::from_ref(f)
+                let first;
+                let next: &[usize] = match groups.get(k + 1) {
+                    Some(g) => g,
+                    None if self.spin && self.scenario.turns == TurnMode::Sequential => {
+                        first = self.recorder.alive().iter().position(|a| *a);
+                        first.as_slice()
                     }
-                    _ => &[],
+                    None => &[],
                 };
                 if self.take_group(&monitor, step, group, next, centre)? {
                     break 'steps;
@@ -177,10 +180,7 @@ impl Driver<'_, '_> {
         centre: &Pose,
     ) -> anyhow::Result<bool> {
         let sensing = self
-            .scenario
-            .agents
-            .iter()
-            .any(|a| a.sensing_radius_m.is_some())
+            .senses
             .then(|| SensedAgents::new(self.recorder.bodies()));
         self.kill_before_turns(step, group);
         let mut granted = Vec::with_capacity(group.len());
@@ -191,10 +191,8 @@ impl Driver<'_, '_> {
                 continue;
             }
             let spec = &self.scenario.agents[agent];
-            let visible = match &sensing {
-                Some(s) => s.sensed_by(agent, spec),
-                None => (0..self.scenario.agents.len()).collect(),
-            };
+            // Without sensing, every agent (no list built).
+            let visible = sensing.as_ref().map(|s| s.sensed_by(agent, spec));
             // Stamped before the world exists, so no answer to it can predate the stamp.
             let at = Instant::now();
             let at_ns = monotonic_ns();
@@ -204,7 +202,7 @@ impl Driver<'_, '_> {
                 centre,
                 self.recorder.bodies(),
                 self.recorder.alive(),
-                &visible,
+                visible.as_deref(),
             )?;
             self.ipc.notify_turn(agent)?;
             if self.options.kills.contains(&(agent, step))

@@ -316,6 +316,7 @@ pub fn run_scenario_with(
             progress: &mut progress,
             missed: vec![0; n],
             spin: options.wait.spins(),
+            senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             between_steps,
         }
         .drive(centre_path, started)

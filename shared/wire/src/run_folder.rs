@@ -237,6 +237,20 @@ pub fn make_run_files_private(prefix: &str) -> Result<usize, RunFilesError> {
     Ok(changed)
 }
 
+/// Remove this user's regular files of run `prefix` left directly in /dev/shm (what
+/// iceoryx2's dead-node cleanup can miss, e.g. a segment of a process killed while it was
+/// connecting); returns how many were removed. Call it once every process of the run has
+/// exited: the prefix is the run's alone.
+pub fn remove_run_files_in_shm(prefix: &str) -> usize {
+    use std::os::unix::fs::MetadataExt;
+    let euid = effective_uid();
+    run_files_in_shm(prefix)
+        .into_iter()
+        .filter(|(_, meta)| meta.uid() == euid && meta.file_type().is_file())
+        .filter(|(path, _)| std::fs::remove_file(path).is_ok())
+        .count()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
