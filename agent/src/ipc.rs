@@ -101,7 +101,8 @@ impl IpcTransport {
         let scenario = wire::read_mission(prefix).context("the mission file")?;
         let mission = MissionView {
             field: scenario.field,
-            obstacles: scenario.obstacles,
+            obstacles: scenario.static_obstacles(),
+            moving: scenario.moving,
             agents: scenario.agents,
             planner: scenario.planner,
         };

@@ -109,6 +109,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// from `radii_m`) and return `agent`'s own position. A list that is not in increasing
 /// agent order, names an agent the mission does not have, or lacks `agent` is an error:
 /// the world comes from another process.
+/// The step of `turn` as an index (moving obstacles stand where this step puts them; a
+/// step beyond the platform's indices cannot come from a run, and saturates).
+fn turn_step(turn: &TurnInput) -> usize {
+    usize::try_from(turn.step).unwrap_or(usize::MAX)
+}
+
 fn read_bodies(
     turn: &TurnInput,
     agent: usize,
@@ -168,11 +174,13 @@ pub fn serve<T: Transport>(
                     mission.agents.len()
                 )
             })?;
-            planner = Some(
-                TurnPlanner::new(&mission.planner, mission.field, &mission.obstacles, spec)
-                    .context("the mission's planner settings")?,
-            );
+            // Every real obstacle it may sense, known to the centre or not.
             obstacles = mission.obstacles.clone();
+            planner = Some(
+                TurnPlanner::new(&mission.planner, mission.field, &obstacles, spec)
+                    .context("the mission's planner settings")?
+                    .with_moving(&mission.moving, &obstacles),
+            );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
         }
         let Some(planner) = planner.as_ref() else {
@@ -180,7 +188,7 @@ pub fn serve<T: Transport>(
         };
         let started = Instant::now();
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
-        let mv = planner.plan_move(&turn.centre, &me, &others);
+        let mv = planner.plan_turn(turn_step(&turn), &turn.centre, &me, &others);
         let compute = started.elapsed();
         let Some(mode) = misbehave else {
             transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
@@ -266,7 +274,8 @@ mod tests {
         Scripted {
             mission: MissionView {
                 field: scenario.field,
-                obstacles: scenario.obstacles.clone(),
+                obstacles: scenario.static_obstacles(),
+                moving: scenario.moving.clone(),
                 agents: scenario.agents.clone(),
                 planner: scenario.planner,
             },
@@ -314,7 +323,12 @@ mod tests {
                     radius_m: scenario.agents[j].radius_m,
                 })
                 .collect();
-            let want = planner.plan_move(&turn.centre, &turn.bodies[agent].1, &others);
+            let want = planner.plan_turn(
+                turn_step(turn),
+                &turn.centre,
+                &turn.bodies[agent].1,
+                &others,
+            );
             assert_eq!(*seq, turn.seq);
             assert_eq!(*mv, want);
             assert_eq!(*status, want.status as u32);

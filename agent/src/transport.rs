@@ -3,6 +3,7 @@
 use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Pose};
+use shared::moving_obstacle::MovingObstacle;
 use shared::vocabulary::{AgentSpec, Move, PlannerSpec};
 
 /// The static scenario as an agent sees it.
@@ -10,8 +11,11 @@ use shared::vocabulary::{AgentSpec, Move, PlannerSpec};
 pub struct MissionView {
     /// The field.
     pub field: Field,
-    /// Every obstacle, true radii.
+    /// Every static obstacle, true radii: those the centre knows and those it finds on
+    /// the way (an agent senses both alike).
     pub obstacles: Vec<Disk>,
+    /// The moving obstacles; where they stand follows from the turn's step.
+    pub moving: Vec<MovingObstacle>,
     /// Every agent, in agent order.
     pub agents: Vec<AgentSpec>,
     /// The controller and its settings.

@@ -53,6 +53,14 @@ pub enum Refusal {
         /// Obstacle index.
         obstacle: usize,
     },
+    /// The agent would overlap a moving obstacle where it stands during the turn.
+    #[error("segment {segment} overlaps moving obstacle {obstacle}")]
+    MovingObstacle {
+        /// Segment index.
+        segment: usize,
+        /// Moving obstacle index, in scenario order.
+        obstacle: usize,
+    },
     /// The agent would overlap another agent.
     #[error("segment {segment} overlaps agent {agent}")]
     Agent {
@@ -68,11 +76,13 @@ pub enum Refusal {
 /// rounding, far less than any spacing.
 const PREFILTER_SLACK_M: f64 = 1e-3;
 
-/// Obstacles in a parry BVH, and the field.
+/// Static obstacles in a parry BVH, the moving ones where they stand, and the field.
 pub struct SafetyMonitor {
     field: Field,
     obstacles: Vec<Disk>,
     bvh: Bvh,
+    /// The moving obstacles where they stand now ([`Self::move_obstacles`]).
+    moving: Vec<Disk>,
 }
 
 impl SafetyMonitor {
@@ -89,7 +99,49 @@ impl SafetyMonitor {
             field,
             obstacles: obstacles.to_vec(),
             bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves),
+            moving: Vec::new(),
         }
+    }
+
+    /// The moving obstacles drive along `sweeps` (one polyline each, from where they
+    /// stood to where they stand now, radius `radius_m`) while every body of `bodies`
+    /// stands still: `(obstacle, agent)` for each live agent (`alive`) a sweep comes
+    /// within reach of, checked with parry's segment-ball query. From now on moves are
+    /// checked against each obstacle at the end of its sweep.
+    pub fn move_obstacles(
+        &mut self,
+        sweeps: &[(Vec<Point>, f64)],
+        bodies: &[Body],
+        alive: &[bool],
+    ) -> Vec<(usize, usize)> {
+        let identity = Isometry2::identity();
+        let mut struck = Vec::new();
+        self.moving.clear();
+        for (m, (sweep, radius_m)) in sweeps.iter().enumerate() {
+            let Some(&end) = sweep.last() else { continue };
+            self.moving.push(Disk {
+                centre: end,
+                radius_m: *radius_m,
+            });
+            let pairs: Vec<Segment> = match sweep.as_slice() {
+                [only] => vec![Segment::new(*only, *only)],
+                _ => sweep.windows(2).map(|w| Segment::new(w[0], w[1])).collect(),
+            };
+            for (a, body) in bodies.iter().enumerate() {
+                if !alive.get(a).copied().unwrap_or(false) {
+                    continue;
+                }
+                let ball = Ball::new(body.radius_m + radius_m - SAFETY_TOLERANCE_M);
+                let at = Isometry2::translation(body.position.x, body.position.y);
+                if pairs
+                    .iter()
+                    .any(|seg| query::intersection_test(&identity, seg, &at, &ball).unwrap_or(true))
+                {
+                    struck.push((m, a));
+                }
+            }
+        }
+        struck
     }
 
     /// Check that agent `agent` (radius `radius_m`, standing at `from`) may follow
@@ -167,6 +219,11 @@ impl SafetyMonitor {
                         segment,
                         obstacle: leaf as usize,
                     });
+                }
+            }
+            for (obstacle, o) in self.moving.iter().enumerate() {
+                if hits(&o.centre, o.radius_m) {
+                    return Err(Refusal::MovingObstacle { segment, obstacle });
                 }
             }
             for (other, body) in bodies.iter().enumerate() {

@@ -146,7 +146,7 @@ fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointPlann
         .iter()
         .map(|spec| BestPointPlanner::new(scenario.field, &scenario.obstacles, spec))
         .collect();
-    let mut recorder = Recorder::new(scenario, &path);
+    let mut recorder = Recorder::new(scenario, path[0]);
     let mut turns = Vec::new();
     let last = sampled
         .iter()

@@ -13,6 +13,9 @@
 //! - [`hybrid_astar`]: the formation centre's planner;
 //! - [`cbf`]: the control-barrier-function planners and their exact 2-D QP;
 //! - [`orca`]: the reactive baseline ORCA (RVO2, on `dodgy_2d`), cut to stay safe;
+//! - [`moving_obstacle`]: obstacles driven along routes, and when they move;
+//! - [`course`]: the centre's course in a changing world (obstacles found on the way,
+//!   online replanning, waits);
 //! - [`scenario`]: the TOML scenario model and its validation;
 //! - [`turn`]: one agent's turn: the paper's best-point planner, and every planner behind
 //!   one interface, shared by simulation and agents;
@@ -26,6 +29,7 @@
 pub mod best_point;
 pub mod cbf;
 pub mod clcbs;
+pub mod course;
 pub mod curve;
 pub mod disk_path;
 pub mod dubins;
@@ -33,6 +37,7 @@ pub mod formation;
 pub mod geometry;
 pub mod groups;
 pub mod hybrid_astar;
+pub mod moving_obstacle;
 pub mod orca;
 mod ordered;
 pub mod record;

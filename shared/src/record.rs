@@ -6,7 +6,8 @@
 
 use serde::Serialize;
 
-use crate::geometry::{DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
+use crate::course::{Course, Replan, Wait};
+use crate::geometry::{Disk, DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
@@ -44,6 +45,12 @@ pub struct Step {
     pub agents: Vec<AgentStep>,
     /// How many groups of turns the step took (one per live agent in sequential mode).
     pub groups: usize,
+    /// Where each moving obstacle stands during the step's turns, in scenario order.
+    pub moving: Vec<Point>,
+    /// `(moving obstacle, agent, distance in metres)` for each live agent that a moving
+    /// obstacle's motion at the start of the step came within their radii sum of: empty
+    /// in a safe run.
+    pub struck: Vec<(usize, usize, f64)>,
 }
 
 impl Step {
@@ -110,6 +117,33 @@ pub struct Run {
     pub faults: Vec<Fault>,
     /// Whether the run went through the whole centre path.
     pub completed: bool,
+    /// What the centre's course did in a changing world: replans, waits, obstacles found.
+    pub course: CourseRecord,
+}
+
+/// What the centre's course did during a run ([`Course`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CourseRecord {
+    /// Every replanning, found or not.
+    pub replans: Vec<Replan>,
+    /// Every step the centre held its pose.
+    pub waits: Vec<Wait>,
+    /// For each `[[obstacles.unknown]]` obstacle, the step it became known.
+    pub found_at: Vec<Option<usize>>,
+    /// Whether the run ended because no way through was found for too long.
+    pub gave_up: bool,
+}
+
+impl CourseRecord {
+    /// The record of `course` so far.
+    pub fn of(course: &Course) -> Self {
+        Self {
+            replans: course.replans().to_vec(),
+            waits: course.waits().to_vec(),
+            found_at: course.found_at().to_vec(),
+            gave_up: course.gave_up(),
+        }
+    }
 }
 
 /// The figures of a run (the `summary.json` keys that do not depend on timing).
@@ -124,7 +158,8 @@ pub struct Summary {
     /// Whether the run went through the whole centre path.
     pub completed: bool,
     /// Number of (step, agent) records in which the agent overlaps another body (an
-    /// obstacle or an agent) at the end of the step: 0 in a safe run.
+    /// obstacle or an agent) at the end of the step, plus the number of times a moving
+    /// obstacle's motion came within an agent's reach: 0 in a safe run.
     pub collisions: usize,
     /// Smallest clearance between two bodies over the run, in metres.
     pub min_clearance_m: f64,
@@ -141,9 +176,44 @@ pub struct Summary {
     pub mean_groups_per_step: f64,
     /// Every fault.
     pub faults: Vec<Fault>,
+    /// Every replanning of the centre's path (a changing world), found or not.
+    pub replans: Vec<ReplanNote>,
+    /// Every step the centre held its pose, and why.
+    pub waits: Vec<WaitNote>,
+    /// For each `[[obstacles.unknown]]` obstacle, the step it became known (`null`: never).
+    pub unknown_found_at_step: Vec<Option<usize>>,
+    /// Whether the run ended because the centre found no way through for too long.
+    pub gave_up: bool,
+}
+
+/// One replanning, as `summary.json` lists it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReplanNote {
+    /// The step at whose start it was planned.
+    pub step: usize,
+    /// `found-obstacle` or `moving-obstacle`.
+    pub reason: &'static str,
+    /// Wall time of the planning, in milliseconds.
+    pub planning_ms: f64,
+    /// Whether a path was found and taken (false: the centre waited).
+    pub found: bool,
+}
+
+/// One step the centre held, as `summary.json` lists it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct WaitNote {
+    /// The step.
+    pub step: usize,
+    /// `lag` (an agent too far behind) or `blocked` (no way through yet).
+    pub reason: &'static str,
 }
 
 impl Run {
+    /// The centre path actually followed, one pose per step (waits repeat a pose).
+    pub fn followed_path(&self) -> Vec<Pose> {
+        self.steps.iter().map(|s| s.centre).collect()
+    }
+
     /// The run's figures.
     pub fn summary(&self) -> Summary {
         let moving = &self.steps[self.steps.len().min(1)..];
@@ -160,6 +230,7 @@ impl Run {
                     .iter()
                     .filter(|a| a.clearance_m < -SAFETY_TOLERANCE_M)
                     .count()
+                    + s.struck.len()
             })
             .sum();
         Summary {
@@ -187,6 +258,28 @@ impl Run {
                 moving.iter().map(|s| s.groups as f64).sum::<f64>() / moving.len() as f64
             },
             faults: self.faults.clone(),
+            replans: self
+                .course
+                .replans
+                .iter()
+                .map(|r| ReplanNote {
+                    step: r.step,
+                    reason: r.reason.name(),
+                    planning_ms: r.planning_ms,
+                    found: r.found,
+                })
+                .collect(),
+            waits: self
+                .course
+                .waits
+                .iter()
+                .map(|w| WaitNote {
+                    step: w.step,
+                    reason: w.reason.name(),
+                })
+                .collect(),
+            unknown_found_at_step: self.course.found_at.clone(),
+            gave_up: self.course.gave_up,
         }
     }
 }
@@ -195,8 +288,15 @@ impl Run {
 #[derive(Debug)]
 pub struct Recorder<'a> {
     scenario: &'a Scenario,
-    /// Obstacles with their true radii, for the safety check and clearances.
+    /// Every static obstacle, known to the centre or not, with its true radius.
+    statics: Vec<Disk>,
+    /// Obstacles with their true radii where they stand now (the static ones, then the
+    /// moving ones), for the safety check and clearances.
     obstacles: DiskGrid,
+    /// Where each moving obstacle stands now.
+    moving: Vec<Point>,
+    /// The agents a moving obstacle's motion struck at the start of this step.
+    struck: Vec<(usize, usize, f64)>,
     bodies: Vec<Body>,
     alive: Vec<bool>,
     /// This step's moves, one per agent, until the step ends.
@@ -207,10 +307,9 @@ pub struct Recorder<'a> {
 }
 
 impl<'a> Recorder<'a> {
-    /// Start a run of `scenario` along `centre_path`: every agent at its ideal slot at
-    /// the first pose, recorded as step 0.
-    pub fn new(scenario: &'a Scenario, centre_path: &[Pose]) -> Self {
-        let start = centre_path.first().copied().unwrap_or(scenario.path.start);
+    /// Start a run of `scenario` with the centre at `start`: every agent at its ideal
+    /// slot, every moving obstacle at its first waypoint, recorded as step 0.
+    pub fn new(scenario: &'a Scenario, start: Pose) -> Self {
         let bodies: Vec<Body> = scenario
             .agents
             .iter()
@@ -220,19 +319,25 @@ impl<'a> Recorder<'a> {
             })
             .collect();
         let n = bodies.len();
+        let statics = scenario.static_obstacles();
+        let moving: Vec<Point> = scenario.moving.iter().map(|m| m.position_at(0)).collect();
         let mut recorder = Self {
             scenario,
-            obstacles: DiskGrid::new(scenario.obstacles.clone()),
+            obstacles: Self::obstacles_now(&statics, scenario, 0),
+            statics,
+            moving,
+            struck: Vec::new(),
             bodies,
             alive: vec![true; n],
             pending: vec![None; n],
             groups: 0,
             run: Run {
                 scenario: scenario.name.clone(),
-                centre_path: centre_path.to_vec(),
+                centre_path: vec![start],
                 steps: Vec::new(),
                 faults: Vec::new(),
                 completed: false,
+                course: CourseRecord::default(),
             },
         };
         for (i, b) in recorder.bodies.clone().iter().enumerate() {
@@ -250,6 +355,44 @@ impl<'a> Recorder<'a> {
     /// The scenario being run.
     pub fn scenario(&self) -> &Scenario {
         self.scenario
+    }
+
+    /// Every obstacle where it stands at `step`: the static ones, then the moving ones.
+    fn obstacles_now(statics: &[Disk], scenario: &Scenario, step: usize) -> DiskGrid {
+        let mut all = statics.to_vec();
+        all.extend(scenario.moving.iter().map(|m| m.disk_at(step)));
+        DiskGrid::new(all)
+    }
+
+    /// Open step `step` (from 1) with the centre at `centre`: every moving obstacle
+    /// drives to where it stands at `step` while the agents stand still, and any live
+    /// agent its motion comes within reach of is recorded as struck (see
+    /// [`crate::moving_obstacle`]). Call before any turn or fault of the step.
+    pub fn begin_step(&mut self, step: usize, centre: Pose) {
+        self.run.centre_path.push(centre);
+        if self.scenario.moving.is_empty() {
+            return;
+        }
+        for (m, obstacle) in self.scenario.moving.iter().enumerate() {
+            let sweep = obstacle.sweep(step);
+            for (a, body) in self.bodies.iter().enumerate() {
+                if !self.alive[a] {
+                    continue;
+                }
+                let reach_m = obstacle.radius_m + body.radius_m;
+                let distance_m = distance_polyline_polyline(&sweep, &[body.position]);
+                if distance_m < reach_m - SAFETY_TOLERANCE_M {
+                    self.struck.push((m, a, distance_m));
+                }
+            }
+            self.moving[m] = obstacle.position_at(step);
+        }
+        self.obstacles = Self::obstacles_now(&self.statics, self.scenario, step);
+    }
+
+    /// Where each moving obstacle stands now, in scenario order.
+    pub fn moving_positions(&self) -> &[Point] {
+        &self.moving
     }
 
     /// Every agent's body, in agent order.
@@ -518,6 +661,8 @@ impl<'a> Recorder<'a> {
             centre,
             agents,
             groups: std::mem::take(&mut self.groups),
+            moving: self.moving.clone(),
+            struck: std::mem::take(&mut self.struck),
         });
     }
 
@@ -525,6 +670,11 @@ impl<'a> Recorder<'a> {
     pub fn finish(mut self, completed: bool) -> Run {
         self.run.completed = completed;
         self.run
+    }
+
+    /// Keep what the centre's course did in the record.
+    pub fn note_course(&mut self, course: &Course) {
+        self.run.course = CourseRecord::of(course);
     }
 
     /// The run so far, marked not completed (for a run stopped early).

@@ -7,6 +7,7 @@
 //! moves are taken together. The multi-process
 //! run must reproduce this trajectory to the bit.
 
+use crate::course::Course;
 use crate::geometry::Pose;
 use crate::groups::turn_groups;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
@@ -34,10 +35,15 @@ pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
 /// One planner per agent, in agent order, of the scenario's kind. The scenario's
 /// settings were validated for every agent, so this cannot fail on a loaded scenario.
 pub fn agent_planners(scenario: &Scenario) -> Result<Vec<TurnPlanner>, CbfSettingsError> {
+    // Agents plan around every real obstacle they sense, known to the centre or not.
+    let obstacles = scenario.static_obstacles();
     scenario
         .agents
         .iter()
-        .map(|a| TurnPlanner::new(&scenario.planner, scenario.field, &scenario.obstacles, a))
+        .map(|a| {
+            TurnPlanner::new(&scenario.planner, scenario.field, &obstacles, a)
+                .map(|p| p.with_moving(&scenario.moving, &obstacles))
+        })
         .collect()
 }
 
@@ -71,7 +77,8 @@ pub fn simulate(scenario: &Scenario) -> Result<Run, SimulateError> {
     simulate_along(scenario, &path)
 }
 
-/// Run the scenario along a given centre path (one pose per step).
+/// Run the scenario starting along a given centre path (one pose per step); in a
+/// changing world the centre's [`Course`] may leave it.
 pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, SimulateError> {
     simulate_along_with_deaths(scenario, centre_path, &[])
 }
@@ -107,8 +114,13 @@ pub fn simulate_along_with_deaths(
     deaths: &[(usize, usize)],
 ) -> Result<Run, SimulateError> {
     let planners = agent_planners(scenario)?;
-    let mut recorder = Recorder::new(scenario, centre_path);
-    for (step, centre) in centre_path.iter().enumerate().skip(1) {
+    let mut course = Course::new(scenario, centre_path);
+    let mut recorder = Recorder::new(scenario, course.pose());
+    let mut step = 0;
+    while let Some(centre) = course.advance(step + 1, recorder.bodies(), recorder.alive()) {
+        step += 1;
+        let centre = &centre;
+        recorder.begin_step(step, *centre);
         let groups = turn_groups(
             scenario.turns,
             &scenario.agents,
@@ -143,7 +155,7 @@ pub fn simulate_along_with_deaths(
                     let me = recorder.bodies()[agent].position;
                     (
                         agent,
-                        planners[agent].plan_move(centre, &me, &recorder.others(agent)),
+                        planners[agent].plan_turn(step, centre, &me, &recorder.others(agent)),
                     )
                 })
                 .collect();
@@ -152,5 +164,6 @@ pub fn simulate_along_with_deaths(
         }
         recorder.end_step(step);
     }
-    Ok(recorder.finish(true))
+    recorder.note_course(&course);
+    Ok(recorder.finish(!course.gave_up()))
 }

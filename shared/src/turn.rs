@@ -10,6 +10,7 @@ use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, polyline_prefix};
+use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaPlanner;
 use crate::vocabulary::{
     AgentSpec, Body, CbfSettingsError, MAX_WAYPOINTS, Move, MoveStatus, PlannerKind, PlannerSpec,
@@ -106,6 +107,18 @@ impl BestPointPlanner {
     /// [`TurnPlanner::plan_move`], which picks the sensed ones); the top speed is
     /// [`TurnPlanner`]'s business too.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        self.plan_move_within(centre, me, others, self.spec.max_step_m)
+    }
+
+    /// [`Self::plan_move`] with the path cut at `max_step_m` (absent: not cut) instead of
+    /// the agent's top speed: what is left of a turn that began with another motion.
+    pub fn plan_move_within(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        others: &[Body],
+        max_step_m: Option<f64>,
+    ) -> Move {
         let slot = self.slot_position(centre);
         let grow_m = self.radius_m + PLANNING_MARGIN_M;
         let agents = DiskGrid::new(
@@ -173,7 +186,7 @@ impl BestPointPlanner {
         };
         // With a top speed the agent follows the path that far: cut on the path itself
         // (on an arc's circle, not on a chord), so it stops at a free point.
-        let under_way = self.spec.max_step_m.and_then(|s| path.prefix(s));
+        let under_way = max_step_m.and_then(|s| path.prefix(s));
         let followed = under_way.as_ref().unwrap_or(&path);
         let mut waypoints: Vec<Point> = followed
             .polyline(0.5 * PLANNING_MARGIN_M)
@@ -215,6 +228,11 @@ impl BestPointPlanner {
 pub struct TurnPlanner {
     controller: Controller,
     spec: AgentSpec,
+    /// The moving obstacles of the scenario ([`Self::with_moving`]).
+    moving: Vec<MovingObstacle>,
+    /// With moving obstacles: the static ones (true radii), to check an escape against.
+    statics: DiskGrid,
+    field: Field,
 }
 
 /// The controllers.
@@ -267,7 +285,20 @@ impl TurnPlanner {
         Ok(Self {
             controller,
             spec: *spec,
+            moving: Vec::new(),
+            statics: DiskGrid::new(Vec::new()),
+            field,
         })
+    }
+
+    /// This planner in a world with `moving` obstacles: [`Self::plan_turn`] plans around
+    /// them. `obstacles` are the static ones given to [`Self::new`] (true radii).
+    pub fn with_moving(mut self, moving: &[MovingObstacle], obstacles: &[Disk]) -> Self {
+        if !moving.is_empty() {
+            self.moving = moving.to_vec();
+            self.statics = DiskGrid::new(obstacles.to_vec());
+        }
+        self
     }
 
     /// The agent this planner moves.
@@ -283,6 +314,157 @@ impl TurnPlanner {
     /// the first `max_step_m` of the controller's path, with status
     /// [`MoveStatus::UnderWay`] when it stops short of the best point.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        self.plan_move_within(centre, me, others, self.spec.max_step_m)
+    }
+
+    /// Plan this agent's turn at `step` while every `other` body stands still and every
+    /// moving obstacle stands where it is at `step` ([`crate::moving_obstacle`]).
+    ///
+    /// The agent plans around each moving obstacle it senses as around a disk grown by
+    /// the obstacle's speed ([`MovingObstacle::reach_disk_at`]): where the obstacle can be
+    /// until the agent's next turn, so a move that ends outside it is still clear after
+    /// the obstacle's next motion. An agent that starts its turn inside such a disk (the
+    /// obstacle came closer since its last turn) first escapes: a straight motion out of
+    /// the disk, radially or up to 120 degrees off, that is clear of every body and
+    /// within its top speed; the rest of the turn is planned from there with what is left
+    /// of the top speed. Without an escape, the disk is shrunk to leave the agent outside.
+    /// Without moving obstacles this is [`Self::plan_move`].
+    pub fn plan_turn(&self, step: usize, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        if self.moving.is_empty() {
+            return self.plan_move(centre, me, others);
+        }
+        let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
+        let reach: Vec<Disk> = self
+            .moving
+            .iter()
+            .filter(|m| {
+                let c = m.position_at(step);
+                self.spec.senses(me, &c, m.radius_m)
+            })
+            .map(|m| m.reach_disk_at(step))
+            .collect();
+        let inside = reach
+            .iter()
+            .any(|d| (me - d.centre).norm() < d.radius_m + keep_m);
+        let escape = if inside {
+            self.escape_point(step, me, others, &reach)
+        } else {
+            None
+        };
+        let start = escape.unwrap_or(*me);
+        let mut bodies = others.to_vec();
+        for d in &reach {
+            let room_m = (start - d.centre).norm() - keep_m;
+            let radius_m = d.radius_m.min(room_m);
+            if radius_m > 0.0 {
+                bodies.push(Body {
+                    position: d.centre,
+                    radius_m,
+                });
+            }
+        }
+        let Some(out) = escape else {
+            return self.plan_move_within(centre, me, &bodies, self.spec.max_step_m);
+        };
+        let used_m = (out - me).norm();
+        let left_m = self.spec.max_step_m.map(|s| (s - used_m).max(0.0));
+        let mut mv = self.plan_move_within(centre, &out, &bodies, left_m);
+        mv.waypoints.insert(0, *me);
+        if mv.waypoints.len() > MAX_WAYPOINTS {
+            mv.waypoints.truncate(2);
+            mv.best = out;
+            mv.status = MoveStatus::UnderWay;
+        }
+        mv
+    }
+
+    /// A point just outside every disk of `reach` (grown by the agent's radius), reached
+    /// from `me` by a straight motion clear of every body, the static obstacles, the
+    /// moving ones where they stand and the field's edges, within the top speed.
+    fn escape_point(
+        &self,
+        step: usize,
+        me: &Point,
+        others: &[Body],
+        reach: &[Disk],
+    ) -> Option<Point> {
+        let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
+        // The disk it is deepest in.
+        let deepest = reach
+            .iter()
+            .max_by(|a, b| {
+                let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
+                depth(a).total_cmp(&depth(b))
+            })
+            .copied()?;
+        let away = me - deepest.centre;
+        let away_rad = if away.norm() > 0.0 {
+            away.y.atan2(away.x)
+        } else {
+            0.0
+        };
+        let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
+        let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
+        let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
+        for off_deg in [
+            0.0_f64, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0,
+        ] {
+            let rad = away_rad + off_deg.to_radians();
+            let v = Vector::new(rad.cos(), rad.sin());
+            // |me + t v - c| = R, the larger root (leaving the disk).
+            let big_r = deepest.radius_m + keep_m + PLANNING_MARGIN_M;
+            let b = v.dot(&away);
+            let disc = b * b - (away.norm_squared() - big_r * big_r);
+            if disc < 0.0 {
+                continue;
+            }
+            let t = -b + disc.sqrt();
+            if !(t > 0.0 && t <= budget_m) {
+                continue;
+            }
+            let q = me + t * v;
+            let outside_reach = reach
+                .iter()
+                .all(|d| (q - d.centre).norm() >= d.radius_m + keep_m);
+            let in_field = self.field.signed_inset_m(&q) >= clear_m;
+            let segment_clear =
+                |d: &Disk, grow_m: f64| d.signed_distance_to_segment_m(me, &q) >= grow_m + clear_m;
+            let clear_of_bodies = others.iter().all(|b| {
+                segment_clear(
+                    &Disk {
+                        centre: b.position,
+                        radius_m: b.radius_m,
+                    },
+                    0.0,
+                )
+            });
+            let clear_of_moving = now.iter().all(|d| segment_clear(d, 0.0));
+            let mut clear_of_statics = true;
+            let _ =
+                self.statics
+                    .visit_near(me, t + clear_m + self.statics.max_radius_m(), |_, d| {
+                        if segment_clear(d, 0.0) {
+                            std::ops::ControlFlow::Continue(())
+                        } else {
+                            clear_of_statics = false;
+                            std::ops::ControlFlow::Break(())
+                        }
+                    });
+            if outside_reach && in_field && clear_of_bodies && clear_of_moving && clear_of_statics {
+                return Some(q);
+            }
+        }
+        None
+    }
+
+    /// [`Self::plan_move`] with the move cut at `max_step_m` (absent: not cut).
+    fn plan_move_within(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        others: &[Body],
+        max_step_m: Option<f64>,
+    ) -> Move {
         let sensed: Vec<Body>;
         let others = if self.spec.sensing_radius_m.is_some() {
             sensed = others
@@ -295,12 +477,12 @@ impl TurnPlanner {
             others
         };
         let mut mv = match &self.controller {
-            Controller::BestPoint(p) => p.plan_move(centre, me, others),
+            Controller::BestPoint(p) => p.plan_move_within(centre, me, others, max_step_m),
             Controller::Cbf(p) => p.plan_move(centre, me, others),
             Controller::ZcbfLogSumExp(p) => p.plan_move(centre, me, others),
             Controller::Orca(p) => p.plan_move(centre, me, others),
         };
-        if let Some(max_step_m) = self.spec.max_step_m
+        if let Some(max_step_m) = max_step_m
             && let Some(prefix) = polyline_prefix(&mv.waypoints, max_step_m)
         {
             mv.waypoints = prefix;

@@ -4,7 +4,8 @@
 
 use std::time::{Duration, Instant};
 
-use shared::geometry::Pose;
+use shared::course::Course;
+use shared::geometry::{Point, Pose};
 use shared::groups::turn_groups;
 use shared::record::Recorder;
 use shared::scenario::Scenario;
@@ -91,7 +92,8 @@ impl Driver<'_, '_> {
         });
         self.progress.turn_samples.reserve(n * centre_path.len());
 
-        let monitor = SafetyMonitor::new(self.scenario.field, &self.scenario.obstacles);
+        let mut monitor =
+            SafetyMonitor::new(self.scenario.field, &self.scenario.static_obstacles());
         let bar = progress_bar(
             centre_path.len().saturating_sub(1),
             &self.scenario.name,
@@ -99,7 +101,18 @@ impl Driver<'_, '_> {
         );
 
         let stepping = Instant::now();
-        'steps: for (step, centre) in centre_path.iter().enumerate().skip(1) {
+        let mut course = Course::new(self.scenario, centre_path);
+        let mut step = 0;
+        'steps: while let Some(centre) =
+            course.advance(step + 1, self.recorder.bodies(), self.recorder.alive())
+        {
+            step += 1;
+            let centre = &centre;
+            self.begin_step(&mut monitor, step, centre);
+            if bar.position() + 1 >= bar.length().unwrap_or(0) {
+                // The course waited or was replanned: the path ahead is longer.
+                bar.inc_length(1);
+            }
             // Agents that died while waiting for their turn are noticed now.
             let checked = Instant::now();
             // One wait call tells whether any child has exited (or an agent has no
@@ -157,6 +170,8 @@ impl Driver<'_, '_> {
             }
         }
         bar.finish_and_clear();
+        self.recorder.note_course(&course);
+        self.progress.gave_up = course.gave_up();
         self.progress.steps_s = stepping.elapsed().as_secs_f64();
         self.progress.rss_kib = self
             .pids()
@@ -166,6 +181,34 @@ impl Driver<'_, '_> {
             .collect();
         self.progress.completed = !self.progress.interrupted;
         Ok(())
+    }
+
+    /// Open `step`: the recorder and the monitor each move the moving obstacles and check
+    /// their motion against the agents standing still; a strike the monitor sees is
+    /// recorded as a fault of the agent struck (the recorder counts its own).
+    fn begin_step(&mut self, monitor: &mut SafetyMonitor, step: usize, centre: &Pose) {
+        self.recorder.begin_step(step, *centre);
+        if self.scenario.moving.is_empty() {
+            return;
+        }
+        let sweeps: Vec<(Vec<Point>, f64)> = self
+            .scenario
+            .moving
+            .iter()
+            .map(|m| (m.sweep(step), m.radius_m))
+            .collect();
+        for (obstacle, agent) in
+            monitor.move_obstacles(&sweeps, self.recorder.bodies(), self.recorder.alive())
+        {
+            tracing::warn!("step {step}: moving obstacle {obstacle} struck agent {agent}");
+            self.recorder.note_fault(
+                step,
+                agent,
+                "struck",
+                format!("moving obstacle {obstacle}'s motion came within reach of the agent"),
+                None,
+            );
+        }
     }
 
     /// Grant every agent of `group` its turn at `step` at once (each sees the same

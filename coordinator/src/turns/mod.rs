@@ -251,6 +251,8 @@ struct Progress {
     rss_kib: Vec<f64>,
     interrupted: bool,
     completed: bool,
+    /// The centre waited too long for a way through: the run ended short of the goal.
+    gave_up: bool,
 }
 
 /// [`run_scenario`] calling `between_steps` after every step (benchmarks measure their
@@ -263,7 +265,10 @@ pub fn run_scenario_with(
 ) -> Result<RunOutcome, RunFailure> {
     let started = Instant::now();
     let n = scenario.agents.len();
-    let mut recorder = Recorder::new(scenario, centre_path);
+    let mut recorder = Recorder::new(
+        scenario,
+        centre_path.first().copied().unwrap_or(scenario.path.start),
+    );
     let mut progress = Progress::default();
     let fail = |error: anyhow::Error, recorder: &Recorder, progress: Progress| RunFailure {
         error,
@@ -341,7 +346,7 @@ pub fn run_scenario_with(
             Some(anyhow::anyhow!("the coordinator panicked: {what}"))
         }
     };
-    let run = if progress.completed && error.is_none() {
+    let run = if progress.completed && !progress.gave_up && error.is_none() {
         recorder.finish(true)
     } else {
         recorder.snapshot()

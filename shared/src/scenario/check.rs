@@ -1,11 +1,14 @@
 //! Validation: the raw file structures checked, field by field, into a [`Scenario`]
 //! every other part can trust, and the limits the checks enforce.
 
-use super::file::{CbfFile, FormationFile, ObstaclesFile, PoseFile, ScenarioFile};
+use super::file::{
+    CbfFile, DiskFile, FormationFile, MovingFile, ObstaclesFile, PoseFile, ScenarioFile,
+};
 use super::random::{Crowded, random_obstacles};
 use super::{PathSpec, Scenario, ScenarioError};
 use crate::formation::Slot;
 use crate::geometry::{Disk, Field, Point, Pose};
+use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec, TurnMode};
 
 /// Largest field side accepted, in metres: beyond this the numbers stop being a field.
@@ -139,6 +142,10 @@ impl Checker<'_> {
                 0.5 * width_m.min(height_m),
             )?,
             allow_reverse: p.allow_reverse,
+            max_lag_m: p
+                .max_lag_m
+                .map(|v| self.positive("path.max_lag_m", v, side_m))
+                .transpose()?,
         };
         let diagonal_m = width_m.hypot(height_m);
         if diagonal_m / path.step_m > MAX_STEPS as f64 / 4.0 {
@@ -176,8 +183,13 @@ impl Checker<'_> {
 
         let obstacles = self.obstacles(&raw.obstacles, &field, &path, raw.seed)?;
         let agents = self.agents(&raw.formation, &field)?;
-        self.start_and_goal_clear(&obstacles, &field, &path)?;
-        self.formation_fits_at_start(&agents, &obstacles, &field, &path)?;
+        let unknown = self.unknown_obstacles(&raw.obstacles, &field, obstacles.len())?;
+        let mut all_static = obstacles.clone();
+        all_static.extend_from_slice(&unknown);
+        self.start_and_goal_clear(&all_static, &field, &path)?;
+        self.formation_fits_at_start(&agents, &all_static, &field, &path)?;
+        let moving =
+            self.moving_obstacles(&raw.obstacles, &field, &path, &agents, all_static.len())?;
         let planner = self.planner(raw.planner, raw.cbf.as_ref(), &agents, side_m)?;
         let turns = raw.turns.mode;
         if turns == TurnMode::Parallel
@@ -196,11 +208,204 @@ impl Checker<'_> {
             seed: raw.seed,
             field,
             obstacles,
+            moving,
+            unknown,
             agents,
             path,
             planner,
             turns,
         })
+    }
+
+    /// A disk table (`[[obstacles.disk]]` or `[[obstacles.unknown]]` item) named `name`.
+    fn disk(
+        &self,
+        name: &str,
+        d: &DiskFile,
+        default_radius_m: f64,
+        field: &Field,
+    ) -> Result<Disk, ScenarioError> {
+        let x_m = self.finite(&format!("{name}.x_m"), d.x_m)?;
+        let y_m = self.finite(&format!("{name}.y_m"), d.y_m)?;
+        let side_m = field.width_m.max(field.height_m);
+        let radius_m = match d.radius_m {
+            Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
+            None => default_radius_m,
+        };
+        if !field.contains(&Point::new(x_m, y_m), 0.0) {
+            return Err(self.invalid(
+                name,
+                format!(
+                    "obstacle centre ({}, {}) is outside the {} x {} m field",
+                    num(x_m),
+                    num(y_m),
+                    field.width_m,
+                    field.height_m
+                ),
+            ));
+        }
+        Ok(Disk::new(x_m, y_m, radius_m))
+    }
+
+    /// The `[[obstacles.unknown]]` tables; `known` obstacles are already placed.
+    fn unknown_obstacles(
+        &self,
+        raw: &ObstaclesFile,
+        field: &Field,
+        known: usize,
+    ) -> Result<Vec<Disk>, ScenarioError> {
+        if known + raw.unknown.len() > MAX_OBSTACLES {
+            return Err(self.invalid(
+                "obstacles.unknown",
+                format!(
+                    "{} unknown obstacles and {known} others exceed the capacity of {MAX_OBSTACLES}",
+                    raw.unknown.len()
+                ),
+            ));
+        }
+        raw.unknown
+            .iter()
+            .enumerate()
+            .map(|(i, d)| self.disk(&format!("obstacles.unknown[{i}]"), d, raw.radius_m, field))
+            .collect()
+    }
+
+    /// The `[[obstacles.moving]]` tables, checked against the agents' top speeds and
+    /// sensing, the start and goal poses and the formation at the start; `statics`
+    /// obstacles are already placed.
+    fn moving_obstacles(
+        &self,
+        raw: &ObstaclesFile,
+        field: &Field,
+        path: &PathSpec,
+        agents: &[AgentSpec],
+        statics: usize,
+    ) -> Result<Vec<MovingObstacle>, ScenarioError> {
+        if statics + raw.moving.len() > MAX_OBSTACLES {
+            return Err(self.invalid(
+                "obstacles.moving",
+                format!(
+                    "{} moving obstacles and {statics} others exceed the capacity of {MAX_OBSTACLES}",
+                    raw.moving.len()
+                ),
+            ));
+        }
+        raw.moving
+            .iter()
+            .enumerate()
+            .map(|(i, m)| self.moving_obstacle(i, m, raw.radius_m, field, path, agents))
+            .collect()
+    }
+
+    fn moving_obstacle(
+        &self,
+        i: usize,
+        m: &MovingFile,
+        default_radius_m: f64,
+        field: &Field,
+        path: &PathSpec,
+        agents: &[AgentSpec],
+    ) -> Result<MovingObstacle, ScenarioError> {
+        let name = format!("obstacles.moving[{i}]");
+        let side_m = field.width_m.max(field.height_m);
+        let radius_m = match m.radius_m {
+            Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
+            None => default_radius_m,
+        };
+        if m.waypoints_m.len() < 2 {
+            return Err(self.invalid(
+                format!("{name}.waypoints_m"),
+                format!(
+                    "a route needs at least two waypoints, got {}",
+                    m.waypoints_m.len()
+                ),
+            ));
+        }
+        let mut waypoints = Vec::with_capacity(m.waypoints_m.len());
+        for (k, xy) in m.waypoints_m.iter().enumerate() {
+            let wname = format!("{name}.waypoints_m[{k}]");
+            let &[x_m, y_m] = xy.as_slice() else {
+                return Err(self.invalid(
+                    wname,
+                    format!("must be a pair [x_m, y_m], got {} value(s)", xy.len()),
+                ));
+            };
+            let p = Point::new(
+                self.finite(&format!("{wname}[0]"), x_m)?,
+                self.finite(&format!("{wname}[1]"), y_m)?,
+            );
+            if !field.contains(&p, 0.0) {
+                return Err(self.invalid(
+                    wname,
+                    format!(
+                        "({}, {}) is outside the {} x {} m field",
+                        num(x_m),
+                        num(y_m),
+                        field.width_m,
+                        field.height_m
+                    ),
+                ));
+            }
+            waypoints.push(p);
+        }
+        let speed_name = format!("{name}.speed_m_per_step");
+        let speed_m = self.positive(&speed_name, m.speed_m_per_step, side_m)?;
+        // Agents must be able to outrun it, and to see it before it can reach them.
+        for (a, spec) in agents.iter().enumerate() {
+            if let Some(max_m) = spec.max_step_m
+                && speed_m > max_m
+            {
+                return Err(self.invalid(
+                    speed_name,
+                    format!(
+                        "{} m per step is faster than the top speed of agent {a} ({} m per step): agents must be able to outrun a moving obstacle",
+                        num(speed_m),
+                        num(max_m)
+                    ),
+                ));
+            }
+            if let (Some(sensing_m), Some(max_m)) = (spec.sensing_radius_m, spec.max_step_m)
+                && sensing_m < max_m + spec.radius_m + speed_m
+            {
+                return Err(self.invalid(
+                    "formation.sensing_radius_m",
+                    format!(
+                        "{} m does not cover the move of agent {a}, its radius and the step of moving obstacle {i} ({} + {} + {} m): it could end a turn where that obstacle reaches it unseen",
+                        num(sensing_m),
+                        num(max_m),
+                        num(spec.radius_m),
+                        num(speed_m)
+                    ),
+                ));
+            }
+        }
+        let first = waypoints[0];
+        for (pname, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
+            let gap_m = (pose.position() - first).norm() - radius_m;
+            if gap_m < path.centre_clearance_m {
+                return Err(self.invalid(
+                    format!("{name}.waypoints_m[0]"),
+                    format!(
+                        "the obstacle starts {} m from {pname}, within the centre clearance {} m",
+                        num(gap_m),
+                        path.centre_clearance_m
+                    ),
+                ));
+            }
+        }
+        for (a, spec) in agents.iter().enumerate() {
+            let p = spec.slot.ideal_position(&path.start);
+            if (p - first).norm() < radius_m + spec.radius_m {
+                return Err(self.invalid(
+                    format!("{name}.waypoints_m[0]"),
+                    format!(
+                        "the obstacle starts on agent {a}, at ({:.3}, {:.3}) at the start pose",
+                        p.x, p.y
+                    ),
+                ));
+            }
+        }
+        Ok(MovingObstacle::new(radius_m, waypoints, speed_m, m.route))
     }
 
     fn planner(

@@ -9,6 +9,7 @@ use serde::Deserialize;
 use super::check::Checker;
 use super::{Scenario, ScenarioError};
 use crate::geometry::Pose;
+use crate::moving_obstacle::Route;
 use crate::vocabulary::{PlannerKind, TurnMode};
 
 /// The paper's example (section III), embedded so `coordinator run` works with no file.
@@ -138,6 +139,12 @@ pub(super) struct ObstaclesFile {
     #[serde(default)]
     pub(super) disk: Vec<DiskFile>,
     pub(super) random: Option<RandomFile>,
+    /// `[[obstacles.moving]]`: obstacles driven along routes.
+    #[serde(default)]
+    pub(super) moving: Vec<MovingFile>,
+    /// `[[obstacles.unknown]]`: obstacles the centre's planner does not know at the start.
+    #[serde(default)]
+    pub(super) unknown: Vec<DiskFile>,
 }
 
 impl Default for ObstaclesFile {
@@ -147,6 +154,8 @@ impl Default for ObstaclesFile {
             positions_m: Vec::new(),
             disk: Vec::new(),
             random: None,
+            moving: Vec::new(),
+            unknown: Vec::new(),
         }
     }
 }
@@ -167,6 +176,17 @@ pub(super) struct DiskFile {
     pub(super) x_m: f64,
     pub(super) y_m: f64,
     pub(super) radius_m: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MovingFile {
+    pub(super) radius_m: Option<f64>,
+    /// `[x_m, y_m]` pairs, checked by the [`Checker`] as `positions_m` is.
+    pub(super) waypoints_m: Vec<Vec<f64>>,
+    pub(super) speed_m_per_step: f64,
+    #[serde(default)]
+    pub(super) route: Route,
 }
 
 #[derive(Deserialize)]
@@ -212,6 +232,8 @@ pub(super) struct PathFile {
     pub(super) centre_clearance_m: f64,
     #[serde(default)]
     pub(super) allow_reverse: bool,
+    /// The centre holds while an agent lags farther than this behind its slot.
+    pub(super) max_lag_m: Option<f64>,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -289,7 +311,12 @@ fn table_given_as_array(document: &toml::Table) -> Option<String> {
         "path.start",
         "path.goal",
     ];
-    const ARRAYS_OF_TABLES: [&str; 2] = ["obstacles.disk", "formation.slots"];
+    const ARRAYS_OF_TABLES: [&str; 4] = [
+        "obstacles.disk",
+        "obstacles.moving",
+        "obstacles.unknown",
+        "formation.slots",
+    ];
     let lookup = |path: &str| {
         let mut parts = path.split('.');
         let mut value = document.get(parts.next()?)?;

@@ -1,6 +1,7 @@
 //! The validated scenario: what a run is made of.
 
 use crate::geometry::{Disk, Field, Pose};
+use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{AgentSpec, PlannerKind, PlannerSpec, TurnMode};
 
 /// A validated scenario: every number finite and in range, every body placed legally.
@@ -15,6 +16,12 @@ pub struct Scenario {
     /// Every obstacle with its true (not inflated) radius, explicit ones first, then the
     /// generated ones.
     pub obstacles: Vec<Disk>,
+    /// Obstacles that move along routes ([`MovingObstacle`]), in file order.
+    pub moving: Vec<MovingObstacle>,
+    /// Real static obstacles the formation centre's planner does not know at the start:
+    /// each joins the known map the moment an agent senses it (agents plan around them as
+    /// around any obstacle they sense).
+    pub unknown: Vec<Disk>,
     /// The agents, in turn order.
     pub agents: Vec<AgentSpec>,
     /// Formation centre path settings.
@@ -40,6 +47,9 @@ pub struct PathSpec {
     pub centre_clearance_m: f64,
     /// Whether the centre may drive backwards.
     pub allow_reverse: bool,
+    /// The centre holds while a live agent's deviation exceeds this, in metres (absent:
+    /// it never waits for stragglers).
+    pub max_lag_m: Option<f64>,
 }
 
 impl Scenario {
@@ -48,6 +58,20 @@ impl Scenario {
         let mut s = self.clone();
         s.planner.kind = kind;
         s
+    }
+
+    /// Whether anything in the world changes during a run: moving obstacles, obstacles
+    /// found on the way, or a centre that waits for stragglers. A static scenario follows
+    /// the centre path planned before the run, as the paper does.
+    pub fn changes(&self) -> bool {
+        !self.moving.is_empty() || !self.unknown.is_empty() || self.path.max_lag_m.is_some()
+    }
+
+    /// Every static obstacle, known or not: the real field the agents move in.
+    pub fn static_obstacles(&self) -> Vec<Disk> {
+        let mut all = self.obstacles.clone();
+        all.extend_from_slice(&self.unknown);
+        all
     }
 
     /// Number of agents.

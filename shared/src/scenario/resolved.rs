@@ -92,6 +92,28 @@ impl Scenario {
             );
         }
         let _ = writeln!(t, "]");
+        for m in &self.moving {
+            let _ = writeln!(t, "\n[[obstacles.moving]]");
+            let _ = writeln!(t, "radius_m = {}", toml_f64(m.radius_m));
+            let waypoints: Vec<String> = m
+                .waypoints_m
+                .iter()
+                .map(|p| format!("[{}, {}]", toml_f64(p.x), toml_f64(p.y)))
+                .collect();
+            let _ = writeln!(t, "waypoints_m = [{}]", waypoints.join(", "));
+            let _ = writeln!(t, "speed_m_per_step = {}", toml_f64(m.speed_m_per_step));
+            let _ = writeln!(t, "route = {}", toml_string(m.route.name()));
+        }
+        for o in &self.unknown {
+            let _ = writeln!(t, "\n[[obstacles.unknown]]");
+            let _ = writeln!(
+                t,
+                "x_m = {}\ny_m = {}\nradius_m = {}",
+                toml_f64(o.centre.x),
+                toml_f64(o.centre.y),
+                toml_f64(o.radius_m)
+            );
+        }
 
         let _ = writeln!(t, "\n[formation]");
         let default_agent_m = self
@@ -150,6 +172,9 @@ impl Scenario {
         let _ = writeln!(t, "step_m = {}", toml_f64(p.step_m));
         let _ = writeln!(t, "centre_clearance_m = {}", toml_f64(p.centre_clearance_m));
         let _ = writeln!(t, "allow_reverse = {}", p.allow_reverse);
+        if let Some(v) = p.max_lag_m {
+            let _ = writeln!(t, "max_lag_m = {}", toml_f64(v));
+        }
 
         let _ = writeln!(t, "\n[turns]");
         let _ = writeln!(t, "mode = {}", toml_string(self.turns.name()));
