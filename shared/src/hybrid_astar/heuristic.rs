@@ -5,34 +5,11 @@
 use std::f64::consts::{PI, SQRT_2};
 use std::ops::ControlFlow;
 
-use pathfinding::directed::dijkstra::{DijkstraReachable, dijkstra_reach};
-
 use super::collision::Checker;
+use super::dijkstra::GridDijkstra;
+use super::grid::{Grid, STRAIGHT_COST};
 use super::settings::HybridAStarSettings;
-use crate::geometry::{Field, Point, Pose, Vector};
-
-/// Up to eight grid neighbours with their step costs.
-struct Neighbours {
-    items: [(u32, u32); 8],
-    len: usize,
-    next: usize,
-}
-
-impl Iterator for Neighbours {
-    type Item = (u32, u32);
-    fn next(&mut self) -> Option<(u32, u32)> {
-        (self.next < self.len).then(|| {
-            self.next += 1;
-            self.items[self.next - 1]
-        })
-    }
-}
-
-/// Grid step costs: 1000 per straight step, 1414 per diagonal (rounded down, so never an
-/// overestimate).
-const STRAIGHT_COST: u32 = 1000;
-
-const DIAGONAL_COST: u32 = 1414;
+use crate::geometry::{Disk, Field, Point, Pose, Vector};
 
 /// A fine cell is blocked when each of its `COVER_SPLIT x COVER_SPLIT` sub-squares lies
 /// inside one obstacle.
@@ -40,69 +17,6 @@ const COVER_SPLIT: usize = 4;
 
 /// Largest number of cells of the connectivity grid.
 pub(super) const MAX_GRID_CELLS: f64 = (1u64 << 24) as f64;
-
-/// Square cells of side `cell_m` tiling the field from the origin, row by row.
-#[derive(Clone, Copy, Debug)]
-struct Grid {
-    columns: usize,
-    rows: usize,
-    cell_m: f64,
-}
-
-impl Grid {
-    fn column_row(&self, cell: usize) -> (usize, usize) {
-        (cell % self.columns, cell / self.columns)
-    }
-
-    fn cell_of(&self, p: &Point) -> usize {
-        let to_cell = |v: f64, n: usize| ((v / self.cell_m).floor().max(0.0) as usize).min(n - 1);
-        to_cell(p.y, self.rows) * self.columns + to_cell(p.x, self.columns)
-    }
-
-    /// The 8-neighbours of `cell` that are not blocked, with their step costs. A diagonal
-    /// step between two blocked cells is refused: their shared corner is not free.
-    fn neighbours(&self, cell: usize, blocked: &[bool]) -> Neighbours {
-        let (c, r) = self.column_row(cell);
-        let mut out = Neighbours {
-            items: [(0, 0); 8],
-            len: 0,
-            next: 0,
-        };
-        for (dc, dr) in [
-            (-1i64, -1i64),
-            (0, -1),
-            (1, -1),
-            (-1, 0),
-            (1, 0),
-            (-1, 1),
-            (0, 1),
-            (1, 1),
-        ] {
-            let (nc, nr) = (c as i64 + dc, r as i64 + dr);
-            if nc < 0 || nr < 0 || nc >= self.columns as i64 || nr >= self.rows as i64 {
-                continue;
-            }
-            let (nc, nr) = (nc as usize, nr as usize);
-            let n = nr * self.columns + nc;
-            let diagonal = dc != 0 && dr != 0;
-            if blocked[n]
-                || (diagonal && blocked[r * self.columns + nc] && blocked[nr * self.columns + c])
-            {
-                continue;
-            }
-            let step = if diagonal {
-                DIAGONAL_COST
-            } else {
-                STRAIGHT_COST
-            };
-            out.items[out.len] = (n as u32, step);
-            out.len += 1;
-        }
-        out
-    }
-}
-
-type Successors = Box<dyn FnMut(&u32) -> Neighbours>;
 
 /// The obstacle-aware lower bound, on two grids.
 ///
@@ -114,17 +28,24 @@ type Successors = Box<dyn FnMut(&u32) -> Neighbours>;
 ///
 /// The coarse grid (`heuristic_downsample` fine cells a side, as Smac downsamples its
 /// costmap) opens the cells holding a reachable fine cell, and a lazy Dijkstra
-/// (`pathfinding::dijkstra_reach`) grows from the goal's cell as far as the queries need.
+/// ([`GridDijkstra`]) grows from the goal's cell as far as the queries need.
+///
+/// Nothing here depends on the start, so one `Holonomic` serves any number of searches to
+/// the same goal; [`Holonomic::add_obstacles`] brings it up to date when obstacles are
+/// added, to the same state a rebuild would reach.
+#[derive(Clone)]
 pub(super) struct Holonomic {
     fine: Grid,
     coarse: Grid,
     downsample: usize,
+    /// The goal's fine cell.
+    goal_cell: usize,
+    /// Fine cells no free point can occupy.
+    blocked: Vec<bool>,
     /// Fine cells from which the goal's cell can be reached.
     reachable: Vec<bool>,
-    /// Coarse grid cost from the goal cell, `u32::MAX` while not yet reached.
-    cost: Vec<u32>,
-    reach: DijkstraReachable<u32, u32, Successors>,
-    exhausted: bool,
+    /// Coarse grid distances from the goal's coarse cell.
+    distances: GridDijkstra,
 }
 
 impl Holonomic {
@@ -140,7 +61,8 @@ impl Holonomic {
             rows: ((field.height_m / cell_m).ceil() as usize).max(1),
             cell_m,
         };
-        let blocked = Self::blocked_cells(field, checker, &fine);
+        let mut blocked = Self::outside_cells(field, checker, &fine);
+        Self::block_covered(field, checker, &fine, checker.grid.disks(), &mut blocked);
 
         let goal_cell = fine.cell_of(&goal.position());
         let reachable = Self::flood_fill(&fine, &blocked, goal_cell);
@@ -151,23 +73,61 @@ impl Holonomic {
             rows: fine.rows.div_ceil(downsample),
             cell_m: cell_m * downsample as f64,
         };
-        let mut coarse_blocked = vec![true; coarse.columns * coarse.rows];
+        let mut coarse_blocked = vec![true; coarse.len()];
         for (cell, _) in reachable.iter().enumerate().filter(|(_, r)| **r) {
-            let (c, r) = fine.column_row(cell);
-            coarse_blocked[(r / downsample) * coarse.columns + c / downsample] = false;
+            coarse_blocked[Self::coarse_cell(&fine, &coarse, downsample, cell)] = false;
         }
-        let coarse_goal = Self::coarse_cell(&fine, &coarse, downsample, goal_cell) as u32;
-        let successors: Successors =
-            Box::new(move |&cell: &u32| coarse.neighbours(cell as usize, &coarse_blocked));
+        let coarse_goal = Self::coarse_cell(&fine, &coarse, downsample, goal_cell);
         Self {
             fine,
             coarse,
             downsample,
+            goal_cell,
+            blocked,
             reachable,
-            cost: vec![u32::MAX; coarse.columns * coarse.rows],
-            reach: dijkstra_reach(&coarse_goal, successors),
-            exhausted: false,
+            distances: GridDijkstra::new(coarse, coarse_blocked, coarse_goal),
         }
+    }
+
+    /// Bring the bound up to date after `added` (inflated, like `checker`'s) joined the
+    /// obstacles; `checker` holds all of them, old and added. Only the fine cells the added
+    /// disks touch are tested again; the flood fill is redone only when one of them was
+    /// reachable and is now blocked; the coarse distances are repaired
+    /// ([`GridDijkstra::block`]) only when coarse cells lost their last reachable fine
+    /// cell. The result is the state [`Holonomic::new`] would build with all obstacles.
+    pub(super) fn add_obstacles(&mut self, field: &Field, checker: &Checker, added: &[Disk]) {
+        let newly = Self::block_covered(field, checker, &self.fine, added, &mut self.blocked);
+        if !newly.iter().any(|&c| self.reachable[c]) {
+            // A free cell next to a reachable one is reachable itself, so blocking cells
+            // that were not reachable changes no other cell's reachability.
+            return;
+        }
+        let reachable = Self::flood_fill(&self.fine, &self.blocked, self.goal_cell);
+        let mut lost = Vec::new();
+        for (cell, (was, is)) in self.reachable.iter().zip(&reachable).enumerate() {
+            if *was && !*is {
+                let coarse = Self::coarse_cell(&self.fine, &self.coarse, self.downsample, cell);
+                if lost.last() != Some(&coarse) {
+                    lost.push(coarse);
+                }
+            }
+        }
+        self.reachable = reachable;
+        lost.sort_unstable();
+        lost.dedup();
+        // A coarse cell is blocked once none of its fine cells is reachable.
+        lost.retain(|&coarse| {
+            let (c, r) = self.coarse.column_row(coarse);
+            let d = self.downsample;
+            let rows = r * d..((r + 1) * d).min(self.fine.rows);
+            !rows.into_iter().any(|fr| {
+                let row = fr * self.fine.columns;
+                self.reachable[row + c * d..row + ((c + 1) * d).min(self.fine.columns)]
+                    .iter()
+                    .any(|r| *r)
+            })
+        });
+        self.distances.block(&lost);
     }
 
     fn coarse_cell(fine: &Grid, coarse: &Grid, downsample: usize, fine_cell: usize) -> usize {
@@ -223,19 +183,9 @@ impl Holonomic {
         reachable
     }
 
-    /// The fine cells no free point can occupy.
-    fn blocked_cells(field: &Field, checker: &Checker, fine: &Grid) -> Vec<bool> {
+    /// The fine cells wholly outside the field inset by the clearance.
+    fn outside_cells(field: &Field, checker: &Checker, fine: &Grid) -> Vec<bool> {
         let cell_m = fine.cell_m;
-        let bounds = |cell: usize| {
-            let (c, r) = fine.column_row(cell);
-            (
-                Point::new(c as f64 * cell_m, r as f64 * cell_m),
-                Point::new(
-                    ((c + 1) as f64 * cell_m).min(field.width_m),
-                    ((r + 1) as f64 * cell_m).min(field.height_m),
-                ),
-            )
-        };
         // Columns and rows wholly outside the inset field.
         let outside = |i: usize, max_v: f64, lo_v: f64, hi_v: f64| {
             let (a, b) = (i as f64 * cell_m, ((i + 1) as f64 * cell_m).min(max_v));
@@ -247,15 +197,38 @@ impl Holonomic {
         let row_out: Vec<bool> = (0..fine.rows)
             .map(|r| outside(r, field.height_m, checker.min.y, checker.max.y))
             .collect();
-        let mut blocked = vec![false; fine.columns * fine.rows];
+        let mut blocked = vec![false; fine.len()];
         for (r, row) in blocked.chunks_mut(fine.columns).enumerate() {
             for (c, b) in row.iter_mut().enumerate() {
                 *b = row_out[r] || column_out[c];
             }
         }
-        // Cells that some obstacle touches, visited in index order (deterministic).
+        blocked
+    }
+
+    /// Block the fine cells, among those the disks `touching` touch, that `checker`'s
+    /// inflated obstacles cover; return the cells newly blocked, in index order.
+    fn block_covered(
+        field: &Field,
+        checker: &Checker,
+        fine: &Grid,
+        touching: &[Disk],
+        blocked: &mut [bool],
+    ) -> Vec<usize> {
+        let cell_m = fine.cell_m;
+        let bounds = |cell: usize| {
+            let (c, r) = fine.column_row(cell);
+            (
+                Point::new(c as f64 * cell_m, r as f64 * cell_m),
+                Point::new(
+                    ((c + 1) as f64 * cell_m).min(field.width_m),
+                    ((r + 1) as f64 * cell_m).min(field.height_m),
+                ),
+            )
+        };
+        // Cells that some disk touches, visited in index order (deterministic).
         let mut touched = vec![false; blocked.len()];
-        for d in checker.grid.disks() {
+        for d in touching {
             let r = Vector::new(d.radius_m, d.radius_m);
             let (c0, r0) = fine.column_row(fine.cell_of(&(d.centre - r)));
             let (c1, r1) = fine.column_row(fine.cell_of(&(d.centre + r)));
@@ -266,6 +239,7 @@ impl Holonomic {
         // A touched cell is blocked when each of its sub-squares lies wholly inside one
         // obstacle, so that the union of the obstacles covers it.
         let mut candidates = Vec::new();
+        let mut newly = Vec::new();
         for cell in 0..blocked.len() {
             if !touched[cell] || blocked[cell] {
                 continue;
@@ -277,7 +251,7 @@ impl Holonomic {
                 ControlFlow::<()>::Continue(())
             });
             let step = (hi - lo) / COVER_SPLIT as f64;
-            blocked[cell] = (0..COVER_SPLIT * COVER_SPLIT).all(|k| {
+            let covered = (0..COVER_SPLIT * COVER_SPLIT).all(|k| {
                 let a = lo
                     + Vector::new(
                         (k % COVER_SPLIT) as f64 * step.x,
@@ -293,8 +267,12 @@ impl Holonomic {
                     .iter()
                     .any(|d| corners.iter().all(|p| (p - d.centre).norm() < d.radius_m))
             });
+            if covered {
+                blocked[cell] = true;
+                newly.push(cell);
+            }
         }
-        blocked
+        newly
     }
 
     /// A lower bound on the length of a free path from `p` to the goal, in metres;
@@ -305,20 +283,60 @@ impl Holonomic {
             return f64::INFINITY;
         }
         let cell = Self::coarse_cell(&self.fine, &self.coarse, self.downsample, fine_cell);
-        while self.cost[cell] == u32::MAX && !self.exhausted {
-            match self.reach.next() {
-                Some(item) => self.cost[item.node as usize] = item.total_cost,
-                None => self.exhausted = true,
-            }
-        }
-        match self.cost[cell] {
-            u32::MAX => f64::INFINITY,
-            cost => {
+        match self.distances.distance(cell) {
+            None => f64::INFINITY,
+            Some(cost) => {
                 // An 8-connected grid path is at most sec(pi/8) times a straight line, plus a
                 // cell diagonal for where the point lies in its cell.
                 let cell_m = self.coarse.cell_m;
                 let grid_m = cost as f64 / STRAIGHT_COST as f64 * cell_m;
                 (grid_m * (PI / 8.0).cos() - SQRT_2 * cell_m).max(0.0)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Adding obstacles in place gives the heuristic a rebuild gives, everywhere.
+        #[test]
+        fn added_obstacles_give_the_rebuilt_heuristic(
+            disks in prop::collection::vec((0.0..30.0f64, 0.0..20.0f64, 0.0..3.0f64), 0..40),
+            split in 0usize..40,
+            queries in prop::collection::vec((0.0..30.0f64, 0.0..20.0f64), 0..20),
+            downsample in 1usize..4,
+        ) {
+            let field = Field::new(30.0, 20.0);
+            let mut settings = HybridAStarSettings::new(2.5, 0.5, true);
+            settings.heuristic_downsample = downsample;
+            let goal = Pose::new(15.0, 10.0, 0.0);
+            let obstacles: Vec<Disk> = disks.iter().map(|&(x, y, r)| Disk::new(x, y, r)).collect();
+            let split = split.min(obstacles.len());
+            let before = Checker::new(&field, &obstacles[..split], &settings);
+            let mut updated = Holonomic::new(&field, &before, &goal, &settings);
+            for (x, y) in queries {
+                let _ = updated.lower_bound_m(&Point::new(x, y));
+            }
+            let after = Checker::new(&field, &obstacles, &settings);
+            updated.add_obstacles(&field, &after, &after.grid.disks()[split..]);
+            let mut rebuilt = Holonomic::new(&field, &after, &goal, &settings);
+            prop_assert_eq!(&updated.blocked, &rebuilt.blocked);
+            prop_assert_eq!(&updated.reachable, &rebuilt.reachable);
+            for cell in 0..updated.fine.len() {
+                let (c, r) = updated.fine.column_row(cell);
+                let p = Point::new((c as f64 + 0.5) * settings.cell_m, (r as f64 + 0.5) * settings.cell_m);
+                prop_assert_eq!(
+                    updated.lower_bound_m(&p).to_bits(),
+                    rebuilt.lower_bound_m(&p).to_bits(),
+                    "cell {}", cell
+                );
             }
         }
     }

@@ -10,7 +10,7 @@
 //!
 //! - the Reeds-Shepp (or, forward only, Dubins) length to the goal, ignoring obstacles;
 //! - the obstacle-aware length for a point that may turn on the spot, from a lazy 2-D
-//!   Dijkstra over a grid of the field grown from the goal (`pathfinding::dijkstra_reach`),
+//!   Dijkstra over a grid of the field grown from the goal,
 //!   scaled by `cos(pi/8)` (the worst stretch of an 8-connected grid path over a straight
 //!   line) less one cell diagonal, so that it does not overestimate.
 //!
@@ -35,26 +35,36 @@
 //! # Files
 //!
 //! - `plan.rs`: [`plan()`] and [`plan_with_stats`], the entry points;
+//! - `replan.rs`: [`Replanner`], which plans to one goal from start after start as
+//!   obstacles are added, reusing the heuristic, and [`first_blocked_pose`];
 //! - `settings.rs` and `error.rs`: [`HybridAStarSettings`] and [`PlanError`];
 //! - `primitive.rs`: motion primitives, pieces of constant curvature and their geometry;
 //! - `collision.rs`: the exact collision checks;
-//! - `heuristic.rs`: the holonomic-with-obstacles lower bound and the reachable cells;
+//! - `heuristic.rs`: the holonomic-with-obstacles lower bound and the reachable cells,
+//!   updatable in place when obstacles are added;
+//! - `grid.rs`: the square grids of the heuristic, their 8-neighbours and step costs;
+//! - `dijkstra.rs`: the lazy grid Dijkstra under the heuristic, repairable in place when
+//!   cells become blocked;
 //! - `analytic.rs`: the analytic expansion (Reeds-Shepp or Dubins shot to the goal);
 //! - `search.rs`: the search itself, and [`PlanStats`];
 //! - `resample.rs`: [`resample()`] and [`path_length_m`].
 
 mod analytic;
 mod collision;
+mod dijkstra;
 mod error;
+mod grid;
 mod heuristic;
 mod plan;
 mod primitive;
+mod replan;
 mod resample;
 mod search;
 mod settings;
 
 pub use error::PlanError;
 pub use plan::{plan, plan_with_stats};
+pub use replan::{Replanner, first_blocked_pose};
 pub use resample::{path_length_m, resample};
 pub use search::PlanStats;
 pub use settings::HybridAStarSettings;

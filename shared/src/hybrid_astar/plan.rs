@@ -1,5 +1,7 @@
 //! The entry point: validate the input, try the straight shot, then search.
 
+use std::borrow::BorrowMut;
+
 use super::analytic::analytic_expansion;
 use super::collision::Checker;
 use super::error::PlanError;
@@ -56,6 +58,66 @@ pub fn plan_with_stats(
     goal: &Pose,
     settings: &HybridAStarSettings,
 ) -> Result<(Vec<Pose>, PlanStats), PlanError> {
+    validate_inputs(field, obstacles, settings)?;
+    let checker = Checker::new(field, obstacles, settings);
+    plan_with_checker(field, checker, start, goal, settings, |checker| {
+        Holonomic::new(field, checker, goal, settings)
+    })
+}
+
+/// Everything of [`plan_with_stats`] after the inputs were validated and the obstacles
+/// indexed in `checker`: check the start and the goal, try the straight shot, then search
+/// with the heuristic `holonomic` gives for `checker`'s obstacles (only asked for when the
+/// straight shot fails).
+pub(super) fn plan_with_checker<H: BorrowMut<Holonomic>>(
+    field: &Field,
+    mut checker: Checker,
+    start: &Pose,
+    goal: &Pose,
+    settings: &HybridAStarSettings,
+    holonomic: impl FnOnce(&Checker) -> H,
+) -> Result<(Vec<Pose>, PlanStats), PlanError> {
+    let finite = |p: &Pose| p.x_m.is_finite() && p.y_m.is_finite() && p.heading_rad.is_finite();
+    if !finite(start) || !checker.point_free(&start.position()) {
+        return Err(PlanError::StartBlocked);
+    }
+    if !finite(goal) || !checker.point_free(&goal.position()) {
+        return Err(PlanError::GoalBlocked);
+    }
+    // The straight shot first, before paying for the heuristic grid.
+    if let Some(tail) = analytic_expansion(&mut checker, settings, start, goal) {
+        let path = dense_path(
+            start,
+            goal,
+            tail.iter().map(|p| (*p, p.end())),
+            settings.sample_spacing_m,
+        );
+        let length_m = path_length_m(&path);
+        let stats = PlanStats {
+            expansions: 0,
+            analytic_attempts: 1,
+            length_m,
+        };
+        return Ok((path, stats));
+    }
+    let mut holonomic = holonomic(&checker);
+    Search::new(
+        field,
+        checker,
+        holonomic.borrow_mut(),
+        start,
+        goal,
+        settings,
+    )
+    .run()
+}
+
+/// Check the settings, the field's size against the grid limit and the obstacles.
+pub(super) fn validate_inputs(
+    field: &Field,
+    obstacles: &[Disk],
+    settings: &HybridAStarSettings,
+) -> Result<(), PlanError> {
     settings.validate()?;
     if !(field.width_m.is_finite()
         && field.height_m.is_finite()
@@ -83,31 +145,5 @@ pub fn plan_with_stats(
             "cell_m is too small for the field (over 2^24 cells)",
         ));
     }
-
-    let mut checker = Checker::new(field, obstacles, settings);
-    let finite = |p: &Pose| p.x_m.is_finite() && p.y_m.is_finite() && p.heading_rad.is_finite();
-    if !finite(start) || !checker.point_free(&start.position()) {
-        return Err(PlanError::StartBlocked);
-    }
-    if !finite(goal) || !checker.point_free(&goal.position()) {
-        return Err(PlanError::GoalBlocked);
-    }
-    // The straight shot first, before paying for the heuristic grid.
-    if let Some(tail) = analytic_expansion(&mut checker, settings, start, goal) {
-        let path = dense_path(
-            start,
-            goal,
-            tail.iter().map(|p| (*p, p.end())),
-            settings.sample_spacing_m,
-        );
-        let length_m = path_length_m(&path);
-        let stats = PlanStats {
-            expansions: 0,
-            analytic_attempts: 1,
-            length_m,
-        };
-        return Ok((path, stats));
-    }
-    let holonomic = Holonomic::new(field, &checker, goal, settings);
-    Search::new(field, checker, holonomic, start, goal, settings).run()
+    Ok(())
 }

@@ -85,7 +85,7 @@ impl Entry {
 /// The search over cells of (x, y, heading bin), one continuous pose per cell.
 pub(super) struct Search<'a> {
     checker: Checker,
-    holonomic: Holonomic,
+    holonomic: &'a mut Holonomic,
     start: Pose,
     goal: Pose,
     settings: &'a HybridAStarSettings,
@@ -100,7 +100,7 @@ impl<'a> Search<'a> {
     pub(super) fn new(
         field: &Field,
         checker: Checker,
-        holonomic: Holonomic,
+        holonomic: &'a mut Holonomic,
         start: &Pose,
         goal: &Pose,
         settings: &'a HybridAStarSettings,
