@@ -27,7 +27,7 @@
 use std::time::Instant;
 
 use crate::geometry::{Disk, Pose};
-use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
+use crate::hybrid_astar::{self, HybridAStarSettings, PlanError, Replanner, first_blocked_pose};
 use crate::scenario::Scenario;
 use crate::vocabulary::Body;
 
@@ -106,6 +106,8 @@ pub struct Wait {
 pub struct Course<'a> {
     scenario: &'a Scenario,
     settings: HybridAStarSettings,
+    /// Built at the first replanning; keeps the heuristic between replannings.
+    replanner: Option<Replanner>,
     /// The path being followed, one pose per step.
     plan: Vec<Pose>,
     /// Index in `plan` of the current pose.
@@ -137,6 +139,7 @@ impl<'a> Course<'a> {
                 p.centre_clearance_m,
                 p.allow_reverse,
             ),
+            replanner: None,
             plan: if first_plan.is_empty() {
                 vec![p.start]
             } else {
@@ -275,12 +278,7 @@ impl<'a> Course<'a> {
     /// Whether a known obstacle comes within the centre clearance of a pose of `path`.
     fn blocked_by_known(&self, path: &[Pose]) -> bool {
         let clearance_m = self.scenario.path.centre_clearance_m;
-        path.iter().any(|pose| {
-            let p = pose.position();
-            self.known
-                .iter()
-                .any(|o| o.signed_distance_m(&p) < clearance_m)
-        })
+        first_blocked_pose(&self.scenario.field, path, &self.known, clearance_m).is_some()
     }
 
     /// The moving obstacles that, within the look-ahead, come within the centre clearance
@@ -323,14 +321,19 @@ impl<'a> Course<'a> {
                 o.radius_m = (o.radius_m - (clearance_m - room_m) - 1e-6).max(0.0);
             }
         }
-        let planned: Result<Vec<Pose>, PlanError> = hybrid_astar::plan(
-            &self.scenario.field,
-            &obstacles,
-            &here,
-            &self.scenario.path.goal,
-            &self.settings,
-        )
-        .map(|dense| hybrid_astar::resample(&dense, self.scenario.path.step_m));
+        let replanner = match self.replanner.take() {
+            Some(r) => Ok(r),
+            None => Replanner::new(
+                self.scenario.field,
+                self.scenario.path.goal,
+                self.settings.clone(),
+            ),
+        };
+        let planned: Result<Vec<Pose>, PlanError> = replanner.and_then(|mut r| {
+            let dense = r.plan_from(&here, &obstacles);
+            self.replanner = Some(r);
+            dense.map(|dense| hybrid_astar::resample(&dense, self.scenario.path.step_m))
+        });
         let path = planned
             .ok()
             .filter(|path| path.len() >= 2 && self.crossing_movers(step, path).is_empty());
