@@ -2,8 +2,8 @@
 //! the reference simulation to the bit, also when an agent is killed in the middle of a
 //! step, in a group with others (`RunOptions::deaths`: killed before its group's turns
 //! are granted, so the death is always detected during its turn, as
-//! `simulate_along_with_deaths` has it). Nothing is left behind: no process, no
-//! shared-memory file.
+//! `simulate_along_with_deaths` has it), and in a changing world (moving obstacles, the
+//! centre replanned). Nothing is left behind: no process, no shared-memory file.
 
 mod support;
 
@@ -185,4 +185,22 @@ fn two_agents_killed_at_one_step_in_sequential_mode_match_the_reference_to_the_b
         .collect();
     // Detected in turn order.
     assert_eq!(dead, [(3, 25), (9, 25), (12, 60)]);
+}
+
+/// The same in a changing world: the patrol scenario (moving obstacles crossing the
+/// formation's path, the centre replanning) with agent 2 killed at step 60 equals the
+/// reference with that death, to the bit, with no collision.
+#[test]
+fn a_killed_agent_in_a_changing_world_matches_the_reference() {
+    let file = support::repo_root().join("scenarios/patrol.toml");
+    let scenario = Scenario::load(&file).expect("patrol.toml");
+    assert!(!scenario.moving.is_empty());
+    let run = run_and_compare(&scenario, &[(2, 60)]);
+    assert!(run.steps[60..].iter().all(|s| !s.agents[2].alive));
+    assert!(run.steps[..60].iter().all(|s| s.agents[2].alive));
+    assert_eq!(
+        run.steps[80].moving[0],
+        scenario.moving[0].position_at(80),
+        "the obstacles moved on"
+    );
 }

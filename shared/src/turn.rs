@@ -321,11 +321,12 @@ impl TurnPlanner {
     /// moving obstacle stands where it is at `step` ([`crate::moving_obstacle`]).
     ///
     /// The agent plans around each moving obstacle it senses as around a disk grown by
-    /// the obstacle's speed ([`MovingObstacle::reach_disk_at`]): where the obstacle can be
-    /// until the agent's next turn, so a move that ends outside it is still clear after
-    /// the obstacle's next motion. An agent that starts its turn inside such a disk (the
+    /// twice the obstacle's speed, or as much of that as leaves it outside: at least the
+    /// obstacle's reach ([`MovingObstacle::reach_disk_at`], where it can be until the
+    /// agent's next turn), so a move that ends outside it is still clear after the
+    /// obstacle's next motion, and a step to spare where there is room. An agent that starts its turn inside such a disk (the
     /// obstacle came closer since its last turn) first escapes: a straight motion out of
-    /// the disk, radially or up to 120 degrees off, that is clear of every body and
+    /// the disk, radially or up to 150 degrees off, that is clear of every body and
     /// within its top speed; the rest of the turn is planned from there with what is left
     /// of the top speed. Without an escape, the disk is shrunk to leave the agent outside.
     /// Without moving obstacles this is [`Self::plan_move`].
@@ -334,15 +335,15 @@ impl TurnPlanner {
             return self.plan_move(centre, me, others);
         }
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
-        let reach: Vec<Disk> = self
+        let sensed: Vec<&MovingObstacle> = self
             .moving
             .iter()
             .filter(|m| {
                 let c = m.position_at(step);
                 self.spec.senses(me, &c, m.radius_m)
             })
-            .map(|m| m.reach_disk_at(step))
             .collect();
+        let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
         let inside = reach
             .iter()
             .any(|d| (me - d.centre).norm() < d.radius_m + keep_m);
@@ -352,8 +353,11 @@ impl TurnPlanner {
             None
         };
         let start = escape.unwrap_or(*me);
+        // Planned around with a second step to spare where there is room, so that an
+        // obstacle coming closer seldom catches the agent inside its reach.
         let mut bodies = others.to_vec();
-        for d in &reach {
+        for m in &sensed {
+            let d = m.reach_disk_at(step).inflated(m.speed_m_per_step);
             let room_m = (start - d.centre).norm() - keep_m;
             let radius_m = d.radius_m.min(room_m);
             if radius_m > 0.0 {
@@ -406,9 +410,10 @@ impl TurnPlanner {
         let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
         let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
-        for off_deg in [
-            0.0_f64, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0, 120.0, -120.0,
-        ] {
+        // Straight away first, then ever more aside, every 10 degrees up to 150.
+        let offsets_deg =
+            (0..=30).map(|k: i32| f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 }));
+        for off_deg in offsets_deg {
             let rad = away_rad + off_deg.to_radians();
             let v = Vector::new(rad.cos(), rad.sin());
             // |me + t v - c| = R, the larger root (leaving the disk).
@@ -427,23 +432,26 @@ impl TurnPlanner {
                 .iter()
                 .all(|d| (q - d.centre).norm() >= d.radius_m + keep_m);
             let in_field = self.field.signed_inset_m(&q) >= clear_m;
-            let segment_clear =
-                |d: &Disk, grow_m: f64| d.signed_distance_to_segment_m(me, &q) >= grow_m + clear_m;
+            // The motion keeps half the planning margin from every body (the agent may
+            // start its turn touching one, at the margin); its end the whole margin, so
+            // the rest of the turn is planned from a free point.
+            let segment_clear = |d: &Disk| {
+                d.signed_distance_to_segment_m(me, &q)
+                    >= self.spec.radius_m + 0.5 * PLANNING_MARGIN_M
+                    && d.signed_distance_m(&q) >= clear_m
+            };
             let clear_of_bodies = others.iter().all(|b| {
-                segment_clear(
-                    &Disk {
-                        centre: b.position,
-                        radius_m: b.radius_m,
-                    },
-                    0.0,
-                )
+                segment_clear(&Disk {
+                    centre: b.position,
+                    radius_m: b.radius_m,
+                })
             });
-            let clear_of_moving = now.iter().all(|d| segment_clear(d, 0.0));
+            let clear_of_moving = now.iter().all(&segment_clear);
             let mut clear_of_statics = true;
             let _ =
                 self.statics
                     .visit_near(me, t + clear_m + self.statics.max_radius_m(), |_, d| {
-                        if segment_clear(d, 0.0) {
+                        if segment_clear(d) {
                             std::ops::ControlFlow::Continue(())
                         } else {
                             clear_of_statics = false;
