@@ -140,7 +140,10 @@ fn a_patrol_crossing_the_path_makes_the_centre_replan_or_wait() {
 
 /// An open field (no static obstacle) 30 x 20 m, a formation of four crossing it with a top
 /// speed of 0.5 m per step, and `movers` random moving obstacles slower than that.
-fn open_field(movers: &[(f64, Vec<(f64, f64)>, f64, bool)]) -> Scenario {
+/// A random moving obstacle: radius, waypoints, speed, and whether its route loops.
+type MoverSpec = (f64, Vec<(f64, f64)>, f64, bool);
+
+fn open_field(movers: &[MoverSpec]) -> Scenario {
     let mut text = String::from(
         "name = \"open-field\"\n[field]\nwidth_m = 30.0\nheight_m = 20.0\n[obstacles]\nradius_m = 0.8\n",
     );
@@ -178,7 +181,7 @@ centre_clearance_m = 0.5
 /// A moving obstacle of radius 0.4 to 1 m on 2 or 3 waypoints inside the field, at 0.05 to
 /// 0.45 m per step (slower than the agents' 0.5 m), starting at least 2.5 m from the formation's start and 1.5 m from the
 /// goal.
-fn mover() -> impl Strategy<Value = (f64, Vec<(f64, f64)>, f64, bool)> {
+fn mover() -> impl Strategy<Value = MoverSpec> {
     (
         0.4..1.0f64,
         prop::collection::vec((1.0..29.0f64, 1.0..19.0f64), 2..=3),
