@@ -587,7 +587,7 @@ fn a_changing_world_writes_its_obstacles_and_plans_and_renders_them() {
     let svg = std::fs::read_to_string(dir.join("plots/field.svg")).expect("svg");
     for text in [
         format!("found at step {found_at}"),
-        format!("plans (first + {} replans)", taken.len()),
+        format!("plans (first + {} replan", taken.len()),
         "centre path followed".to_string(),
         "moving obstacle at step 0".to_string(),
     ] {
@@ -640,5 +640,101 @@ fn a_changing_world_writes_its_obstacles_and_plans_and_renders_them() {
         "filled once found: {:?}",
         patch(last)
     );
+
+    // A folder written before these files is drawn from its scenario and summary.json.
+    let loaded = (data.moving.clone(), data.unknown.clone());
+    std::fs::remove_file(dir.join("obstacles.csv")).expect("remove");
+    std::fs::remove_file(dir.join("plans.csv")).expect("remove");
+    let older = RunData::load(&dir).expect("load without the new files");
+    assert_eq!((older.moving, older.unknown), loaded);
+    assert!(older.plans.is_empty());
+    render_run_dir(&dir).expect("render without the new files");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The names in the first table after the line `heading` of `doc`: every backticked name
+/// of each row's first cell, in order.
+fn documented_names(doc: &str, heading: &str) -> Vec<String> {
+    let mut lines = doc.lines().skip_while(|l| *l != heading).skip(1);
+    let rows = lines
+        .by_ref()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .skip(2); // the header and the separator
+    let mut names = Vec::new();
+    for row in rows {
+        let cell = row.split('|').nth(1).unwrap_or_default();
+        names.extend(cell.split('`').skip(1).step_by(2).map(str::to_string));
+    }
+    assert!(!names.is_empty(), "no table after {heading}");
+    names
+}
+
+#[test]
+fn docs_outputs_md_names_every_summary_key_and_every_csv_column() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("the repository holds the coordinator crate");
+    let doc = std::fs::read_to_string(repo.join("docs").join("outputs.md")).expect("outputs.md");
+    let scenario = shared::scenario::Scenario::parse(CHANGING, "changing.toml").expect("scenario");
+    let first_plan = shared::simulate::plan_centre_path(&scenario).expect("first plan");
+    let run = shared::simulate::simulate_along(&scenario, &first_plan).expect("simulate");
+    let dir = scratch("doc");
+    let written = coordinator::output::write_run(
+        &dir,
+        &scenario,
+        "changing.toml",
+        &run,
+        &first_plan,
+        &coordinator::output::Timing::default(),
+    )
+    .expect("write run");
+    let names: Vec<String> = written
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    // The run folder's table lists the files in the order written, summary.json last.
+    let mut listed = documented_names(&doc, "## `coordinator run`: the run folder");
+    assert_eq!(listed.pop().as_deref(), Some("plots/"));
+    assert_eq!(listed, names);
+
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).expect("summary"))
+            .expect("summary.json parses");
+    let mut keys: Vec<String> = summary
+        .as_object()
+        .expect("an object")
+        .keys()
+        .cloned()
+        .collect();
+    let mut documented = documented_names(&doc, "### `summary.json`");
+    keys.sort();
+    documented.sort();
+    assert_eq!(documented, keys, "summary.json keys");
+    let replan = &summary["replans"][0];
+    let mut replan_keys: Vec<&String> = replan.as_object().expect("a replan").keys().collect();
+    replan_keys.sort();
+    assert_eq!(replan_keys, ["found", "planning_ms", "reason", "step"]);
+
+    for file in [
+        "trajectory.csv",
+        "moves.csv",
+        "path.csv",
+        "plans.csv",
+        "obstacles.csv",
+    ] {
+        let mut reader = csv::Reader::from_path(dir.join(file)).expect(file);
+        let header: Vec<String> = reader
+            .headers()
+            .expect("header")
+            .iter()
+            .map(str::to_string)
+            .collect();
+        assert_eq!(
+            documented_names(&doc, &format!("### `{file}`")),
+            header,
+            "{file}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

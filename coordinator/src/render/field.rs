@@ -58,10 +58,10 @@ impl<'a> FieldFigure<'a> {
                     width: 2,
                     dashed: true,
                 },
-                format!(
-                    "plans (first + {} replans)",
-                    data.plans.len().saturating_sub(1)
-                ),
+                match data.plans.len().saturating_sub(1) {
+                    1 => "plans (first + 1 replan)".to_string(),
+                    n => format!("plans (first + {n} replans)"),
+                },
             ));
         }
         let path_label = if data.replanned() {
