@@ -100,7 +100,9 @@ fn a_folder_holding_a_run_is_refused_without_force_and_replaced_whole_with_it() 
         names(&out),
         [
             "moves.csv",
+            "obstacles.csv",
             "path.csv",
+            "plans.csv",
             "scenario.toml",
             "summary.json",
             "trajectory.csv"

@@ -197,7 +197,7 @@ pub struct PlanArgs {
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     /// A run directory written by `run` (scenario.toml, path.csv, trajectory.csv,
-    /// moves.csv, summary.json).
+    /// moves.csv, summary.json; plans.csv and obstacles.csv when present).
     pub run_dir: PathBuf,
     /// In the animation, draw each live agent's sensing radius as a faint circle (when
     /// the scenario has `formation.sensing_radius_m`).

@@ -253,6 +253,7 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
                     &scenario,
                     &l.source,
                     &outcome.run,
+                    &l.centre_path,
                     &outcome.timing,
                 )?;
                 let r = row(&outcome.run, planner, scenario.turns, &outcome.timing);

@@ -1,4 +1,7 @@
-//! Output files (`docs/outputs.md`): `summary.json`, `trajectory.csv`, `path.csv`.
+//! Output files (`docs/outputs.md`): `summary.json`, `trajectory.csv`, `moves.csv`,
+//! `path.csv` (the path followed), `plans.csv` (the first plan and every replan taken) and
+//! `obstacles.csv` (the moving obstacles at every step, the unknown ones and when they
+//! became known).
 //! Every file is written whole or not at all (a temporary file, then a rename), and an
 //! output folder too ([`OutDir`]: a temporary sibling folder, then a rename).
 
@@ -29,7 +32,9 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 }
 
 /// The centre path as CSV: `step,x_m,y_m,heading_rad`, full precision (shortest
-/// round-trip decimal form, so the file reads back to the same bits).
+/// round-trip decimal form, so the file reads back to the same bits). In a run folder
+/// this is the path the centre actually followed ([`Run::centre_path`]: one pose per step,
+/// a wait repeats the pose); `coordinator plan` writes the planned path in this form.
 pub fn path_csv(path: &[Pose]) -> anyhow::Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(["step", "x_m", "y_m", "heading_rad"])?;
@@ -103,6 +108,86 @@ pub fn moves_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
+/// The reason of plan 0 in `plans.csv`: the path planned before the run.
+pub const FIRST_PLAN_REASON: &str = "first";
+
+/// The centre's plans as CSV, one row per pose: `plan,step,reason,x_m,y_m,heading_rad`.
+/// Plan 0 is `first_plan` (step 0, reason [`FIRST_PLAN_REASON`]); plans 1, 2, ... are the
+/// replans that found a path, in order, each from the pose the centre stood at when it was
+/// planned at the start of `step` (reasons `found-obstacle`, `moving-obstacle`). Replans
+/// that found no path (the centre waited) have no rows: `summary.json` `replans` lists
+/// them all.
+pub fn plans_csv(first_plan: &[Pose], run: &Run) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(["plan", "step", "reason", "x_m", "y_m", "heading_rad"])?;
+    let replans = run
+        .course
+        .replans
+        .iter()
+        .filter(|r| r.found)
+        .map(|r| (r.step, r.reason.name(), r.path.as_slice()));
+    let plans = std::iter::once((0, FIRST_PLAN_REASON, first_plan)).chain(replans);
+    for (plan, (step, reason, poses)) in plans.enumerate() {
+        for p in poses {
+            w.write_record([
+                plan.to_string(),
+                step.to_string(),
+                reason.to_string(),
+                p.x_m.to_string(),
+                p.y_m.to_string(),
+                p.heading_rad.to_string(),
+            ])?;
+        }
+    }
+    Ok(w.into_inner()?)
+}
+
+/// The obstacles of a changing world as CSV:
+/// `step,kind,index,x_m,y_m,radius_m,known_from_step`. First one row per moving obstacle
+/// per recorded step (kind `moving`, `index` its place in `[[obstacles.moving]]`, where it
+/// stands during the step, `known_from_step` empty: the centre's planner knows their
+/// routes); then one row per `[[obstacles.unknown]]` obstacle (kind `unknown`, `step`
+/// empty, `known_from_step` the step it joined the known map, empty when never). A static
+/// world gives the header alone.
+pub fn obstacles_csv(scenario: &Scenario, run: &Run) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "step",
+        "kind",
+        "index",
+        "x_m",
+        "y_m",
+        "radius_m",
+        "known_from_step",
+    ])?;
+    for s in &run.steps {
+        for (i, (p, m)) in s.moving.iter().zip(&scenario.moving).enumerate() {
+            w.write_record([
+                s.step.to_string(),
+                "moving".to_string(),
+                i.to_string(),
+                p.x.to_string(),
+                p.y.to_string(),
+                m.radius_m.to_string(),
+                String::new(),
+            ])?;
+        }
+    }
+    for (i, o) in scenario.unknown.iter().enumerate() {
+        let found = run.course.found_at.get(i).copied().flatten();
+        w.write_record([
+            String::new(),
+            "unknown".to_string(),
+            i.to_string(),
+            o.centre.x.to_string(),
+            o.centre.y.to_string(),
+            o.radius_m.to_string(),
+            found.map_or_else(String::new, |k| k.to_string()),
+        ])?;
+    }
+    Ok(w.into_inner()?)
+}
+
 /// Timing figures of a multi-process run.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Timing {
@@ -135,12 +220,15 @@ struct SummaryFile<'a> {
 /// its resolved form (`scenario.toml`: every obstacle listed, every default and the
 /// planner written out; see [`Scenario::to_resolved_toml`]), so the run can be rendered
 /// again, or reproduced elsewhere, without this program's random obstacle generator.
-/// `source` names the scenario file in the header comment.
+/// `source` names the scenario file in the header comment; `first_plan` is the centre path
+/// planned before the run (the one the run started along), written as plan 0 of
+/// `plans.csv`.
 pub fn write_run(
     dir: &Path,
     scenario: &Scenario,
     source: &str,
     run: &Run,
+    first_plan: &[Pose],
     timing: &Timing,
 ) -> anyhow::Result<Vec<PathBuf>> {
     let scenario_text = scenario
@@ -160,6 +248,8 @@ pub fn write_run(
         ("trajectory.csv", trajectory_csv(run)?),
         ("moves.csv", moves_csv(run)?),
         ("path.csv", path_csv(&run.centre_path)?),
+        ("plans.csv", plans_csv(first_plan, run)?),
+        ("obstacles.csv", obstacles_csv(scenario, run)?),
         // Last: a summary.json present means the other files are complete.
         ("summary.json", json),
     ];

@@ -64,6 +64,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         scenario,
         &loaded.source,
         &outcome.run,
+        centre_path,
         &outcome.timing,
     )?;
     let plots = if args.no_plots {

@@ -1,7 +1,10 @@
 //! The animation of a whole run (the paper's video, and its Fig. 8 at every step): the
 //! obstacles, the centre path, every agent with its safety circle, its ideal slot and the
-//! path it took to its best point, and the current step. Long runs are subsampled to at
-//! most [`MAX_FRAMES`] frames so the GIF stays a few megabytes.
+//! path it took to its best point, and the current step. In a changing world also each
+//! moving obstacle where it stands during the frame's step (its route thin behind it),
+//! and each obstacle unknown at the start as a dashed outline until the step it became
+//! known, filled and hatched from then on. Long runs are subsampled to at most
+//! [`MAX_FRAMES`] frames so the GIF stays a few megabytes.
 
 use std::io::Write;
 
@@ -89,6 +92,7 @@ impl<'a> Animation<'a> {
         let sensing_circles =
             sensing_circles && s.agents.iter().any(|a| a.sensing_radius_m.is_some());
         let (margin_m, mut legend) = scene::obstacle_legend(s);
+        legend.extend(scene::changing_world_legend(s, true));
         legend.extend([
             LegendItem::new(
                 Swatch::Disk {
@@ -327,8 +331,19 @@ impl<'a> Animation<'a> {
             })
             .map_or("-".to_string(), |v| format!("{v:.4} m"));
         let dead = step.agents.iter().filter(|a| !a.alive).count();
+        let found = if self.data.unknown.is_empty() {
+            String::new()
+        } else {
+            let known = self
+                .data
+                .unknown
+                .iter()
+                .filter(|u| u.known_at(step.step))
+                .count();
+            format!("   {known} of {} unknown found", self.data.unknown.len())
+        };
         let text = format!(
-            "step {} of {}   mean deviation {mean}   min clearance {clear}{}",
+            "step {} of {}   mean deviation {mean}   min clearance {clear}{}{found}",
             step.step,
             self.data.last_step(),
             if dead > 0 {
@@ -351,6 +366,16 @@ impl<'a> Animation<'a> {
         close_up: bool,
     ) -> anyhow::Result<()> {
         let step = &self.data.steps[at];
+        // The changing world under the formation: each unknown obstacle as the centre's
+        // planner knew it during this step, each moving obstacle where it stands.
+        for u in &self.data.unknown {
+            p.unknown_obstacle(u, u.known_at(step.step), self.margin_m)?;
+        }
+        if let Some(positions) = self.data.moving_at(step.step) {
+            for (q, m) in positions.iter().zip(&self.data.scenario.moving) {
+                p.moving_obstacle(*q, m.radius_m, self.margin_m)?;
+            }
+        }
         let travelled: Vec<Xy> = self
             .data
             .centre
@@ -426,8 +451,8 @@ impl<'a> Animation<'a> {
     }
 }
 
-/// The static layer of every frame: header, axes, obstacles, the whole centre path, the
-/// start and goal.
+/// The static layer of every frame: header, axes, obstacles, the moving obstacles'
+/// routes, the whole centre path, the start and goal.
 struct Background<'b, 'a>(&'b Animation<'a>);
 
 impl Figure for Background<'_, '_> {
@@ -444,6 +469,9 @@ impl Figure for Background<'_, '_> {
         let p = Painter::new(&chart, &a.layout);
         let s = &a.data.scenario;
         p.obstacles(&s.obstacles, a.margin_m)?;
+        for m in &s.moving {
+            p.route(m)?;
+        }
         let path: Vec<Xy> = a
             .data
             .centre

@@ -1,12 +1,14 @@
 //! Reading a run directory written by `coordinator run` back into memory: the scenario
 //! (obstacles included, rebuilt deterministically from `scenario.toml`), the centre path,
-//! every agent's state and move at every step, and the faults. Nothing is re-planned.
+//! every agent's state and move at every step, the faults, and in a changing world the
+//! centre's plans (`plans.csv`), the moving obstacles at every step and the unknown ones
+//! with the step they became known (`obstacles.csv`). Nothing is re-planned.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use shared::geometry::{Point, Pose};
+use shared::geometry::{Disk, Point, Pose};
 use shared::scenario::Scenario;
 
 /// The files a run directory must hold, in the order they are checked.
@@ -98,6 +100,46 @@ pub struct FaultRecord {
     pub detail: String,
 }
 
+/// One plan of the formation centre (`plans.csv`): the first, or a replan that found a
+/// path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanRecord {
+    /// Its number: 0 for the first plan, then 1, 2, ... in the order planned.
+    pub plan: usize,
+    /// The step at whose start it was planned (0 for the first).
+    pub step: usize,
+    /// Why (`first`, `found-obstacle`, `moving-obstacle`).
+    pub reason: String,
+    /// Its poses, one per step, from the pose the centre stood at.
+    pub poses: Vec<Pose>,
+}
+
+/// Every moving obstacle during one step (`obstacles.csv`, kind `moving`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MovingStep {
+    /// The step.
+    pub step: usize,
+    /// Where each moving obstacle stands, in `[[obstacles.moving]]` order.
+    pub positions: Vec<Point>,
+}
+
+/// An obstacle the centre's planner did not know at the start (`obstacles.csv`, kind
+/// `unknown`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UnknownRecord {
+    /// The obstacle.
+    pub disk: Disk,
+    /// The step it joined the known map; `None` when it never did.
+    pub known_from_step: Option<usize>,
+}
+
+impl UnknownRecord {
+    /// Whether the centre's planner knew it during `step`.
+    pub fn known_at(&self, step: usize) -> bool {
+        self.known_from_step.is_some_and(|k| k <= step)
+    }
+}
+
 /// A run directory, read and checked.
 #[derive(Clone, Debug)]
 pub struct RunData {
@@ -113,10 +155,20 @@ pub struct RunData {
     pub faults: Vec<FaultRecord>,
     /// Whether the run went through the whole centre path (`None` when not recorded).
     pub completed: Option<bool>,
+    /// The centre's plans in order, the first one first (empty when the folder has no
+    /// `plans.csv`).
+    pub plans: Vec<PlanRecord>,
+    /// The moving obstacles at every step, in step order (empty for a static world).
+    pub moving: Vec<MovingStep>,
+    /// The unknown obstacles, in `[[obstacles.unknown]]` order.
+    pub unknown: Vec<UnknownRecord>,
 }
 
 impl RunData {
-    /// Read the run directory `dir`.
+    /// Read the run directory `dir`. `plans.csv` and `obstacles.csv` are optional: run
+    /// folders written before the world could change lack them, and are drawn from the
+    /// scenario instead (every moving obstacle where its route puts it, the steps the
+    /// unknown obstacles were found at from `summary.json`, no plan but the path followed).
     pub fn load(dir: &Path) -> Result<Self, RunDirError> {
         if !dir.is_dir() {
             return Err(RunDirError::NotADirectory {
@@ -136,15 +188,68 @@ impl RunData {
         let centre = read_centre(&dir.join("path.csv"))?;
         let mut steps = read_trajectory(&dir.join("trajectory.csv"), scenario.agents.len())?;
         read_moves(&dir.join("moves.csv"), &mut steps)?;
-        let (faults, completed) = read_summary(&dir.join("summary.json"))?;
+        let summary = read_summary(&dir.join("summary.json"))?;
+        let plans_path = dir.join("plans.csv");
+        let plans = if plans_path.is_file() {
+            read_plans(&plans_path)?
+        } else {
+            Vec::new()
+        };
+        let obstacles_path = dir.join("obstacles.csv");
+        let (moving, unknown) = if obstacles_path.is_file() {
+            read_obstacles(&obstacles_path, &scenario)?
+        } else {
+            // An older run folder: the routes are in the scenario, the steps the unknown
+            // obstacles were found at (if anywhere) in summary.json.
+            let moving = steps
+                .iter()
+                .filter(|_| !scenario.moving.is_empty())
+                .map(|st| MovingStep {
+                    step: st.step,
+                    positions: scenario
+                        .moving
+                        .iter()
+                        .map(|m| m.position_at(st.step))
+                        .collect(),
+                })
+                .collect();
+            let unknown = scenario
+                .unknown
+                .iter()
+                .enumerate()
+                .map(|(i, &disk)| UnknownRecord {
+                    disk,
+                    known_from_step: summary.unknown_found_at_step.get(i).copied().flatten(),
+                })
+                .collect();
+            (moving, unknown)
+        };
         Ok(Self {
             dir: dir.to_path_buf(),
             scenario,
             centre,
             steps,
-            faults,
-            completed,
+            faults: summary.faults,
+            completed: summary.completed,
+            plans,
+            moving,
+            unknown,
         })
+    }
+
+    /// Where each moving obstacle stands during `step`, or during the nearest recorded
+    /// step before it; `None` before the first (or in a static world).
+    pub fn moving_at(&self, step: usize) -> Option<&[Point]> {
+        let i = self.moving.partition_point(|m| m.step <= step);
+        self.moving
+            .get(i.checked_sub(1)?)
+            .map(|m| m.positions.as_slice())
+    }
+
+    /// Whether the centre replanned and took a new path at least once (more than the first
+    /// plan to draw).
+    pub fn replanned(&self) -> bool {
+        self.plans.len() > 1
     }
 
     /// The last step recorded (0 for an empty run).
@@ -357,10 +462,152 @@ struct SummaryFile {
     faults: Vec<FaultRecord>,
     #[serde(default)]
     completed: Option<bool>,
+    #[serde(default)]
+    unknown_found_at_step: Vec<Option<usize>>,
 }
 
-fn read_summary(path: &Path) -> Result<(Vec<FaultRecord>, Option<bool>), RunDirError> {
+fn read_summary(path: &Path) -> Result<SummaryFile, RunDirError> {
     let text = read_text(path)?;
-    let summary: SummaryFile = serde_json::from_str(&text).map_err(|e| invalid(path, e))?;
-    Ok((summary.faults, summary.completed))
+    serde_json::from_str(&text).map_err(|e| invalid(path, e))
+}
+
+#[derive(Deserialize)]
+struct PlanRow {
+    plan: usize,
+    step: usize,
+    reason: String,
+    x_m: f64,
+    y_m: f64,
+    heading_rad: f64,
+}
+
+fn read_plans(path: &Path) -> Result<Vec<PlanRecord>, RunDirError> {
+    let mut plans: Vec<PlanRecord> = Vec::new();
+    csv_rows(path, |_, r: PlanRow| {
+        let pose = Pose::new(
+            finite("x_m", r.x_m)?,
+            finite("y_m", r.y_m)?,
+            finite("heading_rad", r.heading_rad)?,
+        );
+        match plans.last_mut() {
+            Some(last) if last.plan == r.plan => {
+                if last.step != r.step || last.reason != r.reason {
+                    return Err(format!(
+                        "plan {} changes its step or reason within its rows",
+                        r.plan
+                    ));
+                }
+                last.poses.push(pose);
+            }
+            last => {
+                let expected = last.map_or(0, |p| p.plan + 1);
+                if r.plan != expected {
+                    return Err(format!("plan {} where plan {expected} was due", r.plan));
+                }
+                plans.push(PlanRecord {
+                    plan: r.plan,
+                    step: r.step,
+                    reason: r.reason,
+                    poses: vec![pose],
+                });
+            }
+        }
+        Ok(())
+    })?;
+    Ok(plans)
+}
+
+#[derive(Deserialize)]
+struct ObstacleRow {
+    step: Option<usize>,
+    kind: String,
+    index: usize,
+    x_m: f64,
+    y_m: f64,
+    radius_m: f64,
+    known_from_step: Option<usize>,
+}
+
+fn read_obstacles(
+    path: &Path,
+    scenario: &Scenario,
+) -> Result<(Vec<MovingStep>, Vec<UnknownRecord>), RunDirError> {
+    let n_moving = scenario.moving.len();
+    let mut moving: Vec<(usize, Vec<Option<Point>>)> = Vec::new();
+    let mut unknown: Vec<Option<UnknownRecord>> = vec![None; scenario.unknown.len()];
+    csv_rows(path, |_, r: ObstacleRow| {
+        let at = point("x_m", r.x_m, "y_m", r.y_m)?;
+        let radius_m = finite("radius_m", r.radius_m)?;
+        match r.kind.as_str() {
+            "moving" => {
+                let Some(step) = r.step else {
+                    return Err("a moving obstacle's row has no step".into());
+                };
+                if r.index >= n_moving {
+                    return Err(format!(
+                        "moving obstacle {} does not exist (scenario.toml has {n_moving})",
+                        r.index
+                    ));
+                }
+                match moving.last() {
+                    Some((s, _)) if *s > step => {
+                        return Err(format!("step {step} is out of order"));
+                    }
+                    Some((s, _)) if *s == step => {}
+                    _ => moving.push((step, vec![None; n_moving])),
+                }
+                let Some((_, slots)) = moving.last_mut() else {
+                    return Err("internal: no step".into());
+                };
+                if slots[r.index].replace(at).is_some() {
+                    return Err(format!(
+                        "moving obstacle {} appears twice in step {step}",
+                        r.index
+                    ));
+                }
+            }
+            "unknown" => {
+                let Some(slot) = unknown.get_mut(r.index) else {
+                    return Err(format!(
+                        "unknown obstacle {} does not exist (scenario.toml has {})",
+                        r.index,
+                        scenario.unknown.len()
+                    ));
+                };
+                let record = UnknownRecord {
+                    disk: Disk {
+                        centre: at,
+                        radius_m,
+                    },
+                    known_from_step: r.known_from_step,
+                };
+                if slot.replace(record).is_some() {
+                    return Err(format!("unknown obstacle {} appears twice", r.index));
+                }
+            }
+            other => return Err(format!("unknown kind `{other}` (moving or unknown)")),
+        }
+        Ok(())
+    })?;
+    let moving = moving
+        .into_iter()
+        .map(|(step, slots)| {
+            let have = slots.iter().filter(|p| p.is_some()).count();
+            let complete: Option<Vec<Point>> = slots.into_iter().collect();
+            complete
+                .map(|positions| MovingStep { step, positions })
+                .ok_or_else(|| {
+                    invalid(
+                        path,
+                        format!("step {step} has {have} of {n_moving} moving obstacles"),
+                    )
+                })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let unknown = unknown
+        .into_iter()
+        .enumerate()
+        .map(|(i, u)| u.ok_or_else(|| invalid(path, format!("unknown obstacle {i} is missing"))))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((moving, unknown))
 }

@@ -1,6 +1,10 @@
 //! The field figure (the paper's Figs. 2, 3 and 6): obstacles with their safety margins,
 //! the start and goal poses, and the formation centre's Hybrid A* path with heading
-//! arrows.
+//! arrows. In a changing world also: each moving obstacle's route, where it stood at step
+//! 0 (dashed outline) and at the last step (filled); each obstacle unknown at the start
+//! (hatched, labelled with the step it was found at); and, when the centre replanned,
+//! every plan (the first and each replan taken, dashed and lighter, a dot where each
+//! replan starts) under the path actually followed (solid).
 
 use plotters::coord::Shift;
 use plotters::prelude::DrawingArea;
@@ -8,12 +12,12 @@ use plotters::prelude::DrawingArea;
 use super::canvas::{Backend, Figure};
 use super::data::RunData;
 use super::font;
-use super::geom::Xy;
+use super::geom::{self, Xy};
 use super::layout::{MapLayout, Margins};
 use super::palette;
 use super::scene::{
-    self, Header, LegendItem, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, Swatch, fmt_m,
-    line, solid,
+    self, Header, LegendItem, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, Swatch, alpha,
+    fmt_m, line, solid,
 };
 
 /// Largest plotting area of the field figure, in pixels.
@@ -36,6 +40,35 @@ impl<'a> FieldFigure<'a> {
     pub fn new(data: &'a RunData) -> Self {
         let s = &data.scenario;
         let (margin_m, mut legend) = scene::obstacle_legend(s);
+        legend.extend(scene::changing_world_legend(s, true));
+        if !s.moving.is_empty() {
+            legend.push(LegendItem::new(
+                Swatch::Disk {
+                    fill: alpha(palette::WHITE, 0.0),
+                    edge: Some(solid(palette::MOVING_OBSTACLE)),
+                    dashed: true,
+                },
+                "moving obstacle at step 0",
+            ));
+        }
+        if data.replanned() {
+            legend.push(LegendItem::new(
+                Swatch::Line {
+                    color: alpha(palette::CENTRE_PATH, PLAN_ALPHA),
+                    width: 2,
+                    dashed: true,
+                },
+                match data.plans.len().saturating_sub(1) {
+                    1 => "plans (first + 1 replan)".to_string(),
+                    n => format!("plans (first + {n} replans)"),
+                },
+            ));
+        }
+        let path_label = if data.replanned() {
+            "centre path followed"
+        } else {
+            "centre path (Hybrid A*)"
+        };
         legend.extend([
             LegendItem::new(
                 Swatch::Line {
@@ -43,7 +76,7 @@ impl<'a> FieldFigure<'a> {
                     width: 2,
                     dashed: false,
                 },
-                "centre path (Hybrid A*)",
+                path_label,
             ),
             LegendItem::new(
                 Swatch::Arrow {
@@ -57,10 +90,11 @@ impl<'a> FieldFigure<'a> {
         let header = Header {
             title: scene::title(format!("{}: obstacle field and centre path", s.name), s),
             subtitle: Some(format!(
-                "{} x {} m field, {} obstacles; {} centre steps of {} m, turning radius {} m{}",
+                "{} x {} m field, {} obstacles{}; {} centre steps of {} m, turning radius {} m{}",
                 fmt_m(s.field.width_m),
                 fmt_m(s.field.height_m),
                 s.obstacles.len(),
+                changing_note(data),
                 data.centre.len().saturating_sub(1),
                 fmt_m(s.path.step_m),
                 fmt_m(s.path.turning_radius_m),
@@ -98,11 +132,94 @@ impl<'a> FieldFigure<'a> {
     }
 }
 
+/// Opacity of the plans drawn under the path followed.
+const PLAN_ALPHA: f64 = 0.45;
+/// Most unknown obstacles labelled with the step they were found at.
+const MAX_FOUND_LABELS: usize = 40;
+
+/// What a changing world adds to the subtitle's obstacle count: `, 2 moving, 1 unknown`
+/// (empty for a static world).
+fn changing_note(data: &RunData) -> String {
+    let s = &data.scenario;
+    let mut note = String::new();
+    if !s.moving.is_empty() {
+        note.push_str(&format!(", {} moving", s.moving.len()));
+    }
+    if !s.unknown.is_empty() {
+        let found = data
+            .unknown
+            .iter()
+            .filter(|u| u.known_from_step.is_some())
+            .count();
+        note.push_str(&format!(", {} unknown ({found} found)", s.unknown.len()));
+    }
+    note
+}
+
 fn pose_swatch(color: plotters::style::RGBColor) -> Swatch {
     Swatch::Disk {
         fill: solid(color),
         edge: Some(solid(palette::WHITE)),
         dashed: false,
+    }
+}
+
+impl FieldFigure<'_> {
+    /// The unknown obstacles, the moving obstacles' routes and their first and last
+    /// places, and the plans (when the centre replanned): nothing for a static world.
+    fn draw_changing_world<DB: Backend>(&self, p: &Painter<'_, '_, DB>) -> anyhow::Result<()> {
+        let data = self.data;
+        let s = &data.scenario;
+        let label_style = font::text(13.0).color(&palette::TEXT_MUTED);
+        for (i, u) in data.unknown.iter().enumerate() {
+            p.unknown_obstacle(u, u.known_from_step.is_some(), self.margin_m)?;
+            if i < MAX_FOUND_LABELS {
+                let text = u
+                    .known_from_step
+                    .map_or("never found".to_string(), |k| format!("found at step {k}"));
+                let at = (
+                    u.disk.centre.x,
+                    u.disk.centre.y - u.disk.radius_m - self.margin_m - p.m(3.0),
+                );
+                let style = label_style.pos(scene::anchor_towards(-std::f64::consts::FRAC_PI_2));
+                p.text(&text, at, &style)?;
+            }
+        }
+        for m in &s.moving {
+            p.route(m)?;
+        }
+        if let Some(first) = data.moving.first() {
+            for (at, m) in first.positions.iter().zip(&s.moving) {
+                p.dashed(
+                    &geom::closed(geom::circle((at.x, at.y), m.radius_m, self.layout.px_per_m)),
+                    4,
+                    3,
+                    line(solid(palette::MOVING_OBSTACLE), 1),
+                )?;
+            }
+        }
+        if let Some(last) = data.moving.last() {
+            for (at, m) in last.positions.iter().zip(&s.moving) {
+                p.moving_obstacle(*at, m.radius_m, self.margin_m)?;
+            }
+        }
+        if data.replanned() {
+            let style = line(alpha(palette::CENTRE_PATH, PLAN_ALPHA), 2);
+            for plan in &data.plans {
+                let pts: Vec<Xy> = plan.poses.iter().map(|q| (q.x_m, q.y_m)).collect();
+                p.dashed(&pts, 6, 4, style)?;
+            }
+            for plan in data.plans.iter().skip(1) {
+                if let Some(q) = plan.poses.first() {
+                    p.marker(
+                        (q.x_m, q.y_m),
+                        3.5,
+                        scene::fill(solid(palette::CENTRE_PATH)),
+                    )?;
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -118,6 +235,7 @@ impl Figure for FieldFigure<'_> {
         let p = Painter::new(&chart, &self.layout);
         let s = &self.data.scenario;
         p.obstacles(&s.obstacles, self.margin_m)?;
+        self.draw_changing_world(&p)?;
 
         let path: Vec<Xy> = self
             .data

@@ -170,6 +170,39 @@ pub fn arrow(tail: Xy, heading_rad: f64, len: f64, head: f64) -> ([Xy; 2], [Xy; 
     ([tail, base], [tip, left, right])
 }
 
+/// Hatching of the disk of radius `r` around `c`: chords at 45 degrees, `spacing` apart
+/// (at most 64 of them), each as its two ends.
+pub fn hatch(c: Xy, r: f64, spacing: f64) -> Vec<[Xy; 2]> {
+    if !(r > 0.0 && spacing > 0.0) {
+        return Vec::new();
+    }
+    let spacing = spacing.max(2.0 * r / 64.0);
+    let (t, n) = (
+        (
+            std::f64::consts::FRAC_1_SQRT_2,
+            std::f64::consts::FRAC_1_SQRT_2,
+        ),
+        (
+            -std::f64::consts::FRAC_1_SQRT_2,
+            std::f64::consts::FRAC_1_SQRT_2,
+        ),
+    );
+    let k = (r / spacing).floor() as i64;
+    (-k..=k)
+        .filter_map(|i| {
+            let d = i as f64 * spacing;
+            let half = (r * r - d * d).sqrt();
+            (half > 0.0).then(|| {
+                let m = (c.0 + d * n.0, c.1 + d * n.1);
+                [
+                    (m.0 - half * t.0, m.1 - half * t.1),
+                    (m.0 + half * t.0, m.1 + half * t.1),
+                ]
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -214,5 +247,21 @@ mod tests {
         let (shaft, head) = arrow((0.0, 0.0), 0.0, 2.0, 0.5);
         assert_eq!(head[0], (2.0, 0.0));
         assert_eq!(shaft[1], (1.5, 0.0));
+    }
+
+    #[test]
+    fn hatch_chords_end_on_the_circle() {
+        let chords = hatch((1.0, 2.0), 3.0, 1.0);
+        assert_eq!(
+            chords.len(),
+            5,
+            "offsets -2 to 2 (±3 touch the circle only)"
+        );
+        for [a, b] in chords {
+            for p in [a, b] {
+                assert!(((p.0 - 1.0).hypot(p.1 - 2.0) - 3.0).abs() < 1e-9, "{p:?}");
+            }
+        }
+        assert!(hatch((0.0, 0.0), 0.0, 1.0).is_empty());
     }
 }

@@ -2,7 +2,10 @@
 //! the files `coordinator run` wrote (nothing is re-planned), into `RUN_DIR/plots/`:
 //!
 //! - `field.png`/`.svg`: obstacles with their safety margins, start and goal poses, and
-//!   the centre's Hybrid A* path with heading arrows (the paper's Figs. 2, 3, 6);
+//!   the centre's Hybrid A* path with heading arrows (the paper's Figs. 2, 3, 6); in a
+//!   changing world also the moving obstacles' routes and first and last places, the
+//!   obstacles unknown at the start (hatched, with the step they were found at) and every
+//!   plan of the centre under the path it followed (`plans.csv`, `obstacles.csv`);
 //! - `formation.png`/`.svg`: the formation at its start pose, each agent's safety circle
 //!   and its slot (Fig. 7);
 //! - `deviation.png`/`.svg`: each agent's deviation from its slot over the steps and the
@@ -10,7 +13,9 @@
 //! - `clearance.png`/`.svg`: the smallest agent-agent and agent-obstacle clearance at
 //!   every step against the zero line, faults marked;
 //! - `animation.gif`: the whole run (the paper's video; Fig. 8 at every frame), with each
-//!   agent's sensing radius as a faint circle on request ([`RenderOptions`]).
+//!   agent's sensing radius as a faint circle on request ([`RenderOptions`]), each moving
+//!   obstacle where it stands at the frame's step and each unknown obstacle outlined until
+//!   it became known, filled after.
 //!
 //! Titles name what the run's model adds to the paper's: the top speed, the sensing
 //! radius and parallel turns, when the scenario has them (`scene::model_note`).

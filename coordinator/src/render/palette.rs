@@ -61,6 +61,10 @@ pub const CLEARANCE_OBSTACLES: RGBColor = ORANGE;
 pub const COLLISION: RGBColor = VERMILLION;
 /// An agent's sensing radius (drawn faint, on request).
 pub const SENSING: RGBColor = REDDISH_PURPLE;
+/// Moving obstacles, their routes and where they stood (maps).
+pub const MOVING_OBSTACLE: RGBColor = REDDISH_PURPLE;
+/// Outline and hatching of obstacles the centre's planner did not know at the start.
+pub const UNKNOWN_OBSTACLE: RGBColor = BLACK;
 /// Faults marked on a time axis.
 pub const FAULT: RGBColor = REDDISH_PURPLE;
 

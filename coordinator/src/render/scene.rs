@@ -10,11 +10,12 @@ use plotters::prelude::{
 };
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
-use shared::geometry::Disk;
+use shared::geometry::{Disk, Point};
 use shared::scenario::Scenario;
 use shared::vocabulary::TurnMode;
 
 use super::canvas::Backend;
+use super::data::UnknownRecord;
 use super::font;
 use super::geom::{self, View, Xy};
 use super::layout::MapLayout;
@@ -255,6 +256,111 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
         }
         Ok(())
     }
+
+    /// The safety margin ring of one obstacle (translucent fill, dashed edge), as
+    /// [`Self::obstacles`] draws it.
+    fn margin_ring(&self, c: Xy, r: f64, edge: RGBColor) -> anyhow::Result<()> {
+        if !self.view.touches_disk(c, r) {
+            return Ok(());
+        }
+        let ring = geom::circle(c, r, self.px_per_m);
+        self.polygon(&ring, fill(alpha(palette::SAFETY_MARGIN, 0.16)))?;
+        self.dashed(&geom::closed(ring), 4, 3, line(alpha(edge, 0.8), 1))
+    }
+
+    /// An obstacle the centre's planner did not know at the start. Once `known`: like any
+    /// obstacle (its safety margin grown by `margin_m`, its body filled) and hatched;
+    /// before: only its body's dashed outline.
+    pub fn unknown_obstacle(
+        &self,
+        u: &UnknownRecord,
+        known: bool,
+        margin_m: f64,
+    ) -> anyhow::Result<()> {
+        let c = (u.disk.centre.x, u.disk.centre.y);
+        let r = u.disk.radius_m;
+        if !self.view.touches_disk(c, r + margin_m) {
+            return Ok(());
+        }
+        let edge = geom::closed(geom::circle(c, r, self.px_per_m));
+        if known {
+            self.margin_ring(c, r + margin_m, palette::SAFETY_MARGIN)?;
+            self.disk(c, r, Some(fill(alpha(palette::OBSTACLE, 0.55))), None)?;
+            for chord in geom::hatch(c, r, self.m(5.0)) {
+                self.polyline(&chord, line(solid(palette::UNKNOWN_OBSTACLE), 1))?;
+            }
+            self.polyline(&edge, line(solid(palette::UNKNOWN_OBSTACLE), 1))
+        } else {
+            self.dashed(&edge, 4, 3, line(solid(palette::UNKNOWN_OBSTACLE), 1))
+        }
+    }
+
+    /// A moving obstacle of radius `r` standing at `at`: its safety margin (grown by
+    /// `margin_m`) and its body.
+    pub fn moving_obstacle(&self, at: Point, r: f64, margin_m: f64) -> anyhow::Result<()> {
+        let c = (at.x, at.y);
+        self.margin_ring(c, r + margin_m, palette::MOVING_OBSTACLE)?;
+        self.disk(
+            c,
+            r,
+            Some(fill(alpha(palette::MOVING_OBSTACLE, 0.85))),
+            Some(line(solid(palette::BLACK), 1)),
+        )
+    }
+
+    /// A moving obstacle's route: its waypoints joined (closed for a loop), thin.
+    pub fn route(&self, m: &shared::moving_obstacle::MovingObstacle) -> anyhow::Result<()> {
+        let mut pts: Vec<Xy> = m.waypoints_m.iter().map(|p| (p.x, p.y)).collect();
+        if m.route == shared::moving_obstacle::Route::Loop {
+            pts = geom::closed(pts);
+        }
+        self.polyline(&pts, line(alpha(palette::MOVING_OBSTACLE, 0.8), 1))
+    }
+}
+
+/// Legend entries for what a changing world adds to a map: moving obstacles (with their
+/// routes when `routes`) and obstacles unknown at the start; none for a static world.
+pub fn changing_world_legend(scenario: &Scenario, routes: bool) -> Vec<LegendItem> {
+    let mut legend = Vec::new();
+    if !scenario.moving.is_empty() {
+        legend.push(LegendItem::new(
+            Swatch::Disk {
+                fill: alpha(palette::MOVING_OBSTACLE, 0.85),
+                edge: Some(solid(palette::BLACK)),
+                dashed: false,
+            },
+            "moving obstacle",
+        ));
+        if routes {
+            legend.push(LegendItem::new(
+                Swatch::Line {
+                    color: alpha(palette::MOVING_OBSTACLE, 0.8),
+                    width: 1,
+                    dashed: false,
+                },
+                "its route",
+            ));
+        }
+    }
+    if !scenario.unknown.is_empty() {
+        legend.push(LegendItem::new(
+            Swatch::Disk {
+                fill: alpha(palette::WHITE, 0.0),
+                edge: Some(solid(palette::UNKNOWN_OBSTACLE)),
+                dashed: true,
+            },
+            "unknown to the planner",
+        ));
+        legend.push(LegendItem::new(
+            Swatch::Disk {
+                fill: alpha(palette::OBSTACLE, 0.55),
+                edge: Some(solid(palette::UNKNOWN_OBSTACLE)),
+                dashed: false,
+            },
+            "found on the way",
+        ));
+    }
+    legend
 }
 
 /// What a legend entry shows beside its label.
