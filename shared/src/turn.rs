@@ -9,7 +9,9 @@ use crate::best_point::{self, BestPointError};
 use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, polyline_prefix};
+use crate::geometry::{
+    Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, polyline_length_m, polyline_prefix,
+};
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaPlanner;
 use crate::vocabulary::{
@@ -327,7 +329,8 @@ impl TurnPlanner {
     /// obstacle's next motion, and a step to spare where there is room. An agent that starts its turn inside such a disk (the
     /// obstacle came closer since its last turn) first escapes: a straight motion out of
     /// the disk, radially or up to 150 degrees off, that is clear of every body and
-    /// within its top speed; the rest of the turn is planned from there with what is left
+    /// within its top speed, or else the shortest path out round the bodies in its way
+    /// ([`Self::escape_path`]); the rest of the turn is planned from there with what is left
     /// of the top speed. Without an escape, the disk is shrunk to leave the agent outside.
     /// Without moving obstacles this is [`Self::plan_move`].
     pub fn plan_turn(&self, step: usize, centre: &Pose, me: &Point, others: &[Body]) -> Move {
@@ -344,15 +347,21 @@ impl TurnPlanner {
             })
             .collect();
         let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
+        let spares_m: Vec<f64> = sensed.iter().map(|m| m.speed_m_per_step).collect();
         let inside = reach
             .iter()
             .any(|d| (me - d.centre).norm() < d.radius_m + keep_m);
-        let escape = if inside {
-            self.escape_point(step, me, others, &reach)
+        let escape: Option<Vec<Point>> = if inside {
+            self.escape_point(step, me, others, &reach, &spares_m)
+                .map(|q| vec![*me, q])
+                .or_else(|| self.escape_path(step, me, others, &reach, &spares_m))
         } else {
             None
         };
-        let start = escape.unwrap_or(*me);
+        let start = escape
+            .as_ref()
+            .and_then(|e| e.last().copied())
+            .unwrap_or(*me);
         // Planned around with a second step to spare where there is room, so that an
         // obstacle coming closer seldom catches the agent inside its reach.
         let mut bodies = others.to_vec();
@@ -367,19 +376,133 @@ impl TurnPlanner {
                 });
             }
         }
-        let Some(out) = escape else {
+        let Some(escape) = escape else {
             return self.plan_move_within(centre, me, &bodies, self.spec.max_step_m);
         };
-        let used_m = (out - me).norm();
+        let used_m = polyline_length_m(&escape);
         let left_m = self.spec.max_step_m.map(|s| (s - used_m).max(0.0));
-        let mut mv = self.plan_move_within(centre, &out, &bodies, left_m);
-        mv.waypoints.insert(0, *me);
+        let mut mv = self.plan_move_within(centre, &start, &bodies, left_m);
+        // The escape, then the rest (which begins where the escape ends).
+        let mut waypoints = escape;
+        waypoints.extend(mv.waypoints.iter().skip(1));
+        mv.waypoints = waypoints;
         if mv.waypoints.len() > MAX_WAYPOINTS {
-            mv.waypoints.truncate(2);
-            mv.best = out;
+            mv.waypoints.truncate(MAX_WAYPOINTS);
+            mv.best = mv.end();
             mv.status = MoveStatus::UnderWay;
         }
         mv
+    }
+
+    /// When no straight motion gets out ([`Self::escape_point`]): the shortest path among
+    /// every body, the static obstacles and the moving ones where they stand, within the
+    /// top speed, to a point just outside every disk of `reach` (grown by the agent's
+    /// radius), tried every 10 degrees round the disk it is deepest in, nearest the
+    /// straight way out first, a step to spare beyond it before just outside it. A
+    /// polyline from `me` to that point.
+    fn escape_path(
+        &self,
+        step: usize,
+        me: &Point,
+        others: &[Body],
+        reach: &[Disk],
+        spares_m: &[f64],
+    ) -> Option<Vec<Point>> {
+        let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
+        let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
+        let (deepest, spare_m) = reach
+            .iter()
+            .zip(spares_m)
+            .max_by(|(a, _), (b, _)| {
+                let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
+                depth(a).total_cmp(&depth(b))
+            })
+            .map(|(d, s)| (*d, *s))?;
+        let big_r = deepest.radius_m + keep_m + PLANNING_MARGIN_M;
+        // Planning frame as in BestPointPlanner: the agent a point, every body grown by
+        // its radius and the margin, the field inset by as much.
+        let grow_m = self.spec.radius_m + PLANNING_MARGIN_M;
+        let offset = Vector::new(grow_m, grow_m);
+        let field = Field::new(
+            (self.field.width_m - 2.0 * grow_m).max(0.0),
+            (self.field.height_m - 2.0 * grow_m).max(0.0),
+        );
+        let near_m = budget_m.min(2.0 * big_r) + grow_m;
+        let mut statics = Vec::new();
+        let _ = self
+            .statics
+            .visit_near(me, near_m + self.statics.max_radius_m(), |_, d| {
+                statics.push(Disk {
+                    centre: d.centre - offset,
+                    radius_m: d.radius_m + grow_m,
+                });
+                std::ops::ControlFlow::<()>::Continue(())
+            });
+        let bodies: Vec<Disk> = others
+            .iter()
+            .map(|b| Disk {
+                centre: b.position - offset,
+                radius_m: b.radius_m + grow_m,
+            })
+            .chain(self.moving.iter().map(|m| {
+                let d = m.disk_at(step);
+                Disk {
+                    centre: d.centre - offset,
+                    radius_m: d.radius_m + grow_m,
+                }
+            }))
+            .collect();
+        let (statics, bodies) = (DiskGrid::new(statics), DiskGrid::new(bodies));
+        let layers = [&statics, &bodies];
+        let space = FreeSpace::new(field, &layers);
+        let me_p = me - offset;
+        let away = me - deepest.centre;
+        let away_rad = if away.norm() > 0.0 {
+            away.y.atan2(away.x)
+        } else {
+            0.0
+        };
+        // A step to spare beyond the disk first, then just outside it.
+        for (k, out_r) in (0..36_i32)
+            .map(|k| (k, big_r + spare_m))
+            .chain((0..36_i32).map(|k| (k, big_r)))
+        {
+            let off_deg = f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 });
+            let rad = away_rad + off_deg.to_radians();
+            let q = deepest.centre + out_r * Vector::new(rad.cos(), rad.sin());
+            if (q - me).norm() > budget_m
+                || reach
+                    .iter()
+                    .any(|d| (q - d.centre).norm() < d.radius_m + keep_m)
+            {
+                continue;
+            }
+            let q_p = q - offset;
+            if !space.is_free(&q_p, 0.0) {
+                continue;
+            }
+            let Ok(path) = disk_path::shortest_path(&space, &me_p, &q_p) else {
+                continue;
+            };
+            if path.length_m() > budget_m {
+                continue;
+            }
+            let mut points: Vec<Point> = path
+                .polyline(0.5 * PLANNING_MARGIN_M)
+                .iter()
+                .map(|p| p + offset)
+                .collect();
+            if points.len() < 2 || points.len() > MAX_WAYPOINTS / 2 {
+                continue;
+            }
+            // Exactly from the agent to the escape point.
+            points[0] = *me;
+            if let Some(last) = points.last_mut() {
+                *last = q;
+            }
+            return Some(points);
+        }
+        None
     }
 
     /// A point just outside every disk of `reach` (grown by the agent's radius), reached
@@ -391,16 +514,19 @@ impl TurnPlanner {
         me: &Point,
         others: &[Body],
         reach: &[Disk],
+        spares_m: &[f64],
     ) -> Option<Point> {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
-        // The disk it is deepest in.
-        let deepest = reach
+        // The disk it is deepest in, and that obstacle's speed: how far beyond the disk
+        // the agent goes if it can, to keep a step to spare.
+        let (deepest, spare_m) = reach
             .iter()
-            .max_by(|a, b| {
+            .zip(spares_m)
+            .max_by(|(a, _), (b, _)| {
                 let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
                 depth(a).total_cmp(&depth(b))
             })
-            .copied()?;
+            .map(|(d, s)| (*d, *s))?;
         let away = me - deepest.centre;
         let away_rad = if away.norm() > 0.0 {
             away.y.atan2(away.x)
@@ -408,7 +534,6 @@ impl TurnPlanner {
             0.0
         };
         let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
-        let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
         // Straight away first, then ever more aside, every 10 degrees up to 150.
         let offsets_deg =
@@ -417,16 +542,44 @@ impl TurnPlanner {
             let rad = away_rad + off_deg.to_radians();
             let v = Vector::new(rad.cos(), rad.sin());
             // |me + t v - c| = R, the larger root (leaving the disk).
-            let big_r = deepest.radius_m + keep_m + PLANNING_MARGIN_M;
-            let b = v.dot(&away);
-            let disc = b * b - (away.norm_squared() - big_r * big_r);
-            if disc < 0.0 {
+            let leave = |big_r: f64| {
+                let b = v.dot(&away);
+                let disc = b * b - (away.norm_squared() - big_r * big_r);
+                (disc >= 0.0).then(|| -b + disc.sqrt())
+            };
+            let Some(t_out) = leave(deepest.radius_m + keep_m + PLANNING_MARGIN_M) else {
+                continue;
+            };
+            if !(t_out > 0.0 && t_out <= budget_m) {
                 continue;
             }
-            let t = -b + disc.sqrt();
-            if !(t > 0.0 && t <= budget_m) {
-                continue;
+            // As far as a step to spare, or the top speed, allows; else just out.
+            let t_far = leave(deepest.radius_m + spare_m + keep_m + PLANNING_MARGIN_M)
+                .map_or(t_out, |t| t.min(budget_m));
+            for t in [t_far, t_out] {
+                if let Some(q) = self.escape_to(me, v, t, others, reach, &now) {
+                    return Some(q);
+                }
             }
+        }
+        None
+    }
+
+    /// `me + t v` if the straight motion there is clear of every body, the static
+    /// obstacles, the moving ones where they stand (`now`) and the field's edges, and it
+    /// ends outside every disk of `reach` (grown by the agent's radius).
+    fn escape_to(
+        &self,
+        me: &Point,
+        v: Vector,
+        t: f64,
+        others: &[Body],
+        reach: &[Disk],
+        now: &[Disk],
+    ) -> Option<Point> {
+        let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
+        let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
+        {
             let q = me + t * v;
             let outside_reach = reach
                 .iter()
@@ -458,11 +611,9 @@ impl TurnPlanner {
                             std::ops::ControlFlow::Break(())
                         }
                     });
-            if outside_reach && in_field && clear_of_bodies && clear_of_moving && clear_of_statics {
-                return Some(q);
-            }
+            (outside_reach && in_field && clear_of_bodies && clear_of_moving && clear_of_statics)
+                .then_some(q)
         }
-        None
     }
 
     /// [`Self::plan_move`] with the move cut at `max_step_m` (absent: not cut).
