@@ -333,3 +333,76 @@ fn random_fields_of_twenty_moving_obstacles_cause_no_collision() {
         "no moving obstacle ever crossed the centre's path"
     );
 }
+
+/// `[path] max_lag_m`: agents slower than the centre (0.2 m per step against 0.25 m)
+/// fall behind; the centre holds while one is farther than 0.5 m from its slot, so it
+/// never moves on with an agent lagging more (but for the bounded hold), and the
+/// formation arrives together.
+#[test]
+fn the_centre_waits_for_agents_that_lag_behind() {
+    let text = r#"
+name = "slow-agents"
+[field]
+width_m = 30.0
+height_m = 20.0
+[formation]
+agent_radius_m = 0.3
+max_step_m = 0.2
+slots = [
+  { r_m = 0.0, theta_deg = 0.0 },
+  { r_m = 1.0, theta_deg = 90.0 },
+  { r_m = 1.0, theta_deg = -90.0 },
+]
+[path]
+start = { x_m = 3.0, y_m = 10.0, heading_deg = 0.0 }
+goal = { x_m = 27.0, y_m = 10.0, heading_deg = 0.0 }
+turning_radius_m = 2.0
+step_m = 0.25
+centre_clearance_m = 0.5
+max_lag_m = 0.5
+"#;
+    let scenario = Scenario::parse(text, "slow.toml").expect("scenario");
+    let run = simulate(&scenario).expect("simulate");
+    assert!(run.completed);
+    assert_eq!(run.summary().collisions, 0);
+    let lag_waits: Vec<usize> = run
+        .course
+        .waits
+        .iter()
+        .filter(|w| w.reason == shared::course::WaitReason::Lag)
+        .map(|w| w.step)
+        .collect();
+    assert!(!lag_waits.is_empty(), "the agents never lagged");
+    let lag_of = |k: usize| {
+        let step = &run.steps[k];
+        step.agents
+            .iter()
+            .filter(|a| a.alive)
+            .map(|a| (a.position - a.slot).norm())
+            .fold(0.0, f64::max)
+    };
+    for k in 1..run.steps.len() {
+        let moved = run.steps[k].centre != run.steps[k - 1].centre;
+        // The centre moved on at step k only if every agent was within the lag at the end
+        // of step k - 1 (the bounded hold aside).
+        if moved {
+            let held_long = k > shared::course::MAX_LAG_WAIT_STEPS
+                && (k - shared::course::MAX_LAG_WAIT_STEPS..k).all(|j| lag_waits.contains(&j));
+            assert!(
+                lag_of(k - 1) <= 0.5 + 1e-12 || held_long,
+                "step {k}: moved on with a lag of {} m",
+                lag_of(k - 1)
+            );
+        } else {
+            assert!(
+                lag_waits.contains(&k),
+                "step {k}: held without a recorded wait"
+            );
+        }
+    }
+    // Without the hold the same agents end farther behind over the way.
+    let free = Scenario::parse(&text.replace("max_lag_m = 0.5", ""), "free.toml").expect("free");
+    let free_run = simulate(&free).expect("simulate");
+    assert!(free_run.course.waits.is_empty());
+    assert!(run.summary().max_deviation_m < free_run.summary().max_deviation_m);
+}
