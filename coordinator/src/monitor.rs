@@ -222,6 +222,16 @@ impl SafetyMonitor {
                 }
             }
             for (obstacle, o) in self.moving.iter().enumerate() {
+                // Outside the segment's box grown by the radii sum: cannot meet it.
+                let out = o.radius_m + radius_m + PREFILTER_SLACK_M;
+                let c = &o.centre;
+                if c.x < a.x.min(b.x) - out
+                    || c.x > a.x.max(b.x) + out
+                    || c.y < a.y.min(b.y) - out
+                    || c.y > a.y.max(b.y) + out
+                {
+                    continue;
+                }
                 if hits(&o.centre, o.radius_m) {
                     return Err(Refusal::MovingObstacle { segment, obstacle });
                 }

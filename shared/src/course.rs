@@ -15,8 +15,11 @@
 //!    be. A blocked path is replanned with Hybrid A* from the current pose to the goal,
 //!    around the known obstacles and around every place a conflicting moving obstacle
 //!    takes in the look-ahead. When there is no such path, or the new one is blocked in
-//!    the same way, the centre waits one step and tries again, for at most
-//!    [`MAX_BLOCKED_WAIT_STEPS`] steps in a row before the run gives up;
+//!    the same way, the centre waits and tries again: the next step when moving
+//!    obstacles are in the way, else after a pause that doubles from one step up to
+//!    [`MAX_REPLAN_PAUSE_STEPS`]; for at most [`MAX_BLOCKED_WAIT_STEPS`] steps
+//!    in a row before the run gives up (as it does after [`MAX_COURSE_STEPS_FACTOR`]
+//!    times the first plan's steps plus [`MAX_BLOCKED_WAIT_STEPS`] in all);
 //! 4. otherwise moves the centre one pose along the path.
 //!
 //! A scenario where nothing changes ([`Scenario::changes`]) follows the first plan pose
@@ -37,6 +40,12 @@ pub const LOOKAHEAD_STEPS: usize = 20;
 pub const MAX_LAG_WAIT_STEPS: usize = 50;
 /// Longest wait, in steps in a row, for a way through before the run gives up.
 pub const MAX_BLOCKED_WAIT_STEPS: usize = 400;
+/// Longest pause, in steps, between two tries to replan while the way stays blocked: the
+/// pause doubles after every try that finds no way, from 1 step up to this.
+pub const MAX_REPLAN_PAUSE_STEPS: usize = 16;
+/// A run gives up after this many times the first plan's steps, plus
+/// [`MAX_BLOCKED_WAIT_STEPS`] (waits and detours have their bound).
+pub const MAX_COURSE_STEPS_FACTOR: usize = 10;
 
 /// Why the centre's path was planned again.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,8 +115,17 @@ pub struct Wait {
 pub struct Course<'a> {
     scenario: &'a Scenario,
     settings: HybridAStarSettings,
-    /// Built at the first replanning; keeps the heuristic between replannings.
+    /// Built at the first replanning around found obstacles; keeps the heuristic between
+    /// replannings (the known obstacles only grow, which it updates in place).
     replanner: Option<Replanner>,
+    /// The same for replannings around moving obstacles (whose places change every time).
+    replanner_moving: Option<Replanner>,
+    /// No replanning before this step (the pause after tries that found no way).
+    retry_at: usize,
+    /// Tries in a row that found no way.
+    failed_tries: u32,
+    /// The run gives up at this step.
+    step_limit: usize,
     /// The path being followed, one pose per step.
     plan: Vec<Pose>,
     /// Index in `plan` of the current pose.
@@ -140,6 +158,13 @@ impl<'a> Course<'a> {
                 p.allow_reverse,
             ),
             replanner: None,
+            replanner_moving: None,
+            retry_at: 0,
+            failed_tries: 0,
+            step_limit: first_plan
+                .len()
+                .saturating_mul(MAX_COURSE_STEPS_FACTOR)
+                .saturating_add(MAX_BLOCKED_WAIT_STEPS),
             plan: if first_plan.is_empty() {
                 vec![p.start]
             } else {
@@ -173,6 +198,10 @@ impl<'a> Course<'a> {
             self.at += 1;
             return Some(self.pose());
         }
+        if step > self.step_limit {
+            self.gave_up = true;
+            return None;
+        }
         let found = self.sense_unknown(step, bodies, alive);
         if self.lags(bodies, alive) && self.lag_waits < MAX_LAG_WAIT_STEPS {
             self.lag_waits += 1;
@@ -193,7 +222,19 @@ impl<'a> Course<'a> {
             } else {
                 ReplanReason::MovingObstacle
             };
-            if !self.replan(step, reason, &crossing) {
+            let taken = step >= self.retry_at && self.replan(step, reason, &crossing);
+            if taken {
+                self.failed_tries = 0;
+                self.retry_at = 0;
+            } else {
+                if step >= self.retry_at && reason == ReplanReason::FoundObstacle {
+                    // A try that found no way round still obstacles: pause before the
+                    // next, longer each time (moving ones are tried again every step, as
+                    // they change the way every step).
+                    let pause = (1usize << self.failed_tries.min(4)).min(MAX_REPLAN_PAUSE_STEPS);
+                    self.failed_tries += 1;
+                    self.retry_at = step + pause;
+                }
                 self.blocked_waits += 1;
                 if self.blocked_waits > MAX_BLOCKED_WAIT_STEPS {
                     self.gave_up = true;
@@ -321,7 +362,12 @@ impl<'a> Course<'a> {
                 o.radius_m = (o.radius_m - (clearance_m - room_m) - 1e-6).max(0.0);
             }
         }
-        let replanner = match self.replanner.take() {
+        let slot = if crossing.is_empty() {
+            &mut self.replanner
+        } else {
+            &mut self.replanner_moving
+        };
+        let replanner = match slot.take() {
             Some(r) => Ok(r),
             None => Replanner::new(
                 self.scenario.field,
@@ -331,7 +377,7 @@ impl<'a> Course<'a> {
         };
         let planned: Result<Vec<Pose>, PlanError> = replanner.and_then(|mut r| {
             let dense = r.plan_from(&here, &obstacles);
-            self.replanner = Some(r);
+            *slot = Some(r);
             dense.map(|dense| hybrid_astar::resample(&dense, self.scenario.path.step_m))
         });
         let path = planned

@@ -10,7 +10,9 @@
 //! their turns, with the obstacles standing still. So an obstacle's motion is the polyline
 //! [`MovingObstacle::sweep`]`(k)` (its route's corners included), and between two turns of
 //! an agent every moving obstacle moves exactly once, by at most its speed: it stays
-//! within [`MovingObstacle::reach_disk_at`] of where the agent last saw it.
+//! within [`MovingObstacle::reach_disk_at`] of where the agent last saw it. (Before the
+//! first turns, at step 1, the agents have seen nothing: validation refuses an obstacle
+//! whose first motion reaches the formation at the start pose.)
 //!
 //! ```
 //! use shared::geometry::Point;

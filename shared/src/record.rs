@@ -7,7 +7,7 @@
 use serde::Serialize;
 
 use crate::course::{Course, Replan, Wait};
-use crate::geometry::{Disk, DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
+use crate::geometry::{DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
@@ -288,11 +288,11 @@ impl Run {
 #[derive(Debug)]
 pub struct Recorder<'a> {
     scenario: &'a Scenario,
-    /// Every static obstacle, known to the centre or not, with its true radius.
-    statics: Vec<Disk>,
-    /// Obstacles with their true radii where they stand now (the static ones, then the
-    /// moving ones), for the safety check and clearances.
+    /// Every static obstacle, known to the centre or not, with its true radius, for the
+    /// safety check and clearances.
     obstacles: DiskGrid,
+    /// The moving obstacles where they stand now, true radii.
+    moving_now: DiskGrid,
     /// Where each moving obstacle stands now.
     moving: Vec<Point>,
     /// The agents a moving obstacle's motion struck at the start of this step.
@@ -319,12 +319,11 @@ impl<'a> Recorder<'a> {
             })
             .collect();
         let n = bodies.len();
-        let statics = scenario.static_obstacles();
         let moving: Vec<Point> = scenario.moving.iter().map(|m| m.position_at(0)).collect();
         let mut recorder = Self {
             scenario,
-            obstacles: Self::obstacles_now(&statics, scenario, 0),
-            statics,
+            obstacles: DiskGrid::new(scenario.static_obstacles()),
+            moving_now: Self::moving_at(scenario, 0),
             moving,
             struck: Vec::new(),
             bodies,
@@ -357,17 +356,16 @@ impl<'a> Recorder<'a> {
         self.scenario
     }
 
-    /// Every obstacle where it stands at `step`: the static ones, then the moving ones.
-    fn obstacles_now(statics: &[Disk], scenario: &Scenario, step: usize) -> DiskGrid {
-        let mut all = statics.to_vec();
-        all.extend(scenario.moving.iter().map(|m| m.disk_at(step)));
-        DiskGrid::new(all)
+    /// Every moving obstacle where it stands at `step`.
+    fn moving_at(scenario: &Scenario, step: usize) -> DiskGrid {
+        DiskGrid::new(scenario.moving.iter().map(|m| m.disk_at(step)).collect())
     }
 
     /// Open step `step` (from 1) with the centre at `centre`: every moving obstacle
     /// drives to where it stands at `step` while the agents stand still, and any live
-    /// agent its motion comes within reach of is recorded as struck (see
-    /// [`crate::moving_obstacle`]). Call before any turn or fault of the step.
+    /// agent its motion comes within reach of is recorded as struck (in the step, and as
+    /// a fault `struck`; see [`crate::moving_obstacle`]). Call before any turn or fault
+    /// of the step.
     pub fn begin_step(&mut self, step: usize, centre: Pose) {
         self.run.centre_path.push(centre);
         if self.scenario.moving.is_empty() {
@@ -383,11 +381,26 @@ impl<'a> Recorder<'a> {
                 let distance_m = distance_polyline_polyline(&sweep, &[body.position]);
                 if distance_m < reach_m - SAFETY_TOLERANCE_M {
                     self.struck.push((m, a, distance_m));
+                    self.run.faults.push(Fault {
+                        agent: a,
+                        step,
+                        kind: "struck".to_string(),
+                        detail: format!(
+                            "moving obstacle {m}'s motion came {distance_m} m from the agent, within their radii sum {reach_m} m"
+                        ),
+                        detection_ms: None,
+                    });
                 }
             }
             self.moving[m] = obstacle.position_at(step);
         }
-        self.obstacles = Self::obstacles_now(&self.statics, self.scenario, step);
+        self.moving_now = Self::moving_at(self.scenario, step);
+    }
+
+    /// `(moving obstacle, agent, distance in metres)` for each strike of this step's
+    /// obstacle motion ([`Self::begin_step`]), each also recorded as a fault `struck`.
+    pub fn struck_now(&self) -> &[(usize, usize, f64)] {
+        &self.struck
     }
 
     /// Where each moving obstacle stands now, in scenario order.
@@ -510,6 +523,18 @@ impl<'a> Recorder<'a> {
             &mv.waypoints,
             MAX_WAYPOINTS,
         )?;
+        if !self.scenario.moving.is_empty() {
+            // The moving obstacles where they stand (a `HitsObstacle` numbers them).
+            safety::check_move(
+                &self.scenario.field,
+                &self.moving_now,
+                &[],
+                body.radius_m,
+                &body.position,
+                &mv.waypoints,
+                MAX_WAYPOINTS,
+            )?;
+        }
         if let Some(max_m) = self.scenario.agents[agent].max_step_m {
             let length_m = polyline_length_m(&mv.waypoints);
             if length_m > max_m + SAFETY_TOLERANCE_M {
@@ -625,7 +650,10 @@ impl<'a> Recorder<'a> {
             .get(step)
             .copied()
             .unwrap_or(self.scenario.path.start);
-        let reach_m = self.obstacles.max_radius_m()
+        let reach_m = self
+            .obstacles
+            .max_radius_m()
+            .max(self.moving_now.max_radius_m())
             + self.bodies.iter().map(|b| b.radius_m).fold(0.0, f64::max);
         let mut agents = Vec::with_capacity(self.bodies.len());
         for i in 0..self.bodies.len() {
@@ -643,8 +671,15 @@ impl<'a> Recorder<'a> {
             });
             // Obstacles farther than the largest radii sum cannot be the nearest overlap;
             // look a little farther so clearance is reported for near misses too.
-            let (to_obstacle, to_other) =
+            let (to_static, to_other) =
                 safety::clearances_of_m(&self.bodies, i, &self.obstacles, reach_m + 10.0);
+            let to_obstacle = if self.scenario.moving.is_empty() {
+                to_static
+            } else {
+                let (to_moving, _) =
+                    safety::clearances_m(&body, &self.moving_now, &[], reach_m + 10.0);
+                to_static.min(to_moving)
+            };
             agents.push(AgentStep {
                 position: body.position,
                 slot,

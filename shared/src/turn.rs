@@ -337,6 +337,19 @@ impl TurnPlanner {
         if self.moving.is_empty() {
             return self.plan_move(centre, me, others);
         }
+        // What the agent senses from where it stands, once: the coordinator sends an
+        // agent process only that, and an escape must not see more.
+        let sensed_others: Vec<Body>;
+        let others = if self.spec.sensing_radius_m.is_some() {
+            sensed_others = others
+                .iter()
+                .filter(|b| self.spec.senses(me, &b.position, b.radius_m))
+                .copied()
+                .collect();
+            &sensed_others[..]
+        } else {
+            others
+        };
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let sensed: Vec<&MovingObstacle> = self
             .moving

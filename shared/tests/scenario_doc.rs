@@ -18,7 +18,9 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use shared::scenario::{MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_STEPS, Scenario};
+use shared::scenario::{
+    MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, MAX_STEPS, Scenario,
+};
 use shared::simulate::plan_centre_path;
 use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 use toml::{Table, Value};
@@ -364,6 +366,8 @@ fn the_limits_table_gives_the_constants() {
         ("MAX_FIELD_SIDE_M", MAX_FIELD_SIDE_M),
         ("MAX_STEPS", MAX_STEPS as f64),
         ("MAX_ANGLE_DEG", MAX_ANGLE_DEG),
+        ("MAX_ROUTE_WAYPOINTS", MAX_ROUTE_WAYPOINTS as f64),
+        ("MAX_MOVING_WAYPOINTS", MAX_MOVING_WAYPOINTS as f64),
     ];
     assert_eq!(rows.len(), want.len(), "one row per constant: {rows:?}");
     for (name, value) in want {

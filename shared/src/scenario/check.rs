@@ -7,7 +7,7 @@ use super::file::{
 use super::random::{Crowded, random_obstacles};
 use super::{PathSpec, Scenario, ScenarioError};
 use crate::formation::Slot;
-use crate::geometry::{Disk, Field, Point, Pose};
+use crate::geometry::{Disk, Field, Point, Pose, distance_polyline_polyline};
 use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{AgentSpec, MAX_AGENTS, MAX_OBSTACLES, PlannerKind, PlannerSpec, TurnMode};
 
@@ -18,6 +18,11 @@ pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
 /// planner samples the path: every `turning_radius_m / 16` and `centre_clearance_m / 2`
 /// at most, so neither may cut the diagonal into more than this many samples.
 pub const MAX_STEPS: usize = 200_000;
+/// Most waypoints of one moving obstacle's route.
+pub const MAX_ROUTE_WAYPOINTS: usize = 256;
+/// Most waypoints of all moving obstacles' routes together (so the mission file every
+/// agent reads stays small).
+pub const MAX_MOVING_WAYPOINTS: usize = 65_536;
 /// Largest magnitude of an angle in degrees (headings and slot angles): beyond it an
 /// angle is a typo, and far beyond it a double has no precision left for the angle.
 pub const MAX_ANGLE_DEG: f64 = 360.0;
@@ -290,6 +295,13 @@ impl Checker<'_> {
                 ),
             ));
         }
+        let waypoints: usize = raw.moving.iter().map(|m| m.waypoints_m.len()).sum();
+        if waypoints > MAX_MOVING_WAYPOINTS {
+            return Err(self.invalid(
+                "obstacles.moving",
+                format!("{waypoints} waypoints in all exceed the limit of {MAX_MOVING_WAYPOINTS}"),
+            ));
+        }
         raw.moving
             .iter()
             .enumerate()
@@ -312,11 +324,11 @@ impl Checker<'_> {
             Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
             None => default_radius_m,
         };
-        if m.waypoints_m.len() < 2 {
+        if m.waypoints_m.len() < 2 || m.waypoints_m.len() > MAX_ROUTE_WAYPOINTS {
             return Err(self.invalid(
                 format!("{name}.waypoints_m"),
                 format!(
-                    "a route needs at least two waypoints, got {}",
+                    "a route needs 2 to {MAX_ROUTE_WAYPOINTS} waypoints, got {}",
                     m.waypoints_m.len()
                 ),
             ));
@@ -393,19 +405,22 @@ impl Checker<'_> {
                 ));
             }
         }
+        let obstacle = MovingObstacle::new(radius_m, waypoints, speed_m, m.route);
+        // Its first motion comes before any turn: it must not reach the formation.
+        let first_motion = obstacle.sweep(1);
         for (a, spec) in agents.iter().enumerate() {
             let p = spec.slot.ideal_position(&path.start);
-            if (p - first).norm() < radius_m + spec.radius_m {
+            if distance_polyline_polyline(&first_motion, &[p]) < radius_m + spec.radius_m {
                 return Err(self.invalid(
                     format!("{name}.waypoints_m[0]"),
                     format!(
-                        "the obstacle starts on agent {a}, at ({:.3}, {:.3}) at the start pose",
+                        "the obstacle starts on agent {a} (at ({:.3}, {:.3}) at the start pose) or reaches it with its first motion, before the agent's first turn",
                         p.x, p.y
                     ),
                 ));
             }
         }
-        Ok(MovingObstacle::new(radius_m, waypoints, speed_m, m.route))
+        Ok(obstacle)
     }
 
     fn planner(

@@ -24,7 +24,9 @@ mod model;
 mod random;
 mod resolved;
 
-pub use check::{MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_STEPS};
+pub use check::{
+    MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, MAX_STEPS,
+};
 pub use error::ScenarioError;
 pub use file::{PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
 pub use model::{PathSpec, Scenario};
