@@ -173,6 +173,19 @@ fn every_other_shipped_scenario_matches_the_reference() {
     }
 }
 
+/// A changing world with limited sensing: each agent process is sent only the agents
+/// it senses and plans around only the moving obstacles it senses, its escapes too; the
+/// run still equals the reference to the bit.
+#[test]
+fn a_changing_world_with_limited_sensing_matches_the_reference() {
+    let file = support::repo_root().join("tests/data/patrol-sensing.toml");
+    let scenario = Scenario::load(&file).expect("patrol-sensing.toml");
+    assert!(!scenario.moving.is_empty());
+    assert!(scenario.agents.iter().all(|a| a.sensing_radius_m.is_some()));
+    let run = run_and_compare(&scenario);
+    assert!(run.steps.iter().any(|s| s.moving != run.steps[0].moving));
+}
+
 #[test]
 fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
     let scenario = Scenario::paper();

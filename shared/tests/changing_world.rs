@@ -406,3 +406,84 @@ max_lag_m = 0.5
     assert!(free_run.course.waits.is_empty());
     assert!(run.summary().max_deviation_m < free_run.summary().max_deviation_m);
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// With limited sensing, an agent's turn among moving obstacles (escapes included)
+    /// depends only on the bodies it senses: given every body or only those, the move is
+    /// the same, bit for bit (the coordinator sends an agent process only what it
+    /// senses, the reference simulation has them all).
+    #[test]
+    fn a_turn_among_moving_obstacles_depends_only_on_what_the_agent_senses(
+        near in (-1.2..1.2f64, -1.2..1.2f64),
+        crowd in prop::collection::vec((0.0..std::f64::consts::TAU, 0.6..2.2f64), 0..14),
+        step in 0usize..400,
+        slot in (-2.5..2.5f64, -2.5..2.5f64),
+    ) {
+        let text = r#"
+name = "sensing-turns"
+[field]
+width_m = 30.0
+height_m = 20.0
+[[obstacles.moving]]
+radius_m = 0.6
+waypoints_m = [[4.0, 4.0], [26.0, 16.0], [26.0, 4.0]]
+speed_m_per_step = 0.3
+route = "loop"
+[formation]
+agent_radius_m = 0.25
+max_step_m = 0.5
+sensing_radius_m = 1.1
+slots = [
+  { r_m = 0.0, theta_deg = 0.0 },
+  { r_m = 1.0, theta_deg = 90.0 },
+]
+[path]
+start = { x_m = 3.0, y_m = 10.0, heading_deg = 0.0 }
+goal = { x_m = 27.0, y_m = 10.0, heading_deg = 0.0 }
+turning_radius_m = 2.0
+step_m = 0.25
+centre_clearance_m = 0.5
+"#;
+        let scenario = Scenario::parse(text, "sensing-turns.toml").expect("scenario");
+        let planner = &shared::simulate::agent_planners(&scenario).expect("planners")[0];
+        // The agent near the obstacle (so it often has to escape), others around it.
+        let obstacle = scenario.moving[0].position_at(step);
+        let me = Point::new(
+            (obstacle.x + near.0).clamp(0.5, 29.5),
+            (obstacle.y + near.1).clamp(0.5, 19.5),
+        );
+        let spec = scenario.agents[0];
+        let others: Vec<shared::vocabulary::Body> = crowd
+            .iter()
+            .map(|(angle, d)| shared::vocabulary::Body {
+                position: Point::new(me.x + d * angle.cos(), me.y + d * angle.sin()),
+                radius_m: 0.25,
+            })
+            .filter(|b| (b.position - me).norm() >= 0.5 + 1e-3 && (b.position - obstacle).norm() >= 0.85)
+            .collect();
+        // Bodies that overlap one another are left out, not the case.
+        let others: Vec<shared::vocabulary::Body> = others
+            .iter()
+            .enumerate()
+            .filter(|(i, a)| others[..*i].iter().all(|b| (a.position - b.position).norm() >= 0.5))
+            .map(|(_, b)| *b)
+            .collect();
+        prop_assume!((me - obstacle).norm() >= 0.85 + 1e-3);
+        let sensed: Vec<shared::vocabulary::Body> = others
+            .iter()
+            .filter(|b| spec.senses(&me, &b.position, b.radius_m))
+            .copied()
+            .collect();
+        // Agent 0's slot is the centre itself: somewhere around, often past the others.
+        let centre = shared::geometry::Pose::new(
+            (me.x + slot.0).clamp(0.5, 29.5),
+            (me.y + slot.1).clamp(0.5, 19.5),
+            0.0,
+        );
+        let all = planner.plan_turn(step, &centre, &me, &others);
+        let seen = planner.plan_turn(step, &centre, &me, &sensed);
+        prop_assert_eq!(all, seen);
+    }
+}
