@@ -186,6 +186,24 @@ fn a_changing_world_with_limited_sensing_matches_the_reference() {
     assert!(run.steps.iter().any(|s| s.moving != run.steps[0].moving));
 }
 
+/// Strikes over real processes: a moving obstacle that catches agents now and then. The
+/// monitor (parry) and the recorder both let a struck agent move away, and only away; the
+/// run equals the reference to the bit, strikes and all.
+#[test]
+fn strikes_by_a_moving_obstacle_match_the_reference() {
+    let file = support::repo_root().join("tests/data/strike.toml");
+    let scenario = Scenario::load(&file).expect("strike.toml");
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference simulation");
+    let outcome = run_scenario(&scenario, &path, &options()).expect("multi-process run");
+    assert!(support::leftovers(&outcome.prefix).is_empty());
+    assert_eq!(outcome.run.steps, reference.steps);
+    assert_eq!(outcome.run.faults, reference.faults);
+    let struck = reference.faults.iter().filter(|f| f.kind == "struck").count();
+    assert!(struck > 0, "no strike");
+    assert_eq!(struck, reference.faults.len(), "{:?}", reference.faults);
+}
+
 #[test]
 fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
     let scenario = Scenario::paper();

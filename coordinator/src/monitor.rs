@@ -233,7 +233,16 @@ impl SafetyMonitor {
                     continue;
                 }
                 if hits(&o.centre, o.radius_m) {
-                    return Err(Refusal::MovingObstacle { segment, obstacle });
+                    // Struck already (it starts overlapping the obstacle): it may leave,
+                    // never coming closer to the obstacle's centre than it started.
+                    let start_m = nalgebra::distance(from, &o.centre);
+                    let reach_m = o.radius_m + radius_m - SAFETY_TOLERANCE_M;
+                    let at = Isometry2::translation(o.centre.x, o.centre.y);
+                    let closest_m =
+                        query::distance(&identity, &shape, &at, &Ball::new(0.0)).unwrap_or(0.0);
+                    if !(start_m < reach_m && closest_m >= start_m - SAFETY_TOLERANCE_M) {
+                        return Err(Refusal::MovingObstacle { segment, obstacle });
+                    }
                 }
             }
             for (other, body) in bodies.iter().enumerate() {

@@ -523,18 +523,12 @@ impl<'a> Recorder<'a> {
             &mv.waypoints,
             MAX_WAYPOINTS,
         )?;
-        if !self.scenario.moving.is_empty() {
-            // The moving obstacles where they stand (a `HitsObstacle` numbers them).
-            safety::check_move(
-                &self.scenario.field,
-                &self.moving_now,
-                &[],
-                body.radius_m,
-                &body.position,
-                &mv.waypoints,
-                MAX_WAYPOINTS,
-            )?;
-        }
+        safety::check_move_against_moving(
+            self.moving_now.disks(),
+            body.radius_m,
+            &body.position,
+            &mv.waypoints,
+        )?;
         if let Some(max_m) = self.scenario.agents[agent].max_step_m {
             let length_m = polyline_length_m(&mv.waypoints);
             if length_m > max_m + SAFETY_TOLERANCE_M {

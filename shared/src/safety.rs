@@ -7,7 +7,7 @@
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{DiskGrid, Field, Point, Vector, distance_point_segment};
+use crate::geometry::{Disk, DiskGrid, Field, Point, Vector, distance_point_segment};
 use crate::vocabulary::Body;
 
 /// How far a body may overlap another before it counts as a collision, in metres.
@@ -48,6 +48,15 @@ pub enum Violation {
         /// Index of the segment (waypoint `segment` to `segment + 1`).
         segment: usize,
         /// Index of the obstacle.
+        obstacle: usize,
+        /// Overlap depth.
+        overlap_m: f64,
+    },
+    /// The body would overlap a moving obstacle where it stands (a body that starts its
+    /// move overlapping one, struck by it, may only move away from its centre).
+    #[error("the move overlaps moving obstacle {obstacle} by {overlap_m} m")]
+    HitsMovingObstacle {
+        /// Index of the moving obstacle, in scenario order.
         obstacle: usize,
         /// Overlap depth.
         overlap_m: f64,
@@ -260,6 +269,36 @@ fn clearances_skipping_m(
         .map(|o| (body.position - o.position).norm() - o.radius_m - body.radius_m)
         .fold(f64::INFINITY, f64::min);
     (to_obstacle, to_other)
+}
+
+/// Check the move `waypoints` of a body of `radius_m` standing at `from` against the
+/// moving obstacles `moving` where they stand (true radii, scenario order): no point of
+/// it may come within reach of one, but a body that starts overlapping one (it was
+/// struck) may leave it: its move must then never come closer to that obstacle's centre
+/// than it started.
+pub fn check_move_against_moving(
+    moving: &[Disk],
+    radius_m: f64,
+    from: &Point,
+    waypoints: &[Point],
+) -> Result<(), Violation> {
+    for (obstacle, o) in moving.iter().enumerate() {
+        let reach_m = o.radius_m + radius_m;
+        let closest_m = crate::geometry::distance_polyline_polyline(waypoints, &[o.centre]);
+        if closest_m >= reach_m - SAFETY_TOLERANCE_M {
+            continue;
+        }
+        let start_m = (from - o.centre).norm();
+        let leaving =
+            start_m < reach_m - SAFETY_TOLERANCE_M && closest_m >= start_m - SAFETY_TOLERANCE_M;
+        if !leaving {
+            return Err(Violation::HitsMovingObstacle {
+                obstacle,
+                overlap_m: reach_m - closest_m,
+            });
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -10,7 +10,8 @@ use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{
-    Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, polyline_length_m, polyline_prefix,
+    Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, distance_point_segment,
+    polyline_length_m, polyline_prefix,
 };
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaPlanner;
@@ -368,6 +369,10 @@ impl TurnPlanner {
             self.escape_point(step, me, others, &reach, &spares_m)
                 .map(|q| vec![*me, q])
                 .or_else(|| self.escape_path(step, me, others, &reach, &spares_m))
+                .or_else(|| {
+                    self.flee_point(step, me, others, &reach)
+                        .map(|q| vec![*me, q])
+                })
         } else {
             None
         };
@@ -570,7 +575,7 @@ impl TurnPlanner {
             let t_far = leave(deepest.radius_m + spare_m + keep_m + PLANNING_MARGIN_M)
                 .map_or(t_out, |t| t.min(budget_m));
             for t in [t_far, t_out] {
-                if let Some(q) = self.escape_to(me, v, t, others, reach, &now) {
+                if let Some(q) = self.escape_to(me, v, t, others, reach, &now, true) {
                     return Some(q);
                 }
             }
@@ -578,9 +583,48 @@ impl TurnPlanner {
         None
     }
 
+    /// When there is no way out of the obstacle's reach within the top speed (it came
+    /// too close, or struck the agent): a straight motion as far from it as the top speed
+    /// allows, radially or up to 90 degrees off, clear of everything.
+    fn flee_point(
+        &self,
+        step: usize,
+        me: &Point,
+        others: &[Body],
+        reach: &[Disk],
+    ) -> Option<Point> {
+        let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
+        let budget_m = self.spec.max_step_m?;
+        let deepest = reach.iter().copied().max_by(|a, b| {
+            let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
+            depth(a).total_cmp(&depth(b))
+        })?;
+        let away = me - deepest.centre;
+        let away_rad = if away.norm() > 0.0 {
+            away.y.atan2(away.x)
+        } else {
+            0.0
+        };
+        let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
+        let offsets_deg =
+            (0..=18).map(|k: i32| f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 }));
+        for off_deg in offsets_deg {
+            let rad = away_rad + off_deg.to_radians();
+            let v = Vector::new(rad.cos(), rad.sin());
+            if let Some(q) = self.escape_to(me, v, budget_m, others, reach, &now, false)
+                && (q - deepest.centre).norm() > (me - deepest.centre).norm()
+            {
+                return Some(q);
+            }
+        }
+        None
+    }
+
     /// `me + t v` if the straight motion there is clear of every body, the static
-    /// obstacles, the moving ones where they stand (`now`) and the field's edges, and it
-    /// ends outside every disk of `reach` (grown by the agent's radius).
+    /// obstacles, the moving ones where they stand (`now`) and the field's edges, and,
+    /// with `leave_reach`, it ends outside every disk of `reach` (grown by the agent's
+    /// radius).
+    #[allow(clippy::too_many_arguments)]
     fn escape_to(
         &self,
         me: &Point,
@@ -589,14 +633,16 @@ impl TurnPlanner {
         others: &[Body],
         reach: &[Disk],
         now: &[Disk],
+        leave_reach: bool,
     ) -> Option<Point> {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
         {
             let q = me + t * v;
-            let outside_reach = reach
-                .iter()
-                .all(|d| (q - d.centre).norm() >= d.radius_m + keep_m);
+            let outside_reach = !leave_reach
+                || reach
+                    .iter()
+                    .all(|d| (q - d.centre).norm() >= d.radius_m + keep_m);
             let in_field = self.field.signed_inset_m(&q) >= clear_m;
             // The motion keeps half the planning margin from every body (the agent may
             // start its turn touching one, at the margin); its end the whole margin, so
@@ -612,7 +658,17 @@ impl TurnPlanner {
                     radius_m: b.radius_m,
                 })
             });
-            let clear_of_moving = now.iter().all(&segment_clear);
+            // An agent a moving obstacle struck (it overlaps it) may leave it, never
+            // coming closer to its centre.
+            let clear_of_moving = now.iter().all(|d| {
+                let start_m = (me - d.centre).norm();
+                if start_m < d.radius_m + self.spec.radius_m {
+                    distance_point_segment(&d.centre, me, &q) >= start_m
+                        && d.signed_distance_m(&q) >= clear_m
+                } else {
+                    segment_clear(d)
+                }
+            });
             let mut clear_of_statics = true;
             let _ =
                 self.statics
