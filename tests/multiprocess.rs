@@ -199,7 +199,11 @@ fn strikes_by_a_moving_obstacle_match_the_reference() {
     assert!(support::leftovers(&outcome.prefix).is_empty());
     assert_eq!(outcome.run.steps, reference.steps);
     assert_eq!(outcome.run.faults, reference.faults);
-    let struck = reference.faults.iter().filter(|f| f.kind == "struck").count();
+    let struck = reference
+        .faults
+        .iter()
+        .filter(|f| f.kind == "struck")
+        .count();
     assert!(struck > 0, "no strike");
     assert_eq!(struck, reference.faults.len(), "{:?}", reference.faults);
 }

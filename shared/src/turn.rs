@@ -428,14 +428,8 @@ impl TurnPlanner {
     ) -> Option<Vec<Point>> {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
-        let (deepest, spare_m) = reach
-            .iter()
-            .zip(spares_m)
-            .max_by(|(a, _), (b, _)| {
-                let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
-                depth(a).total_cmp(&depth(b))
-            })
-            .map(|(d, s)| (*d, *s))?;
+        let (i, away_rad) = deepest_of(me, reach, keep_m)?;
+        let (deepest, spare_m) = (reach[i], spares_m.get(i).copied().unwrap_or(0.0));
         let big_r = deepest.radius_m + keep_m + PLANNING_MARGIN_M;
         // Planning frame as in BestPointPlanner: the agent a point, every body grown by
         // its radius and the margin, the field inset by as much.
@@ -474,18 +468,11 @@ impl TurnPlanner {
         let layers = [&statics, &bodies];
         let space = FreeSpace::new(field, &layers);
         let me_p = me - offset;
-        let away = me - deepest.centre;
-        let away_rad = if away.norm() > 0.0 {
-            away.y.atan2(away.x)
-        } else {
-            0.0
-        };
         // A step to spare beyond the disk first, then just outside it.
-        for (k, out_r) in (0..36_i32)
-            .map(|k| (k, big_r + spare_m))
-            .chain((0..36_i32).map(|k| (k, big_r)))
+        for (off_deg, out_r) in offsets_deg(180)
+            .map(|off| (off, big_r + spare_m))
+            .chain(offsets_deg(180).map(|off| (off, big_r)))
         {
-            let off_deg = f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 });
             let rad = away_rad + off_deg.to_radians();
             let q = deepest.centre + out_r * Vector::new(rad.cos(), rad.sin());
             if (q - me).norm() > budget_m
@@ -537,26 +524,12 @@ impl TurnPlanner {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         // The disk it is deepest in, and that obstacle's speed: how far beyond the disk
         // the agent goes if it can, to keep a step to spare.
-        let (deepest, spare_m) = reach
-            .iter()
-            .zip(spares_m)
-            .max_by(|(a, _), (b, _)| {
-                let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
-                depth(a).total_cmp(&depth(b))
-            })
-            .map(|(d, s)| (*d, *s))?;
+        let (i, away_rad) = deepest_of(me, reach, keep_m)?;
+        let (deepest, spare_m) = (reach[i], spares_m.get(i).copied().unwrap_or(0.0));
         let away = me - deepest.centre;
-        let away_rad = if away.norm() > 0.0 {
-            away.y.atan2(away.x)
-        } else {
-            0.0
-        };
         let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
-        // Straight away first, then ever more aside, every 10 degrees up to 150.
-        let offsets_deg =
-            (0..=30).map(|k: i32| f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 }));
-        for off_deg in offsets_deg {
+        for off_deg in offsets_deg(150) {
             let rad = away_rad + off_deg.to_radians();
             let v = Vector::new(rad.cos(), rad.sin());
             // |me + t v - c| = R, the larger root (leaving the disk).
@@ -595,20 +568,10 @@ impl TurnPlanner {
     ) -> Option<Point> {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let budget_m = self.spec.max_step_m?;
-        let deepest = reach.iter().copied().max_by(|a, b| {
-            let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
-            depth(a).total_cmp(&depth(b))
-        })?;
-        let away = me - deepest.centre;
-        let away_rad = if away.norm() > 0.0 {
-            away.y.atan2(away.x)
-        } else {
-            0.0
-        };
+        let (i, away_rad) = deepest_of(me, reach, keep_m)?;
+        let deepest = reach[i];
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
-        let offsets_deg =
-            (0..=18).map(|k: i32| f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 }));
-        for off_deg in offsets_deg {
+        for off_deg in offsets_deg(90) {
             let rad = away_rad + off_deg.to_radians();
             let v = Vector::new(rad.cos(), rad.sin());
             if let Some(q) = self.escape_to(me, v, budget_m, others, reach, &now, false)
@@ -718,4 +681,27 @@ impl TurnPlanner {
         }
         mv
     }
+}
+
+/// The disk of `reach` that `me` is deepest in (each grown by `keep_m`), by index, and the
+/// direction straight away from its centre, in radians.
+fn deepest_of(me: &Point, reach: &[Disk], keep_m: f64) -> Option<(usize, f64)> {
+    let depth = |d: &Disk| d.radius_m + keep_m - (me - d.centre).norm();
+    let (i, d) = reach
+        .iter()
+        .enumerate()
+        .max_by(|(_, a), (_, b)| depth(a).total_cmp(&depth(b)))?;
+    let away = me - d.centre;
+    let away_rad = if away.norm() > 0.0 {
+        away.y.atan2(away.x)
+    } else {
+        0.0
+    };
+    Some((i, away_rad))
+}
+
+/// Turns off the straight way out, in degrees, nearest first: 0, 10, -10, 20, -20, ...,
+/// `max_deg`, `-max_deg` (`max_deg` a multiple of 10).
+fn offsets_deg(max_deg: i32) -> impl Iterator<Item = f64> {
+    (0..=max_deg / 5).map(|k: i32| f64::from(10 * ((k + 1) / 2) * if k % 2 == 0 { 1 } else { -1 }))
 }

@@ -502,32 +502,8 @@ centre_clearance_m = 0.5
 /// agent move only away from the obstacle's centre) takes it away, never refused.
 #[test]
 fn a_struck_agent_gets_away_from_the_obstacle() {
-    let text = r#"
-name = "strike"
-[field]
-width_m = 30.0
-height_m = 20.0
-[[obstacles.moving]]
-radius_m = 0.5
-waypoints_m = [[9.0, 10.0], [3.0, 10.0]]
-speed_m_per_step = 0.45
-[formation]
-agent_radius_m = 0.3
-max_step_m = 0.5
-slots = [
-  { r_m = 0.0, theta_deg = 0.0 },
-  { r_m = 1.0, theta_deg = 90.0 },
-  { r_m = 1.0, theta_deg = -90.0 },
-  { r_m = 1.0, theta_deg = 180.0 },
-]
-[path]
-start = { x_m = 3.0, y_m = 10.0, heading_deg = 0.0 }
-goal = { x_m = 27.0, y_m = 10.0, heading_deg = 0.0 }
-turning_radius_m = 2.0
-step_m = 0.25
-centre_clearance_m = 0.5
-"#;
-    let scenario = Scenario::parse(text, "strike.toml").expect("scenario");
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/strike.toml");
+    let scenario = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
     let run = simulate(&scenario).expect("simulate");
     let strikes: Vec<(usize, usize)> = run
         .steps
