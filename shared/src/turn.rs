@@ -5,6 +5,8 @@
 //! process both call [`TurnPlanner::plan_move`] (the paper's [`BestPointPlanner`] or a
 //! barrier planner), so their trajectories agree to the bit.
 
+use std::borrow::Cow;
+
 use crate::best_point::{self, BestPointError};
 use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
 use crate::disk_path::{self, DiskPath};
@@ -340,17 +342,7 @@ impl TurnPlanner {
         }
         // What the agent senses from where it stands, once: the coordinator sends an
         // agent process only that, and an escape must not see more.
-        let sensed_others: Vec<Body>;
-        let others = if self.spec.sensing_radius_m.is_some() {
-            sensed_others = others
-                .iter()
-                .filter(|b| self.spec.senses(me, &b.position, b.radius_m))
-                .copied()
-                .collect();
-            &sensed_others[..]
-        } else {
-            others
-        };
+        let others = &*self.sensed_bodies(me, others);
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let sensed: Vec<&MovingObstacle> = self
             .moving
@@ -366,11 +358,14 @@ impl TurnPlanner {
             .iter()
             .any(|d| (me - d.centre).norm() < d.radius_m + keep_m);
         let escape: Option<Vec<Point>> = if inside {
-            self.escape_point(step, me, others, &reach, &spares_m)
+            // Every moving obstacle where it stands, sensed or not (an escape is checked
+            // against the true bodies).
+            let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
+            self.escape_point(me, others, &now, &reach, &spares_m)
                 .map(|q| vec![*me, q])
-                .or_else(|| self.escape_path(step, me, others, &reach, &spares_m))
+                .or_else(|| self.escape_path(me, others, &now, &reach, &spares_m))
                 .or_else(|| {
-                    self.flee_point(step, me, others, &reach)
+                    self.flee_point(me, others, &now, &reach)
                         .map(|q| vec![*me, q])
                 })
         } else {
@@ -420,9 +415,9 @@ impl TurnPlanner {
     /// polyline from `me` to that point.
     fn escape_path(
         &self,
-        step: usize,
         me: &Point,
         others: &[Body],
+        now: &[Disk],
         reach: &[Disk],
         spares_m: &[f64],
     ) -> Option<Vec<Point>> {
@@ -456,12 +451,9 @@ impl TurnPlanner {
                 centre: b.position - offset,
                 radius_m: b.radius_m + grow_m,
             })
-            .chain(self.moving.iter().map(|m| {
-                let d = m.disk_at(step);
-                Disk {
-                    centre: d.centre - offset,
-                    radius_m: d.radius_m + grow_m,
-                }
+            .chain(now.iter().map(|d| Disk {
+                centre: d.centre - offset,
+                radius_m: d.radius_m + grow_m,
             }))
             .collect();
         let (statics, bodies) = (DiskGrid::new(statics), DiskGrid::new(bodies));
@@ -515,9 +507,9 @@ impl TurnPlanner {
     /// moving ones where they stand and the field's edges, within the top speed.
     fn escape_point(
         &self,
-        step: usize,
         me: &Point,
         others: &[Body],
+        now: &[Disk],
         reach: &[Disk],
         spares_m: &[f64],
     ) -> Option<Point> {
@@ -528,7 +520,6 @@ impl TurnPlanner {
         let (deepest, spare_m) = (reach[i], spares_m.get(i).copied().unwrap_or(0.0));
         let away = me - deepest.centre;
         let budget_m = self.spec.max_step_m.unwrap_or(f64::INFINITY);
-        let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
         for off_deg in offsets_deg(150) {
             let rad = away_rad + off_deg.to_radians();
             let v = Vector::new(rad.cos(), rad.sin());
@@ -548,7 +539,7 @@ impl TurnPlanner {
             let t_far = leave(deepest.radius_m + spare_m + keep_m + PLANNING_MARGIN_M)
                 .map_or(t_out, |t| t.min(budget_m));
             for t in [t_far, t_out] {
-                if let Some(q) = self.escape_to(me, v, t, others, reach, &now, true) {
+                if let Some(q) = self.escape_to(me, v, t, others, reach, now, true) {
                     return Some(q);
                 }
             }
@@ -561,20 +552,19 @@ impl TurnPlanner {
     /// allows, radially or up to 90 degrees off, clear of everything.
     fn flee_point(
         &self,
-        step: usize,
         me: &Point,
         others: &[Body],
+        now: &[Disk],
         reach: &[Disk],
     ) -> Option<Point> {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let budget_m = self.spec.max_step_m?;
         let (i, away_rad) = deepest_of(me, reach, keep_m)?;
         let deepest = reach[i];
-        let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
         for off_deg in offsets_deg(90) {
             let rad = away_rad + off_deg.to_radians();
             let v = Vector::new(rad.cos(), rad.sin());
-            if let Some(q) = self.escape_to(me, v, budget_m, others, reach, &now, false)
+            if let Some(q) = self.escape_to(me, v, budget_m, others, reach, now, false)
                 && (q - deepest.centre).norm() > (me - deepest.centre).norm()
             {
                 return Some(q);
@@ -648,6 +638,21 @@ impl TurnPlanner {
         }
     }
 
+    /// The bodies of `others` this agent senses from `me` (all of them without a sensing
+    /// radius).
+    fn sensed_bodies<'b>(&self, me: &Point, others: &'b [Body]) -> Cow<'b, [Body]> {
+        if self.spec.sensing_radius_m.is_none() {
+            return Cow::Borrowed(others);
+        }
+        Cow::Owned(
+            others
+                .iter()
+                .filter(|b| self.spec.senses(me, &b.position, b.radius_m))
+                .copied()
+                .collect(),
+        )
+    }
+
     /// [`Self::plan_move`] with the move cut at `max_step_m` (absent: not cut).
     fn plan_move_within(
         &self,
@@ -656,17 +661,7 @@ impl TurnPlanner {
         others: &[Body],
         max_step_m: Option<f64>,
     ) -> Move {
-        let sensed: Vec<Body>;
-        let others = if self.spec.sensing_radius_m.is_some() {
-            sensed = others
-                .iter()
-                .filter(|b| self.spec.senses(me, &b.position, b.radius_m))
-                .copied()
-                .collect();
-            &sensed
-        } else {
-            others
-        };
+        let others = &*self.sensed_bodies(me, others);
         let mut mv = match &self.controller {
             Controller::BestPoint(p) => p.plan_move_within(centre, me, others, max_step_m),
             Controller::Cbf(p) => p.plan_move(centre, me, others),

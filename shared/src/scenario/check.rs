@@ -222,6 +222,33 @@ impl Checker<'_> {
         })
     }
 
+    /// The point `(x, y)` (each a field path and its value) when both are finite and it
+    /// lies in `field` (edges included), else the error naming `name`, `what` the point
+    /// is in the message (`"obstacle centre "`, or `""` for a waypoint).
+    fn point_in_field(
+        &self,
+        name: &str,
+        what: &str,
+        x: (&str, f64),
+        y: (&str, f64),
+        field: &Field,
+    ) -> Result<Point, ScenarioError> {
+        let p = Point::new(self.finite(x.0, x.1)?, self.finite(y.0, y.1)?);
+        if !field.contains(&p, 0.0) {
+            return Err(self.invalid(
+                name,
+                format!(
+                    "{what}({}, {}) is outside the {} x {} m field",
+                    num(p.x),
+                    num(p.y),
+                    field.width_m,
+                    field.height_m
+                ),
+            ));
+        }
+        Ok(p)
+    }
+
     /// A disk table (`[[obstacles.disk]]` or `[[obstacles.unknown]]` item) named `name`.
     fn disk(
         &self,
@@ -230,26 +257,19 @@ impl Checker<'_> {
         default_radius_m: f64,
         field: &Field,
     ) -> Result<Disk, ScenarioError> {
-        let x_m = self.finite(&format!("{name}.x_m"), d.x_m)?;
-        let y_m = self.finite(&format!("{name}.y_m"), d.y_m)?;
         let side_m = field.width_m.max(field.height_m);
         let radius_m = match d.radius_m {
             Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
             None => default_radius_m,
         };
-        if !field.contains(&Point::new(x_m, y_m), 0.0) {
-            return Err(self.invalid(
-                name,
-                format!(
-                    "obstacle centre ({}, {}) is outside the {} x {} m field",
-                    num(x_m),
-                    num(y_m),
-                    field.width_m,
-                    field.height_m
-                ),
-            ));
-        }
-        Ok(Disk::new(x_m, y_m, radius_m))
+        let c = self.point_in_field(
+            name,
+            "obstacle centre ",
+            (&format!("{name}.x_m"), d.x_m),
+            (&format!("{name}.y_m"), d.y_m),
+            field,
+        )?;
+        Ok(Disk::new(c.x, c.y, radius_m))
     }
 
     /// The `[[obstacles.unknown]]` tables; `known` obstacles are already placed.
@@ -342,23 +362,13 @@ impl Checker<'_> {
                     format!("must be a pair [x_m, y_m], got {} value(s)", xy.len()),
                 ));
             };
-            let p = Point::new(
-                self.finite(&format!("{wname}[0]"), x_m)?,
-                self.finite(&format!("{wname}[1]"), y_m)?,
-            );
-            if !field.contains(&p, 0.0) {
-                return Err(self.invalid(
-                    wname,
-                    format!(
-                        "({}, {}) is outside the {} x {} m field",
-                        num(x_m),
-                        num(y_m),
-                        field.width_m,
-                        field.height_m
-                    ),
-                ));
-            }
-            waypoints.push(p);
+            waypoints.push(self.point_in_field(
+                &wname,
+                "",
+                (&format!("{wname}[0]"), x_m),
+                (&format!("{wname}[1]"), y_m),
+                field,
+            )?);
         }
         let speed_name = format!("{name}.speed_m_per_step");
         let speed_m = self.positive(&speed_name, m.speed_m_per_step, side_m)?;
@@ -487,25 +497,6 @@ impl Checker<'_> {
             ));
         }
         let mut obstacles = Vec::with_capacity(explicit);
-        // `name` is the obstacle's path, `x` and `y` those of its coordinates.
-        let mut place = |name: String, x: (String, f64), y: (String, f64), radius_m: f64| {
-            let x_m = self.finite(&x.0, x.1)?;
-            let y_m = self.finite(&y.0, y.1)?;
-            if !field.contains(&Point::new(x_m, y_m), 0.0) {
-                return Err(self.invalid(
-                    name,
-                    format!(
-                        "obstacle centre ({}, {}) is outside the {} x {} m field",
-                        num(x_m),
-                        num(y_m),
-                        field.width_m,
-                        field.height_m
-                    ),
-                ));
-            }
-            obstacles.push(Disk::new(x_m, y_m, radius_m));
-            Ok(())
-        };
         for (i, xy) in raw.positions_m.iter().enumerate() {
             let name = format!("obstacles.positions_m[{i}]");
             let &[x_m, y_m] = xy.as_slice() else {
@@ -514,22 +505,22 @@ impl Checker<'_> {
                     format!("must be a pair [x_m, y_m], got {} value(s)", xy.len()),
                 ));
             };
-            place(
-                name.clone(),
-                (format!("{name}[0]"), x_m),
-                (format!("{name}[1]"), y_m),
-                default_radius_m,
+            let c = self.point_in_field(
+                &name,
+                "obstacle centre ",
+                (&format!("{name}[0]"), x_m),
+                (&format!("{name}[1]"), y_m),
+                field,
             )?;
+            obstacles.push(Disk::new(c.x, c.y, default_radius_m));
         }
         for (i, d) in raw.disk.iter().enumerate() {
-            let name = format!("obstacles.disk[{i}]");
-            let x = (format!("{name}.x_m"), d.x_m);
-            let y = (format!("{name}.y_m"), d.y_m);
-            let radius_m = match d.radius_m {
-                Some(r) => self.positive(&format!("{name}.radius_m"), r, side_m)?,
-                None => default_radius_m,
-            };
-            place(name, x, y, radius_m)?;
+            obstacles.push(self.disk(
+                &format!("obstacles.disk[{i}]"),
+                d,
+                default_radius_m,
+                field,
+            )?);
         }
         if let Some(random) = &raw.random {
             if random.count > MAX_OBSTACLES - explicit {
