@@ -135,6 +135,11 @@ pub struct IdleCpu {
     pub wakeups: u64,
 }
 
+/// How long processes must go without a context switch to count as settled.
+const SETTLE: Duration = Duration::from_millis(50);
+/// How long to wait at most for processes to settle before a hold.
+const SETTLE_LIMIT: Duration = Duration::from_secs(1);
+
 #[derive(Clone, Copy)]
 struct Snapshot {
     ticks: u64,
@@ -163,8 +168,26 @@ fn snapshot(pid: u32) -> Option<Snapshot> {
 
 impl IdleCpu {
     /// Sleep `hold` and measure the CPU time processes `pids` used meanwhile.
+    ///
+    /// The hold starts once they have settled: a process that has just said it is ready
+    /// may still be on its way into its wait, and the context switch of falling asleep is
+    /// not a wake-up. Settled means no context switch in [`SETTLE`] (given up after
+    /// [`SETTLE_LIMIT`]).
     pub fn measure(pids: &[u32], hold: Duration) -> Self {
-        let before: Vec<Option<Snapshot>> = pids.iter().map(|&p| snapshot(p)).collect();
+        let switches = |snaps: &[Option<Snapshot>]| -> Vec<Option<u64>> {
+            snaps.iter().map(|s| s.map(|s| s.switches)).collect()
+        };
+        let settling = Instant::now();
+        let mut before: Vec<Option<Snapshot>> = pids.iter().map(|&p| snapshot(p)).collect();
+        while settling.elapsed() < SETTLE_LIMIT {
+            std::thread::sleep(SETTLE);
+            let now: Vec<Option<Snapshot>> = pids.iter().map(|&p| snapshot(p)).collect();
+            let quiet = switches(&now) == switches(&before);
+            before = now;
+            if quiet {
+                break;
+            }
+        }
         let started = Instant::now();
         std::thread::sleep(hold);
         let held_s = started.elapsed().as_secs_f64();
