@@ -6,7 +6,9 @@
 
 pub mod ipc;
 pub mod misbehave;
+pub mod net_transport;
 pub mod pingpong;
+pub mod relay;
 pub mod rogue;
 pub mod transport;
 
@@ -27,9 +29,32 @@ pub use transport::{Command, Transport, TurnInput};
 #[derive(Debug, Parser)]
 #[command(name = "agent", version, about = "One formation agent process")]
 pub struct Args {
-    /// The run's iceoryx2 prefix (given by the coordinator).
+    /// The run's iceoryx2 prefix (given by the coordinator); not with `--connect`.
+    #[arg(long, required_unless_present = "connect", conflicts_with = "connect")]
+    pub run: Option<String>,
+    /// Take turns over Zenoh from the coordinator's router at this endpoint
+    /// (`tcp/HOST:PORT` or `tls/HOST:PORT`): an agent on another machine, started by the
+    /// user.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub connect: Option<net::Endpoint>,
+    /// Relay mode (started by the coordinator): stand for an agent that takes its turns
+    /// over Zenoh from the router at this endpoint.
+    #[arg(long, value_name = "ENDPOINT", requires = "run")]
+    pub relay: Option<net::Endpoint>,
+    /// Relay mode: start the agent itself, on this host.
+    #[arg(long, requires = "relay")]
+    pub spawn_agent: bool,
+    /// The folder of TLS files (`ca.pem`, `agent.pem`, `agent-key.pem`) for a `tls/`
+    /// endpoint.
+    #[arg(long, value_name = "DIR")]
+    pub tls_dir: Option<std::path::PathBuf>,
+    /// Allow plain TCP to a host beyond the loopback (anyone on the network could join
+    /// or listen).
     #[arg(long)]
-    pub run: String,
+    pub allow_plain_tcp: bool,
+    /// Leave when the parent process dies (set by a relay for the agent it starts).
+    #[arg(long, hide = true)]
+    pub die_with_parent: bool,
     /// This agent's index in the formation.
     #[arg(long)]
     pub agent: usize,
@@ -73,20 +98,57 @@ pub fn init_logging() {
 
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    let liveness = Duration::from_millis(args.liveness_ms.max(1));
+    if args.die_with_parent {
+        #[cfg(target_os = "linux")]
+        let _ = nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGKILL);
+    }
+    let security = match &args.tls_dir {
+        Some(dir) => net::Security::Tls(net::TlsFiles::in_dir(dir, "agent")),
+        None => net::Security::Plain,
+    };
+    if let Some(connect) = &args.connect {
+        net::check_security(connect, &security, args.allow_plain_tcp)?;
+        let mut transport =
+            net_transport::NetTransport::connect(connect, &security, args.agent, liveness)?;
+        return serve(&mut transport, args.agent, args.misbehave);
+    }
+    let Some(prefix) = args.run.as_deref() else {
+        bail!("either --run (started by the coordinator) or --connect ENDPOINT");
+    };
     // Join only a run that exists (a node opened for no run would leave files behind),
     // and only through a folder no other user can reach (ours, 0700, not a link).
-    if let Some(root) = wire::run_root(&args.run) {
-        wire::check_run_root(&root).with_context(|| format!("opening run {}", args.run))?;
+    if let Some(root) = wire::run_root(prefix) {
+        wire::check_run_root(&root).with_context(|| format!("opening run {prefix}"))?;
+    }
+    if let Some(connect) = &args.relay {
+        net::check_security(connect, &security, args.allow_plain_tcp)?;
+        let mut extra = vec!["--die-with-parent".to_string()];
+        if let Some(mode) = args.misbehave {
+            extra.extend(["--misbehave".to_string(), mode.to_string()]);
+        }
+        if args.allow_plain_tcp {
+            extra.push("--allow-plain-tcp".to_string());
+        }
+        return relay::run(&relay::RelaySettings {
+            prefix,
+            agent: args.agent,
+            generation: args.generation,
+            liveness,
+            connect,
+            security: &security,
+            tls_dir: args.tls_dir.as_deref(),
+            spawn_agent: args.spawn_agent.then_some(extra),
+        });
     }
     if args.misbehave == Some(Misbehave::Fork) {
-        misbehave::start_strays(&args.run)?;
+        misbehave::start_strays(prefix)?;
     }
-    let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.pingpong {
-        return pingpong::run(&args.run, args.uds.as_deref(), liveness);
+        return pingpong::run(prefix, args.uds.as_deref(), liveness);
     }
     // Attacks on other agents' channels come first, to race their owners.
-    let _held = rogue::before_opening(&args.run, args.agent, args.misbehave);
+    let _held = rogue::before_opening(prefix, args.agent, args.misbehave);
     let tamper = Tamper {
         raw_count_on_moves: args.misbehave == Some(Misbehave::RawLength),
         raw_count_on_ready: args.misbehave == Some(Misbehave::RawLengthReady),
@@ -96,8 +158,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         },
     };
     let mut transport =
-        ipc::IpcTransport::open(&args.run, args.agent, args.generation, liveness, tamper)
-            .with_context(|| format!("opening run {}", args.run))?;
+        ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, tamper)
+            .with_context(|| format!("opening run {prefix}"))?;
     if args.misbehave == Some(Misbehave::ExitBeforeReady) {
         // Leave at once, without closing anything: the coordinator must cope.
         std::process::exit(3);

@@ -97,6 +97,66 @@ pub struct RunArgs {
     /// cores or more, block on one).
     #[arg(long, value_enum, default_value_t = WaitMode::Auto)]
     pub wait: WaitMode,
+    #[command(flatten)]
+    pub network: NetworkArgs,
+}
+
+/// How agents reach the coordinator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum TransportKind {
+    /// iceoryx2 shared memory: every agent on this host.
+    #[default]
+    Ipc,
+    /// Zenoh: each agent over the network, through a relay on this host; agents may run
+    /// on other machines (`--remote`).
+    Zenoh,
+}
+
+/// Arguments for agents over the network (`--transport zenoh`).
+#[derive(Debug, Args)]
+pub struct NetworkArgs {
+    /// How agents reach the coordinator: `ipc` (shared memory, this host) or `zenoh`.
+    #[arg(long, value_enum, default_value_t = TransportKind::Ipc)]
+    pub transport: TransportKind,
+    /// With `--transport zenoh`: where the coordinator's Zenoh router listens,
+    /// `tcp/HOST:PORT` or `tls/HOST:PORT`.
+    #[arg(long, value_name = "ENDPOINT", default_value = "tcp/127.0.0.1:7447")]
+    pub listen: net::Endpoint,
+    /// With `--transport zenoh`: the agents the user starts elsewhere with
+    /// `agent --connect ENDPOINT --agent I` (comma-separated); the coordinator starts the
+    /// others on this host.
+    #[arg(long, value_name = "AGENTS", value_delimiter = ',')]
+    pub remote: Vec<usize>,
+    /// With a `tls/` endpoint: the folder of `ca.pem`, `coordinator.pem`,
+    /// `coordinator-key.pem` (and `agent.pem`, `agent-key.pem` for the agents started here).
+    #[arg(long, value_name = "DIR")]
+    pub tls_dir: Option<PathBuf>,
+    /// Allow plain TCP beyond the loopback: anyone who reaches the port could join.
+    #[arg(long)]
+    pub allow_plain_tcp: bool,
+}
+
+impl NetworkArgs {
+    /// The network options, `None` for `--transport ipc` (then the other flags must not be
+    /// given).
+    pub fn options(&self) -> Result<Option<crate::network::NetworkOptions>, String> {
+        match self.transport {
+            TransportKind::Ipc => {
+                if !self.remote.is_empty() || self.tls_dir.is_some() || self.allow_plain_tcp {
+                    return Err(
+                        "--remote, --tls-dir and --allow-plain-tcp need --transport zenoh".into(),
+                    );
+                }
+                Ok(None)
+            }
+            TransportKind::Zenoh => Ok(Some(crate::network::NetworkOptions {
+                listen: self.listen.clone(),
+                remote: self.remote.clone(),
+                tls_dir: self.tls_dir.clone(),
+                allow_plain_tcp: self.allow_plain_tcp,
+            })),
+        }
+    }
 }
 
 /// Arguments of `simulate`.

@@ -34,6 +34,18 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
             n - 1
         )));
     }
+    let network = args.network.options().map_err(CliError::Usage)?;
+    if let Some(a) = network.as_ref().and_then(|n| {
+        n.remote
+            .iter()
+            .copied()
+            .find(|&a| a >= scenario.agents.len())
+    }) {
+        return Err(CliError::Usage(format!(
+            "--remote {a}: the scenario has {n} agents (0 to {})",
+            n - 1
+        )));
+    }
     // Before any agent is spawned or anything created: a folder holding something is
     // refused unless --force.
     let out = output::OutDir::check(
@@ -50,6 +62,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         misbehave: args.misbehave.clone(),
         progress: !args.quiet,
         wait: args.wait,
+        network,
         ..RunOptions::default()
     };
     // A failed run still writes what it recorded, marked not completed.

@@ -66,6 +66,9 @@ impl Driver<'_, '_> {
         {
             extra.extend(["--misbehave".to_string(), mode.to_string()]);
         }
+        if let Some(network) = &self.options.network {
+            extra.extend(network.relay_args(agent));
+        }
         self.procs.spawn(agent, &extra)?;
         Ok(())
     }

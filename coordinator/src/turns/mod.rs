@@ -45,6 +45,8 @@ use driver::Driver;
 
 use crate::agents::{self, AgentProcesses};
 use crate::ipc::{CoordinatorIpc, TurnSplit};
+pub use crate::network::NetworkOptions;
+use crate::network::Router;
 use crate::output::Timing;
 use crate::procfs::IdleCpu;
 use crate::stats::Distribution;
@@ -117,6 +119,9 @@ pub struct RunOptions {
     /// Benchmark hook: after the ready handshake, hold every agent idle this long (no
     /// turn) and measure the CPU time they used meanwhile ([`RunOutcome::idle_cpu`]).
     pub idle_probe: Option<Duration>,
+    /// Agents over Zenoh: each agent's process is a relay to the agent itself, which runs
+    /// here or on another machine ([`NetworkOptions`]); `None`: every agent on iceoryx2.
+    pub network: Option<NetworkOptions>,
 }
 
 /// Start-up time allowed per agent on top of [`RunOptions::startup_timeout`]: the agents
@@ -146,6 +151,7 @@ impl Default for RunOptions {
             progress: true,
             wait: WaitMode::default(),
             idle_probe: None,
+            network: None,
         }
     }
 }
@@ -309,6 +315,14 @@ pub fn run_scenario_with(
             return Err(fail(e, &recorder, progress));
         }
     };
+    let router = match options.network.as_ref().map(Router::open).transpose() {
+        Ok(router) => router,
+        Err(e) => {
+            drop(ipc);
+            crate::stale_runs::remove_run_files(&prefix);
+            return Err(fail(e, &recorder, progress));
+        }
+    };
     let mut procs = AgentProcesses::new(bin, &prefix, n);
 
     let driven = catch_unwind(AssertUnwindSafe(|| {
@@ -333,6 +347,9 @@ pub fn run_scenario_with(
     }
     procs.stop_all(Duration::from_secs(2));
     drop(procs);
+    if let Some(router) = router {
+        router.close();
+    }
     let cleaned = ipc.shut_down();
     let error = match driven {
         Ok(Ok(())) => cleaned.err(),

@@ -1,0 +1,244 @@
+//! The agent's side of the protocol over Zenoh ([`net`]): an agent on another machine
+//! than the coordinator. It connects to the coordinator's router, announces itself with a
+//! liveliness token, answers its relay's probe, takes the mission and serves turns.
+
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, bail};
+use net::zenoh::Session;
+use net::zenoh::Wait;
+use net::zenoh::handlers::FifoChannelHandler;
+use net::zenoh::liveliness::LivelinessToken;
+use net::zenoh::pubsub::{Publisher, Subscriber};
+use net::zenoh::sample::{Sample, SampleKind};
+use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
+use shared::geometry::{Point, Pose};
+use shared::scenario::Scenario;
+use shared::vocabulary::{MAX_AGENTS, Move};
+
+use crate::transport::{Command, MissionView, Transport, TurnInput};
+
+/// The agent's Zenoh session and ports.
+pub struct NetTransport {
+    agent: usize,
+    _session: Session,
+    _token: LivelinessToken,
+    down: Subscriber<FifoChannelHandler<Sample>>,
+    up: Publisher<'static>,
+    coordinator: Subscriber<FifoChannelHandler<Sample>>,
+    /// Whether the coordinator's token was seen (its loss then means it is gone).
+    coordinator_seen: bool,
+    mission: Option<MissionView>,
+    liveness: Duration,
+}
+
+impl NetTransport {
+    /// Connect agent `agent` to the router at `connect`. `liveness` is how often it looks
+    /// for the coordinator while it waits.
+    pub fn connect(
+        connect: &Endpoint,
+        security: &Security,
+        agent: usize,
+        liveness: Duration,
+    ) -> anyhow::Result<Self> {
+        let session = net::open_client(connect, security)
+            .with_context(|| format!("connecting to {connect}"))?;
+        let z = |e: net::zenoh::Error| anyhow::anyhow!("zenoh: {e}");
+        let down = session
+            .declare_subscriber(net::agent_down_key(agent))
+            .wait()
+            .map_err(z)?;
+        let up = session
+            .declare_publisher(net::agent_up_key(agent))
+            .wait()
+            .map_err(z)?;
+        let coordinator = session
+            .liveliness()
+            .declare_subscriber(net::COORDINATOR_ALIVE_KEY)
+            .history(true)
+            .wait()
+            .map_err(z)?;
+        let token = session
+            .liveliness()
+            .declare_token(net::agent_alive_key(agent))
+            .wait()
+            .map_err(z)?;
+        Ok(Self {
+            agent,
+            _session: session,
+            _token: token,
+            down,
+            up,
+            coordinator,
+            coordinator_seen: false,
+            mission: None,
+            liveness,
+        })
+    }
+
+    fn send(&self, message: &Up) -> anyhow::Result<()> {
+        let bytes = net::encode(message)?;
+        self.up
+            .put(bytes)
+            .wait()
+            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))
+    }
+
+    /// Whether the coordinator's token came and went.
+    fn coordinator_gone(&mut self) -> bool {
+        while let Ok(Some(sample)) = self.coordinator.try_recv() {
+            match sample.kind() {
+                SampleKind::Put => self.coordinator_seen = true,
+                SampleKind::Delete => return self.coordinator_seen,
+            }
+        }
+        false
+    }
+
+    /// The next message from the relay, waiting at most `timeout`; a message that does
+    /// not decode is logged and skipped.
+    fn receive(&mut self, timeout: Duration) -> anyhow::Result<Option<Down>> {
+        let Some(sample) = self
+            .down
+            .recv_timeout(timeout)
+            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))?
+        else {
+            return Ok(None);
+        };
+        match net::decode::<Down>(&sample.payload().to_bytes()) {
+            Ok(message) => Ok(Some(message)),
+            Err(e) => {
+                tracing::warn!("agent {}: from the relay: {e}", self.agent);
+                Ok(None)
+            }
+        }
+    }
+
+    /// Answer a probe or a mission (the handshake, again after a relay's respawn);
+    /// true once a mission was taken.
+    fn handshake_step(&mut self, message: &Down) -> anyhow::Result<bool> {
+        let agent = u32::try_from(self.agent).context("the agent's index")?;
+        match message {
+            Down::Probe { nonce } => {
+                self.send(&Up::Hello {
+                    agent,
+                    nonce: *nonce,
+                })?;
+                Ok(false)
+            }
+            Down::Mission { nonce, toml } => {
+                let scenario = Scenario::parse(toml, "the mission from the coordinator")
+                    .context("the mission")?;
+                if self.agent >= scenario.agents.len() {
+                    bail!(
+                        "agent {} is not in the mission's {} agents",
+                        self.agent,
+                        scenario.agents.len()
+                    );
+                }
+                self.mission = Some(MissionView {
+                    field: scenario.field,
+                    obstacles: scenario.static_obstacles(),
+                    moving: scenario.moving,
+                    agents: scenario.agents,
+                    planner: scenario.planner,
+                });
+                self.send(&Up::Ready {
+                    agent,
+                    nonce: *nonce,
+                })?;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+}
+
+/// A turn from the network, checked like any input from another machine.
+fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
+    if t.bodies.len() > MAX_AGENTS {
+        bail!("a turn with {} bodies, beyond the capacity", t.bodies.len());
+    }
+    let finite = t.centre.iter().all(|v| v.is_finite())
+        && t.bodies
+            .iter()
+            .all(|(_, p)| p.iter().all(|v| v.is_finite()));
+    if !finite {
+        bail!("a turn with a coordinate that is not a finite number");
+    }
+    Ok(TurnInput {
+        seq: t.seq,
+        step: t.step,
+        token: t.token,
+        centre: Pose::new(t.centre[0], t.centre[1], t.centre[2]),
+        bodies: t
+            .bodies
+            .into_iter()
+            .map(|(j, p)| (j as usize, Point::new(p[0], p[1])))
+            .collect(),
+    })
+}
+
+impl Transport for NetTransport {
+    fn announce_ready(&mut self) -> anyhow::Result<()> {
+        // Readiness is said in the handshake, when a relay sends the mission.
+        loop {
+            if self.coordinator_gone() {
+                bail!("the coordinator left before the handshake");
+            }
+            if let Some(message) = self.receive(self.liveness)?
+                && self.handshake_step(&message)?
+            {
+                return Ok(());
+            }
+        }
+    }
+
+    fn next_command(&mut self) -> anyhow::Result<Command> {
+        let waited = Instant::now();
+        loop {
+            match self.receive(self.liveness)? {
+                Some(Down::Turn(t)) => match turn_input(t) {
+                    Ok(turn) => return Ok(Command::Turn(turn)),
+                    Err(e) => tracing::warn!("agent {}: {e:#}", self.agent),
+                },
+                Some(Down::Quit) => return Ok(Command::Quit),
+                Some(message) => {
+                    self.handshake_step(&message)?;
+                }
+                None => {}
+            }
+            if waited.elapsed() >= self.liveness && self.coordinator_gone() {
+                tracing::warn!("agent {}: coordinator gone, leaving", self.agent);
+                return Ok(Command::Quit);
+            }
+        }
+    }
+
+    fn mission(&mut self) -> anyhow::Result<MissionView> {
+        self.mission
+            .clone()
+            .context("no mission yet: the handshake is not done")
+    }
+
+    fn publish_move(
+        &mut self,
+        turn: &TurnInput,
+        mv: &Move,
+        status: u32,
+        compute: Duration,
+    ) -> anyhow::Result<()> {
+        let xy = |p: &Point| [p.x, p.y];
+        self.send(&Up::Move(NetMove {
+            agent: u32::try_from(self.agent).context("the agent's index")?,
+            seq: turn.seq,
+            step: turn.step,
+            token: turn.token,
+            status,
+            compute_ns: u64::try_from(compute.as_nanos()).unwrap_or(u64::MAX),
+            slot: xy(&mv.slot),
+            best: xy(&mv.best),
+            waypoints: mv.waypoints.iter().map(xy).collect(),
+        }))
+    }
+}

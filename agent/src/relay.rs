@@ -1,0 +1,267 @@
+//! The relay: on the coordinator's host, it stands for an agent that runs elsewhere. It
+//! opens the agent's iceoryx2 channel as a local agent would ([`IpcTransport`]) and
+//! forwards each turn to the agent and its move back over Zenoh ([`net`]).
+//!
+//! The coordinator's checks, deadlines and fault handling see the relay as the agent:
+//! when the agent's session ends (its process died, its link went down for longer than
+//! [`net::LINK_LEASE`]), its liveliness token goes, the relay exits, and the coordinator
+//! freezes the agent as it freezes any agent whose process died. A relay started again
+//! (`--respawn`) probes for the agent and admits it again if it is (still or again)
+//! there; without a respawn, an agent that comes back finds no relay and takes no turn.
+
+use std::process::{Child, Command as ProcessCommand, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, bail};
+use net::zenoh::Wait;
+use net::zenoh::handlers::FifoChannelHandler;
+use net::zenoh::pubsub::{Publisher, Subscriber};
+use net::zenoh::sample::{Sample, SampleKind};
+use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
+use shared::geometry::Point;
+use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
+
+use crate::ipc::{IpcTransport, Tamper};
+use crate::transport::{Command, Transport, TurnInput};
+
+/// How often the relay probes for its agent until it answers.
+const PROBE_PERIOD: Duration = Duration::from_millis(50);
+
+/// How long the relay waits for a move before it goes back to the coordinator (which has
+/// long since counted the turn as missed): the next turn or a quit is then heard.
+const MOVE_WAIT: Duration = Duration::from_secs(1);
+
+/// What a relay is given.
+pub struct RelaySettings<'a> {
+    /// The run's prefix.
+    pub prefix: &'a str,
+    /// The agent's index.
+    pub agent: usize,
+    /// Its process generation.
+    pub generation: u32,
+    /// How often to check the coordinator while waiting.
+    pub liveness: Duration,
+    /// The router.
+    pub connect: &'a Endpoint,
+    /// Plain or TLS.
+    pub security: &'a Security,
+    /// The TLS folder, passed on to a spawned agent.
+    pub tls_dir: Option<&'a std::path::Path>,
+    /// Start the agent itself, on this host (single-host use and tests), with these extra
+    /// arguments.
+    pub spawn_agent: Option<Vec<String>>,
+}
+
+/// An agent process the relay started; killed and reaped with the relay.
+struct SpawnedAgent(Child);
+
+impl Drop for SpawnedAgent {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+struct Link {
+    agent: usize,
+    down: Publisher<'static>,
+    up: Subscriber<FifoChannelHandler<Sample>>,
+    alive: Subscriber<FifoChannelHandler<Sample>>,
+    seen_alive: bool,
+}
+
+impl Link {
+    fn send(&self, message: &Down) -> anyhow::Result<()> {
+        let bytes = net::encode(message)?;
+        self.down
+            .put(bytes)
+            .wait()
+            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))
+    }
+
+    /// Fails once the agent's liveliness token, seen before, is gone.
+    fn check_alive(&mut self) -> anyhow::Result<()> {
+        while let Ok(Some(sample)) = self.alive.try_recv() {
+            match sample.kind() {
+                SampleKind::Put => self.seen_alive = true,
+                SampleKind::Delete if self.seen_alive => {
+                    bail!("agent {}: its session is gone", self.agent)
+                }
+                SampleKind::Delete => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// The next message from the agent within `timeout`; one that does not decode is
+    /// logged and skipped (the agent is another machine: untrusted).
+    fn receive(&mut self, timeout: Duration) -> anyhow::Result<Option<Up>> {
+        self.check_alive()?;
+        let Some(sample) = self
+            .up
+            .recv_timeout(timeout)
+            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))?
+        else {
+            return Ok(None);
+        };
+        match net::decode::<Up>(&sample.payload().to_bytes()) {
+            Ok(message) => Ok(Some(message)),
+            Err(e) => {
+                tracing::warn!("relay of agent {}: {e}", self.agent);
+                Ok(None)
+            }
+        }
+    }
+}
+
+/// A move from the network as the iceoryx2 channel takes it; `None` (logged) if it
+/// cannot be written there. Its values are checked by the coordinator like any move.
+fn move_of(agent: usize, m: NetMove) -> Option<(Move, u32, Duration)> {
+    if m.waypoints.len() > MAX_WAYPOINTS {
+        tracing::warn!(
+            "relay of agent {agent}: a move of {} waypoints, beyond the capacity: dropped",
+            m.waypoints.len()
+        );
+        return None;
+    }
+    let p = |xy: [f64; 2]| Point::new(xy[0], xy[1]);
+    Some((
+        Move {
+            slot: p(m.slot),
+            best: p(m.best),
+            // Only the code below is sent; this field is not read.
+            status: MoveStatus::Stayed,
+            waypoints: m.waypoints.into_iter().map(p).collect(),
+        },
+        m.status,
+        Duration::from_nanos(m.compute_ns),
+    ))
+}
+
+fn net_turn(t: &TurnInput) -> NetTurn {
+    NetTurn {
+        seq: t.seq,
+        step: t.step,
+        token: t.token,
+        centre: [t.centre.x_m, t.centre.y_m, t.centre.heading_rad],
+        bodies: t
+            .bodies
+            .iter()
+            .map(|&(j, p)| (u32::try_from(j).unwrap_or(u32::MAX), [p.x, p.y]))
+            .collect(),
+    }
+}
+
+/// Serve agent `settings.agent` as its relay until the coordinator says quit (then the
+/// agent is told too) or the agent is gone (an error: the coordinator sees the exit).
+pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
+    let agent = settings.agent;
+    let mut ipc = IpcTransport::open(
+        settings.prefix,
+        agent,
+        settings.generation,
+        settings.liveness,
+        Tamper::default(),
+    )?;
+    let toml = wire::read_mission(settings.prefix)
+        .context("the mission file")?
+        .to_resolved_toml("the coordinator")
+        .map_err(|e| anyhow::anyhow!("the mission as TOML: {e}"))?;
+    let session = net::open_client(settings.connect, settings.security)
+        .with_context(|| format!("connecting to {}", settings.connect))?;
+    let z = |e: net::zenoh::Error| anyhow::anyhow!("zenoh: {e}");
+    let mut link = Link {
+        agent,
+        down: session
+            .declare_publisher(net::agent_down_key(agent))
+            .wait()
+            .map_err(z)?,
+        up: session
+            .declare_subscriber(net::agent_up_key(agent))
+            .wait()
+            .map_err(z)?,
+        alive: session
+            .liveliness()
+            .declare_subscriber(net::agent_alive_key(agent))
+            .history(true)
+            .wait()
+            .map_err(z)?,
+        seen_alive: false,
+    };
+    let _spawned = match &settings.spawn_agent {
+        Some(extra) => Some(spawn_agent(settings, extra)?),
+        None => None,
+    };
+
+    // The handshake: probe until the agent says hello, then hand it the mission.
+    let nonce = random_nonce()?;
+    let agent_u32 = u32::try_from(agent).context("the agent's index")?;
+    let mut probed = Instant::now() - PROBE_PERIOD;
+    let mut mission_sent = false;
+    loop {
+        if !mission_sent && probed.elapsed() >= PROBE_PERIOD {
+            link.send(&Down::Probe { nonce })?;
+            probed = Instant::now();
+        }
+        match link.receive(PROBE_PERIOD)? {
+            Some(Up::Hello { agent: a, nonce: n }) if a == agent_u32 && n == nonce => {
+                link.send(&Down::Mission {
+                    nonce,
+                    toml: toml.clone(),
+                })?;
+                mission_sent = true;
+            }
+            Some(Up::Ready { agent: a, nonce: n }) if a == agent_u32 && n == nonce => break,
+            _ => {}
+        }
+    }
+    ipc.announce_ready()?;
+
+    loop {
+        let turn = match ipc.next_command()? {
+            Command::Quit => {
+                link.send(&Down::Quit)?;
+                return Ok(());
+            }
+            Command::Turn(turn) => turn,
+        };
+        link.send(&Down::Turn(net_turn(&turn)))?;
+        let asked = Instant::now();
+        while asked.elapsed() < MOVE_WAIT {
+            let Some(Up::Move(m)) = link.receive(MOVE_WAIT - asked.elapsed().min(MOVE_WAIT))?
+            else {
+                continue;
+            };
+            if m.agent != agent_u32 || m.token != turn.token || m.seq != turn.seq {
+                continue;
+            }
+            if let Some((mv, status, compute)) = move_of(agent, m) {
+                ipc.publish_move(&turn, &mv, status, compute)?;
+            }
+            break;
+        }
+    }
+}
+
+fn random_nonce() -> anyhow::Result<u64> {
+    let mut bytes = [0u8; 8];
+    getrandom::fill(&mut bytes).map_err(|e| anyhow::anyhow!("the OS random source: {e}"))?;
+    Ok(u64::from_le_bytes(bytes))
+}
+
+/// Start agent `settings.agent` on this host, connected to the same router.
+fn spawn_agent(settings: &RelaySettings, extra: &[String]) -> anyhow::Result<SpawnedAgent> {
+    let exe = std::env::current_exe().context("the agent executable")?;
+    let mut command = ProcessCommand::new(exe);
+    command
+        .args(["--connect", &settings.connect.to_string()])
+        .args(["--agent", &settings.agent.to_string()])
+        .args(["--liveness-ms", &settings.liveness.as_millis().to_string()])
+        .args(extra)
+        .stdin(Stdio::null());
+    if let Some(dir) = settings.tls_dir {
+        command.arg("--tls-dir").arg(dir);
+    }
+    let child = command.spawn().context("starting the agent")?;
+    Ok(SpawnedAgent(child))
+}

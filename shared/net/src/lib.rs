@@ -1,0 +1,36 @@
+//! The formation controller between hosts: an agent on another machine takes its turns
+//! over Zenoh.
+//!
+//! On one host everything goes through iceoryx2 shared memory. An agent elsewhere is
+//! represented on the coordinator's host by a *relay*: a process that opens the agent's
+//! iceoryx2 channel exactly as a local agent would, and forwards each turn to the agent
+//! and its move back over Zenoh. The coordinator's protocol, checks and deadlines are
+//! the same for both; the relay adds one hop on the coordinator's host.
+//!
+//! The coordinator runs a Zenoh router on an explicit endpoint ([`open_router`]); relays
+//! and agents are its clients ([`open_client`]). Per agent I:
+//! - `formation/agent/I/down`: relay to agent ([`Down`]: probe, mission, turn, quit);
+//! - `formation/agent/I/up`: agent to relay ([`Up`]: hello, ready, move);
+//! - `formation/agent/I/alive`: the agent's liveliness token, gone with its session;
+//! - `formation/coordinator/alive`: the coordinator's.
+//!
+//! One concept per module:
+//! - `endpoint`: `tcp/HOST:PORT` and `tls/HOST:PORT` ([`Endpoint`]);
+//! - `message`: the messages and their bounded decoding ([`decode`]);
+//! - `keys`: the key expressions;
+//! - `session`: opening the router and the clients, plain or TLS ([`Security`]).
+#![warn(missing_docs)]
+
+mod endpoint;
+mod keys;
+mod message;
+mod session;
+
+pub use endpoint::{Endpoint, EndpointError, LinkProtocol};
+pub use keys::{COORDINATOR_ALIVE_KEY, agent_alive_key, agent_down_key, agent_up_key};
+pub use message::{Down, MAX_MESSAGE_BYTES, MessageError, NetMove, NetTurn, Up, decode, encode};
+pub use session::{
+    CONNECT_TIMEOUT, LINK_LEASE, Security, SessionError, TlsFiles, check_security, open_client,
+    open_router,
+};
+pub use zenoh;

@@ -1,0 +1,202 @@
+//! Opening Zenoh sessions: the coordinator's router, listening on an endpoint, and the
+//! clients (relays and agents) connecting to it. Explicit endpoints only: no multicast
+//! or gossip scouting, which many networks (and CI) block.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use zenoh::{Session, Wait};
+
+use crate::endpoint::{Endpoint, LinkProtocol};
+
+/// A link's lease: a peer silent this long (its process gone, its link down) is dropped
+/// and its liveliness tokens with it. Zenoh's default is 10 s.
+pub const LINK_LEASE: Duration = Duration::from_millis(1000);
+
+/// How long a client tries to reach the router before giving up.
+pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Who may talk to whom.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Security {
+    /// Plain TCP: anyone who reaches the port may join. Loopback only, unless the user
+    /// says otherwise ([`check_security`]).
+    Plain,
+    /// TLS with certificates on both sides, signed by one certificate authority.
+    Tls(TlsFiles),
+}
+
+/// The PEM files of one side of a TLS link, in a folder (`--tls-dir`): `ca.pem` (the
+/// authority both sides trust), `ROLE.pem` and `ROLE-key.pem` (this side's certificate
+/// and private key; ROLE is `coordinator` or `agent`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TlsFiles {
+    /// The certificate authority.
+    pub ca: PathBuf,
+    /// This side's certificate.
+    pub certificate: PathBuf,
+    /// This side's private key.
+    pub private_key: PathBuf,
+}
+
+impl TlsFiles {
+    /// The files of `role` (`coordinator` or `agent`) in `dir`.
+    pub fn in_dir(dir: &Path, role: &str) -> Self {
+        Self {
+            ca: dir.join("ca.pem"),
+            certificate: dir.join(format!("{role}.pem")),
+            private_key: dir.join(format!("{role}-key.pem")),
+        }
+    }
+}
+
+/// Why a session cannot be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// Plain TCP on an endpoint beyond the loopback without the user's consent.
+    #[error(
+        "{0}: plain TCP beyond the loopback lets anyone on the network join; use tls/ with --tls-dir, or allow plain TCP explicitly"
+    )]
+    PlainBeyondLoopback(Endpoint),
+    /// The endpoint's protocol and the security disagree.
+    #[error("{0}: {1}")]
+    Mismatch(Endpoint, &'static str),
+    /// A TLS file is missing or unreadable.
+    #[error("{}: {source}", path.display())]
+    TlsFile {
+        /// The file.
+        path: PathBuf,
+        /// Why it cannot be read.
+        source: std::io::Error,
+    },
+    /// Zenoh refused the configuration or could not open the session.
+    #[error("zenoh: {0}")]
+    Zenoh(String),
+}
+
+/// Check that `endpoint` may be used with `security`: TLS needs `tls/`, plain needs
+/// `tcp/` and, unless `allow_plain_beyond_loopback`, a loopback host.
+pub fn check_security(
+    endpoint: &Endpoint,
+    security: &Security,
+    allow_plain_beyond_loopback: bool,
+) -> Result<(), SessionError> {
+    match (security, endpoint.protocol) {
+        (Security::Tls(_), LinkProtocol::Tls) => Ok(()),
+        (Security::Tls(_), LinkProtocol::Tcp) => Err(SessionError::Mismatch(
+            endpoint.clone(),
+            "certificates given (--tls-dir) for a tcp/ endpoint: use tls/",
+        )),
+        (Security::Plain, LinkProtocol::Tls) => Err(SessionError::Mismatch(
+            endpoint.clone(),
+            "a tls/ endpoint needs certificates (--tls-dir)",
+        )),
+        (Security::Plain, LinkProtocol::Tcp) => {
+            if endpoint.is_loopback() || allow_plain_beyond_loopback {
+                Ok(())
+            } else {
+                Err(SessionError::PlainBeyondLoopback(endpoint.clone()))
+            }
+        }
+    }
+}
+
+fn zenoh_err(e: impl std::fmt::Display) -> SessionError {
+    SessionError::Zenoh(e.to_string())
+}
+
+fn insert(config: &mut zenoh::Config, key: &str, value: &str) -> Result<(), SessionError> {
+    config
+        .insert_json5(key, value)
+        .map_err(|e| SessionError::Zenoh(format!("{key} = {value}: {e}")))
+}
+
+/// A JSON string literal.
+fn json_string(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if c.is_control() => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+fn base_config(
+    mode: &str,
+    security: &Security,
+    listening: bool,
+) -> Result<zenoh::Config, SessionError> {
+    let mut config = zenoh::Config::default();
+    insert(&mut config, "mode", &json_string(mode))?;
+    insert(&mut config, "scouting/multicast/enabled", "false")?;
+    insert(&mut config, "scouting/gossip/enabled", "false")?;
+    insert(
+        &mut config,
+        "transport/link/tx/lease",
+        &LINK_LEASE.as_millis().to_string(),
+    )?;
+    if let Security::Tls(files) = security {
+        for path in [&files.ca, &files.certificate, &files.private_key] {
+            std::fs::metadata(path).map_err(|source| SessionError::TlsFile {
+                path: path.clone(),
+                source,
+            })?;
+        }
+        let path = |p: &Path| json_string(&p.display().to_string());
+        insert(
+            &mut config,
+            "transport/link/tls/root_ca_certificate",
+            &path(&files.ca),
+        )?;
+        insert(&mut config, "transport/link/tls/enable_mtls", "true")?;
+        let (cert_key, key_key) = if listening {
+            ("listen_certificate", "listen_private_key")
+        } else {
+            ("connect_certificate", "connect_private_key")
+        };
+        insert(
+            &mut config,
+            &format!("transport/link/tls/{cert_key}"),
+            &path(&files.certificate),
+        )?;
+        insert(
+            &mut config,
+            &format!("transport/link/tls/{key_key}"),
+            &path(&files.private_key),
+        )?;
+    }
+    Ok(config)
+}
+
+/// Open the coordinator's router, listening on `listen`.
+pub fn open_router(listen: &Endpoint, security: &Security) -> Result<Session, SessionError> {
+    let mut config = base_config("router", security, true)?;
+    insert(
+        &mut config,
+        "listen/endpoints",
+        &format!("[{}]", json_string(&listen.to_string())),
+    )?;
+    zenoh::open(config).wait().map_err(zenoh_err)
+}
+
+/// Open a client session connected to the router at `connect` (tried for
+/// [`CONNECT_TIMEOUT`]).
+pub fn open_client(connect: &Endpoint, security: &Security) -> Result<Session, SessionError> {
+    let mut config = base_config("client", security, false)?;
+    insert(
+        &mut config,
+        "connect/endpoints",
+        &format!("[{}]", json_string(&connect.to_string())),
+    )?;
+    insert(
+        &mut config,
+        "connect/timeout_ms",
+        &CONNECT_TIMEOUT.as_millis().to_string(),
+    )?;
+    zenoh::open(config).wait().map_err(zenoh_err)
+}

@@ -1,0 +1,239 @@
+//! Agents over Zenoh: on the loopback, and on a second test host (a network namespace
+//! with a mount namespace of its own, joined by a veth pair). The run equals the
+//! reference to the bit; a killed remote agent and a link taken down are survived.
+
+mod support;
+
+use std::net::{Ipv4Addr, TcpListener};
+use std::process::Child;
+use std::time::{Duration, Instant};
+
+use coordinator::turns::{NetworkOptions, RunOptions, run_scenario, run_scenario_with};
+use net::Endpoint;
+use shared::record::Run;
+use shared::scenario::Scenario;
+use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
+use support::netns::TestHost;
+
+/// A port free on `ip` now.
+fn free_port(ip: Ipv4Addr) -> u16 {
+    TcpListener::bind((ip, 0))
+        .and_then(|l| l.local_addr())
+        .expect("a free port")
+        .port()
+}
+
+fn loopback() -> NetworkOptions {
+    let port = free_port(Ipv4Addr::LOCALHOST);
+    NetworkOptions::plain(Endpoint::parse(&format!("tcp/127.0.0.1:{port}")).expect("endpoint"))
+}
+
+fn options(network: NetworkOptions) -> RunOptions {
+    RunOptions {
+        agent_bin: Some(support::agent_bin()),
+        turn_deadline: Duration::from_secs(10),
+        progress: false,
+        network: Some(network),
+        ..RunOptions::default()
+    }
+}
+
+/// The faults as both sides must agree on them: agent, step and kind (the detail and
+/// the detection time are the coordinator's own).
+fn fault_keys(run: &Run) -> Vec<(usize, usize, String)> {
+    run.faults
+        .iter()
+        .map(|f| (f.agent, f.step, f.kind.clone()))
+        .collect()
+}
+
+/// Step by step and field by field (f64 equality is bit equality here: no NaN in a
+/// record).
+fn assert_equal_runs(got: &Run, want: &Run, name: &str) {
+    assert_eq!(got.steps.len(), want.steps.len(), "{name}");
+    for (g, w) in got.steps.iter().zip(&want.steps) {
+        assert_eq!(g, w, "{name}: step {} differs from the reference", w.step);
+    }
+    assert_eq!(fault_keys(got), fault_keys(want), "{name}");
+}
+
+fn assert_clean(prefix: &str) {
+    assert!(support::leftovers(prefix).is_empty(), "files left");
+    assert!(
+        support::processes_mentioning(prefix).is_empty(),
+        "relays left running"
+    );
+}
+
+/// Wait for a process the test started, killing it if it has not left in `timeout`.
+fn reap(child: &mut Child, timeout: Duration) -> bool {
+    let until = Instant::now() + timeout;
+    while Instant::now() < until {
+        if let Ok(Some(_)) = child.try_wait() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    false
+}
+
+/// In sequential and in parallel turns, every agent over Zenoh on the loopback: the run
+/// equals the reference to the bit.
+#[test]
+fn agents_over_zenoh_on_the_loopback_match_the_reference_to_the_bit() {
+    let parallel = Scenario::load(&support::repo_root().join("tests/data/swarm16-parallel.toml"))
+        .expect("swarm16-parallel.toml");
+    for scenario in [Scenario::paper(), parallel] {
+        let path = plan_centre_path(&scenario).expect("centre path");
+        let reference = simulate_along(&scenario, &path).expect("reference");
+        let outcome = run_scenario(&scenario, &path, &options(loopback())).expect("zenoh run");
+        assert!(outcome.run.completed);
+        assert_equal_runs(&outcome.run, &reference, &scenario.name);
+        assert_clean(&outcome.prefix);
+    }
+}
+
+/// An agent (its relay and the agent behind it) killed before its turn is frozen and
+/// the run equals the reference with that death.
+#[test]
+fn an_agent_killed_over_zenoh_is_frozen_as_in_the_reference() {
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let deaths = [(2, 40)];
+    let reference = simulate_along_with_deaths(&scenario, &path, &deaths).expect("reference");
+    let mut opts = options(loopback());
+    opts.deaths = deaths.to_vec();
+    let outcome = run_scenario(&scenario, &path, &opts).expect("zenoh run");
+    assert_equal_runs(&outcome.run, &reference, "paper with a death");
+    assert_eq!(outcome.run.summary().collisions, 0);
+    assert_clean(&outcome.prefix);
+}
+
+/// Half the paper example's agents on another host: they connect from their own network
+/// and mount namespaces over the veth link. The run equals the reference to the bit,
+/// and the remote agents leave when it ends.
+#[test]
+fn half_the_agents_on_another_host_match_the_reference_to_the_bit() {
+    let host = TestHost::new();
+    let port = free_port(host.local_ip);
+    let listen = Endpoint::parse(&format!("tcp/{}:{port}", host.local_ip)).expect("endpoint");
+    let remote = vec![3, 4, 5];
+    let mut agents: Vec<Child> = remote
+        .iter()
+        .map(|i| {
+            host.spawn(
+                &support::agent_bin(),
+                &[
+                    "--connect".into(),
+                    listen.to_string(),
+                    "--agent".into(),
+                    i.to_string(),
+                    "--allow-plain-tcp".into(),
+                ],
+            )
+        })
+        .collect();
+    let network = NetworkOptions {
+        remote,
+        allow_plain_tcp: true,
+        ..NetworkOptions::plain(listen)
+    };
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference");
+    let outcome = run_scenario(&scenario, &path, &options(network));
+    let left: Vec<bool> = agents
+        .iter_mut()
+        .map(|a| reap(a, Duration::from_secs(5)))
+        .collect();
+    let outcome = outcome.expect("run across hosts");
+    assert_equal_runs(&outcome.run, &reference, "paper across hosts");
+    assert!(outcome.run.completed);
+    assert_eq!(left, [true; 3], "remote agents did not leave after the run");
+    assert_clean(&outcome.prefix);
+}
+
+/// What goes wrong with the remote agent at step 40.
+#[derive(Clone, Copy, Debug)]
+enum Trouble {
+    /// Its process is killed with SIGKILL on its host.
+    Kill,
+    /// Its host's link goes down (and stays down).
+    LinkDown,
+}
+
+fn survive(trouble: Trouble) {
+    let host = TestHost::new();
+    let port = free_port(host.local_ip);
+    let listen = Endpoint::parse(&format!("tcp/{}:{port}", host.local_ip)).expect("endpoint");
+    let mut agent = host.spawn(
+        &support::agent_bin(),
+        &[
+            "--connect".into(),
+            listen.to_string(),
+            "--agent".into(),
+            "4".into(),
+            "--allow-plain-tcp".into(),
+        ],
+    );
+    let network = NetworkOptions {
+        remote: vec![4],
+        allow_plain_tcp: true,
+        ..NetworkOptions::plain(listen)
+    };
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let mut opts = options(network);
+    // A silent agent is declared hung after a few missed turns of this length.
+    opts.turn_deadline = Duration::from_millis(300);
+    let agent_pid = agent.id();
+    let outcome = run_scenario_with(&scenario, &path, &opts, &mut |between| {
+        if between.step == 40 {
+            match trouble {
+                Trouble::Kill => {
+                    let pid = nix::unistd::Pid::from_raw(agent_pid as i32);
+                    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGKILL)?;
+                }
+                Trouble::LinkDown => host.set_link(false),
+            }
+        }
+        Ok(())
+    });
+    reap(&mut agent, Duration::from_secs(5));
+    let outcome = outcome.unwrap_or_else(|f| panic!("{trouble:?}: {:#}", f.error));
+    let run = &outcome.run;
+    assert!(run.completed, "{trouble:?}");
+    let s = run.summary();
+    assert_eq!(s.collisions, 0, "{trouble:?}");
+    assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
+    let last = run.steps.last().expect("steps");
+    assert!(
+        !last.agents[4].alive,
+        "{trouble:?}: agent 4 is still alive at the end"
+    );
+    assert!(
+        run.faults.iter().any(|f| f.agent == 4 && f.step >= 40),
+        "{trouble:?}: no fault recorded for agent 4: {:?}",
+        run.faults
+    );
+    // Everyone else kept moving to the end.
+    assert!(
+        last.agents
+            .iter()
+            .enumerate()
+            .all(|(i, a)| a.alive || i == 4)
+    );
+    assert_clean(&outcome.prefix);
+}
+
+#[test]
+fn a_remote_agent_killed_on_its_host_is_survived() {
+    survive(Trouble::Kill);
+}
+
+#[test]
+fn a_remote_agent_whose_link_goes_down_is_survived() {
+    survive(Trouble::LinkDown);
+}

@@ -1,0 +1,138 @@
+//! A second test host on this machine: a network namespace joined to this one by a veth
+//! pair, with `ip netns` (needs root, as CI has). Processes started in it also get their
+//! own mount namespace with a /dev/shm of their own, so nothing is shared with this host
+//! but the veth link. Removed (with everything in it) when dropped.
+
+use std::net::Ipv4Addr;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+static NEXT: AtomicU32 = AtomicU32::new(0);
+
+/// A network namespace with one veth link to this host's namespace.
+pub struct TestHost {
+    /// The namespace's name.
+    pub name: String,
+    /// This host's end of the veth pair.
+    pub local_link: String,
+    /// This host's address on the link.
+    pub local_ip: Ipv4Addr,
+    /// The test host's address on the link.
+    pub remote_ip: Ipv4Addr,
+}
+
+fn ip(args: &[&str]) {
+    let out = Command::new("ip")
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("ip {args:?}: {e} (iproute2 is needed)"));
+    assert!(
+        out.status.success(),
+        "ip {args:?}: {} (network namespaces need root)",
+        String::from_utf8_lossy(&out.stderr).trim()
+    );
+}
+
+impl TestHost {
+    /// A new namespace with a veth link, addresses on a /30 of its own, and loopback up.
+    pub fn new() -> Self {
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let pid = std::process::id();
+        let tag = format!("{:x}", (pid % 0xffff) * 16 + n % 16);
+        let name = format!("fmt-{tag}");
+        let local_link = format!("fv{tag}a");
+        let remote_link = format!("fv{tag}b");
+        // 10.(200 + n % 50).(pid % 250).{1,2}: distinct for the tests of one process.
+        let (a, b) = (200 + (n % 50) as u8, (pid % 250) as u8);
+        let local_ip = Ipv4Addr::new(10, a, b, 1);
+        let remote_ip = Ipv4Addr::new(10, a, b, 2);
+        let _ = Command::new("ip")
+            .args(["netns", "del", &name])
+            .stderr(Stdio::null())
+            .status();
+        ip(&["netns", "add", &name]);
+        let host = Self {
+            name: name.clone(),
+            local_link: local_link.clone(),
+            local_ip,
+            remote_ip,
+        };
+        ip(&[
+            "link",
+            "add",
+            &local_link,
+            "type",
+            "veth",
+            "peer",
+            "name",
+            &remote_link,
+        ]);
+        ip(&["link", "set", &remote_link, "netns", &name]);
+        ip(&["addr", "add", &format!("{local_ip}/30"), "dev", &local_link]);
+        ip(&["link", "set", &local_link, "up"]);
+        let inside = |args: &[&str]| {
+            let mut all = vec!["netns", "exec", &name, "ip"];
+            all.extend_from_slice(args);
+            ip(&all);
+        };
+        inside(&[
+            "addr",
+            "add",
+            &format!("{remote_ip}/30"),
+            "dev",
+            &remote_link,
+        ]);
+        inside(&["link", "set", &remote_link, "up"]);
+        inside(&["link", "set", "lo", "up"]);
+        host
+    }
+
+    /// Start `program args` on the test host, in a mount namespace of its own with a
+    /// fresh /dev/shm. The child is the program itself (every wrapper execs).
+    pub fn spawn(&self, program: &std::path::Path, args: &[String]) -> Child {
+        Command::new("ip")
+            .args([
+                "netns",
+                "exec",
+                &self.name,
+                "unshare",
+                "--mount",
+                "--propagation",
+                "private",
+            ])
+            .args([
+                "sh",
+                "-c",
+                "mount -t tmpfs tmpfs /dev/shm && exec \"$0\" \"$@\"",
+            ])
+            .arg(program)
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start a process on the test host")
+    }
+
+    /// Take the link down (from this host's end) or up again.
+    pub fn set_link(&self, up: bool) {
+        ip(&[
+            "link",
+            "set",
+            &self.local_link,
+            if up { "up" } else { "down" },
+        ]);
+    }
+}
+
+impl Drop for TestHost {
+    fn drop(&mut self) {
+        // Deleting the namespace deletes the veth pair with it.
+        let _ = Command::new("ip")
+            .args(["link", "del", &self.local_link])
+            .status();
+        let _ = Command::new("ip")
+            .args(["netns", "del", &self.name])
+            .status();
+    }
+}
