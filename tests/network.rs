@@ -237,3 +237,91 @@ fn a_remote_agent_killed_on_its_host_is_survived() {
 fn a_remote_agent_whose_link_goes_down_is_survived() {
     survive(Trouble::LinkDown);
 }
+
+/// `scripts/make-tls-dir DIR 127.0.0.1`: the TLS folder a user makes.
+fn tls_dir(parent: &std::path::Path, name: &str) -> std::path::PathBuf {
+    let dir = parent.join(name);
+    let out = std::process::Command::new(support::repo_root().join("scripts/make-tls-dir"))
+        .arg(&dir)
+        .arg("127.0.0.1")
+        .output()
+        .expect("scripts/make-tls-dir (needs openssl)");
+    assert!(
+        out.status.success(),
+        "make-tls-dir: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir
+}
+
+/// Over TLS with client certificates: agents with a certificate of the run's authority
+/// take their turns; one with no certificate and one with a certificate of another
+/// authority are refused, recorded as failed to start, and the run goes on safely.
+#[test]
+fn no_stranger_joins_a_run_over_tls() {
+    let temp = tempfile::tempdir().expect("tempdir");
+    let ours = tls_dir(temp.path(), "ours");
+    let theirs = tls_dir(temp.path(), "theirs");
+    let port = free_port(Ipv4Addr::LOCALHOST);
+    let listen = Endpoint::parse(&format!("tls/127.0.0.1:{port}")).expect("endpoint");
+    let stranger = |agent: usize, extra: &[String]| {
+        let mut args = vec!["--agent".to_string(), agent.to_string()];
+        args.extend_from_slice(extra);
+        std::process::Command::new(support::agent_bin())
+            .args(&args)
+            .stdin(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("start a stranger")
+    };
+    // No certificate at all: plain TCP to the TLS port.
+    let mut plain = stranger(4, &["--connect".into(), format!("tcp/127.0.0.1:{port}")]);
+    // A certificate of another authority.
+    let mut forged = stranger(
+        5,
+        &[
+            "--connect".into(),
+            listen.to_string(),
+            "--tls-dir".into(),
+            theirs.display().to_string(),
+        ],
+    );
+    let network = NetworkOptions {
+        remote: vec![4, 5],
+        tls_dir: Some(ours),
+        ..NetworkOptions::plain(listen)
+    };
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let mut opts = options(network);
+    opts.startup_timeout = Duration::from_secs(4);
+    let outcome = run_scenario(&scenario, &path, &opts);
+    let (plain_left, forged_left) = (
+        reap(&mut plain, Duration::from_secs(15)),
+        reap(&mut forged, Duration::from_secs(15)),
+    );
+    let outcome = outcome.unwrap_or_else(|f| panic!("{:#}", f.error));
+    let run = &outcome.run;
+    assert!(run.completed);
+    assert_eq!(run.summary().collisions, 0);
+    for agent in [4, 5] {
+        let fault = run
+            .faults
+            .iter()
+            .find(|f| f.agent == agent)
+            .unwrap_or_else(|| panic!("agent {agent} not recorded: {:?}", run.faults));
+        assert_eq!((fault.step, fault.kind.as_str()), (0, "failed-to-start"));
+        assert!(fault.detail.contains("refused"), "{fault:?}");
+        // Frozen where it stood from the first move on.
+        assert!(run.steps.iter().skip(1).all(|s| !s.agents[agent].alive));
+        let start = run.steps[0].agents[agent].position;
+        assert!(run.steps.iter().all(|s| s.agents[agent].position == start));
+    }
+    // The certified agents took every turn.
+    let last = run.steps.last().expect("steps");
+    assert!((0..4).all(|i| last.agents[i].alive));
+    assert!(!run.faults.iter().any(|f| f.agent < 4), "{:?}", run.faults);
+    // The strangers never got a session: each gave up and exited with an error.
+    assert!(plain_left && forged_left, "a stranger was still running");
+    assert_clean(&outcome.prefix);
+}

@@ -112,10 +112,16 @@ impl Driver<'_, '_> {
                 bail!("interrupted while the agents were starting");
             }
             if Instant::now() >= deadline {
+                // Over the network, the relay is up but the agent never answered it.
+                let hint = if self.options.network.is_some() {
+                    " (over Zenoh: the agent did not connect, or was refused: no valid certificate)"
+                } else {
+                    ""
+                };
                 for &agent in &pending {
                     failed.push((
                         agent,
-                        format!("no handshake within {:.1} s", timeout.as_secs_f64()),
+                        format!("no handshake within {:.1} s{hint}", timeout.as_secs_f64()),
                     ));
                 }
                 break;
