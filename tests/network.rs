@@ -8,12 +8,12 @@ use std::net::{Ipv4Addr, TcpListener};
 use std::process::Child;
 use std::time::{Duration, Instant};
 
+use coordinator::netns::NetnsHost;
 use coordinator::turns::{NetworkOptions, RunOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
 use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
-use support::netns::TestHost;
 
 /// A port free on `ip` now.
 fn free_port(ip: Ipv4Addr) -> u16 {
@@ -116,7 +116,7 @@ fn an_agent_killed_over_zenoh_is_frozen_as_in_the_reference() {
 /// and the remote agents leave when it ends.
 #[test]
 fn half_the_agents_on_another_host_match_the_reference_to_the_bit() {
-    let host = TestHost::new();
+    let host = NetnsHost::new().expect("a test host (network namespaces need root)");
     let port = free_port(host.local_ip);
     let listen = Endpoint::parse(&format!("tcp/{}:{port}", host.local_ip)).expect("endpoint");
     let remote = vec![3, 4, 5];
@@ -133,6 +133,7 @@ fn half_the_agents_on_another_host_match_the_reference_to_the_bit() {
                     "--allow-plain-tcp".into(),
                 ],
             )
+            .expect("an agent on the test host")
         })
         .collect();
     let network = NetworkOptions {
@@ -156,28 +157,43 @@ fn half_the_agents_on_another_host_match_the_reference_to_the_bit() {
 }
 
 /// What goes wrong with the remote agent at step 40.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Trouble {
     /// Its process is killed with SIGKILL on its host.
     Kill,
     /// Its host's link goes down (and stays down).
     LinkDown,
+    /// Its host's link goes down, and up again at step 60: the agent is not re-admitted
+    /// (no `--respawn`).
+    Partition,
+    /// Its process is killed and the user starts it again at once; with `--respawn` the
+    /// coordinator's new relay re-admits it.
+    KillAndRestart,
 }
 
 fn survive(trouble: Trouble) {
-    let host = TestHost::new();
+    let host = NetnsHost::new().expect("a test host (network namespaces need root)");
     let port = free_port(host.local_ip);
     let listen = Endpoint::parse(&format!("tcp/{}:{port}", host.local_ip)).expect("endpoint");
-    let mut agent = host.spawn(
-        &support::agent_bin(),
-        &[
-            "--connect".into(),
-            listen.to_string(),
-            "--agent".into(),
-            "4".into(),
-            "--allow-plain-tcp".into(),
-        ],
-    );
+    let mut agent = host
+        .spawn(
+            &support::agent_bin(),
+            &[
+                "--connect".into(),
+                listen.to_string(),
+                "--agent".into(),
+                "4".into(),
+                "--allow-plain-tcp".into(),
+            ],
+        )
+        .expect("an agent on the test host");
+    let agent_args: Vec<String> = vec![
+        "--connect".into(),
+        listen.to_string(),
+        "--agent".into(),
+        "4".into(),
+        "--allow-plain-tcp".into(),
+    ];
     let network = NetworkOptions {
         remote: vec![4],
         allow_plain_tcp: true,
@@ -188,20 +204,33 @@ fn survive(trouble: Trouble) {
     let mut opts = options(network);
     // A silent agent is declared hung after a few missed turns of this length.
     opts.turn_deadline = Duration::from_millis(300);
+    opts.respawn = trouble == Trouble::KillAndRestart;
     let agent_pid = agent.id();
+    let mut restarted: Option<Child> = None;
     let outcome = run_scenario_with(&scenario, &path, &opts, &mut |between| {
-        if between.step == 40 {
-            match trouble {
-                Trouble::Kill => {
-                    let pid = nix::unistd::Pid::from_raw(agent_pid as i32);
-                    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGKILL)?;
-                }
-                Trouble::LinkDown => host.set_link(false),
+        let kill = || {
+            let pid = nix::unistd::Pid::from_raw(agent_pid as i32);
+            nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGKILL)
+        };
+        match (trouble, between.step) {
+            (Trouble::Kill, 40) => kill()?,
+            (Trouble::LinkDown | Trouble::Partition, 40) => host.set_link(false)?,
+            (Trouble::Partition, 60) => host.set_link(true)?,
+            (Trouble::KillAndRestart, 40) => {
+                kill()?;
+                restarted = Some(host.spawn(&support::agent_bin(), &agent_args)?);
             }
+            _ => {}
         }
         Ok(())
     });
     reap(&mut agent, Duration::from_secs(5));
+    if let Some(mut again) = restarted {
+        assert!(
+            reap(&mut again, Duration::from_secs(5)),
+            "the restarted agent did not leave after the run"
+        );
+    }
     let outcome = outcome.unwrap_or_else(|f| panic!("{trouble:?}: {:#}", f.error));
     let run = &outcome.run;
     assert!(run.completed, "{trouble:?}");
@@ -209,6 +238,21 @@ fn survive(trouble: Trouble) {
     assert_eq!(s.collisions, 0, "{trouble:?}");
     assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
     let last = run.steps.last().expect("steps");
+    if trouble == Trouble::KillAndRestart {
+        assert!(
+            last.agents[4].alive,
+            "the restarted agent was not re-admitted"
+        );
+        assert!(
+            run.faults
+                .iter()
+                .any(|f| f.agent == 4 && f.kind == "respawned"),
+            "{:?}",
+            run.faults
+        );
+        assert_clean(&outcome.prefix);
+        return;
+    }
     assert!(
         !last.agents[4].alive,
         "{trouble:?}: agent 4 is still alive at the end"
@@ -236,6 +280,16 @@ fn a_remote_agent_killed_on_its_host_is_survived() {
 #[test]
 fn a_remote_agent_whose_link_goes_down_is_survived() {
     survive(Trouble::LinkDown);
+}
+
+#[test]
+fn a_remote_agent_back_after_a_partition_is_not_readmitted_without_respawn() {
+    survive(Trouble::Partition);
+}
+
+#[test]
+fn a_remote_agent_restarted_by_its_user_is_readmitted_with_respawn() {
+    survive(Trouble::KillAndRestart);
 }
 
 /// `scripts/make-tls-dir DIR 127.0.0.1`: the TLS folder a user makes.

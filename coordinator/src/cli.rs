@@ -309,6 +309,15 @@ pub struct BenchArgs {
     /// Rounds with --loop-scenario (each: simulate(), a blocking run, a spinning run).
     #[arg(long, value_name = "N", default_value_t = 2)]
     pub loop_rounds: usize,
+    /// With `--turns-scenario`: also run each mode with every agent over Zenoh on the
+    /// loopback (`zenoh`), beside iceoryx2 (`ipc`, always).
+    #[arg(long, value_enum, default_value_t = TransportKind::Ipc)]
+    pub transport: TransportKind,
+    /// With `--transport zenoh`: also run each mode with every agent on a second host, a
+    /// network namespace joined by a veth pair that the bench makes and removes (needs
+    /// root and iproute2).
+    #[arg(long)]
+    pub zenoh_netns: bool,
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

@@ -9,6 +9,7 @@ mod error;
 mod ipc;
 pub mod logging;
 mod monitor;
+pub mod netns;
 pub mod network;
 pub mod output;
 mod plan;

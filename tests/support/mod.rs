@@ -8,8 +8,6 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-pub mod netns;
-
 /// `target/<profile>/` of this test build.
 pub fn target_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("test executable path");

@@ -98,6 +98,24 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         return Err(CliError::Usage("--round-trips: at least 1".into()));
     }
     // The turns scenario is checked before anything runs (a bad one: exit code 2).
+    let zenoh = args.transport == crate::cli::TransportKind::Zenoh;
+    if zenoh && args.turns_scenario.is_none() {
+        return Err(CliError::Usage(
+            "--transport zenoh: measured on a --turns-scenario FILE (beside iceoryx2)".into(),
+        ));
+    }
+    if args.zenoh_netns && !zenoh {
+        return Err(CliError::Usage(
+            "--zenoh-netns needs --transport zenoh".into(),
+        ));
+    }
+    let mut links = vec![turns::Link::Iceoryx2];
+    if zenoh {
+        links.push(turns::Link::ZenohLoopback);
+    }
+    if args.zenoh_netns {
+        links.push(turns::Link::ZenohVeth);
+    }
     let turns_bench = args
         .turns_scenario
         .as_deref()
@@ -106,6 +124,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             rounds: args.turns_rounds,
             steps: args.turns_steps,
             verbose: !args.json,
+            links: links.clone(),
         });
     let turns_prepared = turns_bench.as_ref().map(turns::prepare).transpose()?;
     let loop_prepared = args

@@ -15,7 +15,7 @@ use shared::vocabulary::TurnMode;
 use crate::compare::with_turn_mode;
 use crate::error::CliError;
 use crate::stats::{Distribution, median};
-use crate::turns::{RunOptions, RunOutcome, run_scenario};
+use crate::turns::{NetworkOptions, RunOptions, RunOutcome, run_scenario};
 use crate::validate::load_and_plan;
 
 /// The comparison (`turns` in the report).
@@ -45,6 +45,32 @@ pub struct TurnsReport {
     pub parallel_vs_sequential_steps_per_s: f64,
     /// `parallel.turn_us.p50 / sequential.turn_us.p50`.
     pub parallel_vs_sequential_turn_p50: f64,
+    /// The same runs with every agent over Zenoh (`--transport zenoh`): on the loopback,
+    /// and across a veth pair to a network namespace (`--zenoh-netns`); each mode of each.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub over_zenoh: Vec<ModeReport>,
+}
+
+/// How the agents of a run talk to the coordinator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Link {
+    /// iceoryx2 shared memory.
+    Iceoryx2,
+    /// Zenoh on the loopback: a relay per agent, the agent started by it.
+    ZenohLoopback,
+    /// Zenoh across a veth pair: every agent in a network namespace of its own host.
+    ZenohVeth,
+}
+
+impl Link {
+    /// The name in the report.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Iceoryx2 => "iceoryx2",
+            Self::ZenohLoopback => "zenoh loopback",
+            Self::ZenohVeth => "zenoh veth",
+        }
+    }
 }
 
 /// The figures of one turn mode over its runs.
@@ -52,6 +78,8 @@ pub struct TurnsReport {
 pub struct ModeReport {
     /// `sequential` or `parallel`.
     pub mode: &'static str,
+    /// How the agents talked: `iceoryx2`, `zenoh loopback`, `zenoh veth` ([`Link`]).
+    pub transport: &'static str,
     /// Steps per second of the step loop (start-up excluded): the median of the runs.
     pub steps_per_s: f64,
     /// Steps per second of each run, in the order they were made.
@@ -86,6 +114,8 @@ pub struct TurnsBench<'a> {
     pub steps: Option<usize>,
     /// Progress lines on stderr.
     pub verbose: bool,
+    /// The transports each mode runs over (iceoryx2 first).
+    pub links: Vec<Link>,
 }
 
 /// The scenario in both modes, with its path.
@@ -148,8 +178,20 @@ pub fn run(b: &TurnsBench<'_>, prepared: Prepared, bin: &Path) -> Result<TurnsRe
         progress: false,
         ..RunOptions::default()
     };
+    // A second host for the veth runs, made once (needs root).
+    let host = if b.links.contains(&Link::ZenohVeth) {
+        Some(crate::netns::NetnsHost::new().map_err(CliError::Other)?)
+    } else {
+        None
+    };
     let mut order = Vec::with_capacity(2 * b.rounds);
-    let (mut seq_runs, mut par_runs) = (Vec::new(), Vec::new());
+    // By mode and link.
+    let mut runs: Vec<(TurnMode, Link, Vec<RunOutcome>)> = Vec::new();
+    for mode in [TurnMode::Sequential, TurnMode::Parallel] {
+        for &link in &b.links {
+            runs.push((mode, link, Vec::new()));
+        }
+    }
     for round in 0..b.rounds {
         let pair = if round % 2 == 0 {
             [TurnMode::Sequential, TurnMode::Parallel]
@@ -162,32 +204,49 @@ pub fn run(b: &TurnsBench<'_>, prepared: Prepared, bin: &Path) -> Result<TurnsRe
             } else {
                 &seq
             };
-            let outcome = run_scenario(scenario, &path, &options)
-                .map_err(|failure| CliError::Other(failure.error))?;
-            if outcome.interrupted {
-                return Err(CliError::Other(anyhow::anyhow!("interrupted")));
-            }
-            if b.verbose {
-                eprintln!(
-                    "bench: {} turns, round {} of {}: {:.2} steps/s, {:.2} groups per step, turn p50 {:.1} us",
-                    mode.name(),
-                    round + 1,
-                    b.rounds,
-                    outcome.timing.steps_per_s,
-                    outcome.run.summary().mean_groups_per_step,
-                    outcome.timing.turn_latency_us.p50
-                );
-            }
-            order.push(mode.name());
-            if mode == TurnMode::Parallel {
-                par_runs.push(outcome);
-            } else {
-                seq_runs.push(outcome);
+            for &link in &b.links {
+                let outcome = run_over(scenario, &path, &options, bin, link, host.as_ref())?;
+                if outcome.interrupted {
+                    return Err(CliError::Other(anyhow::anyhow!("interrupted")));
+                }
+                if b.verbose {
+                    eprintln!(
+                        "bench: {} turns over {}, round {} of {}: {:.2} steps/s, {:.2} groups per step, turn p50 {:.1} us",
+                        mode.name(),
+                        link.name(),
+                        round + 1,
+                        b.rounds,
+                        outcome.timing.steps_per_s,
+                        outcome.run.summary().mean_groups_per_step,
+                        outcome.timing.turn_latency_us.p50
+                    );
+                }
+                if link == Link::Iceoryx2 {
+                    order.push(mode.name());
+                }
+                if let Some((_, _, list)) =
+                    runs.iter_mut().find(|(m, l, _)| *m == mode && *l == link)
+                {
+                    list.push(outcome);
+                }
             }
         }
     }
-    let sequential = mode_report(TurnMode::Sequential, &seq_runs);
-    let parallel = mode_report(TurnMode::Parallel, &par_runs);
+    let report_of = |mode: TurnMode, link: Link| {
+        let list = runs
+            .iter()
+            .find(|(m, l, _)| *m == mode && *l == link)
+            .map_or(&[][..], |(_, _, list)| list.as_slice());
+        mode_report(mode, link, list)
+    };
+    let sequential = report_of(TurnMode::Sequential, Link::Iceoryx2);
+    let parallel = report_of(TurnMode::Parallel, Link::Iceoryx2);
+    let over_zenoh: Vec<ModeReport> = b
+        .links
+        .iter()
+        .filter(|&&l| l != Link::Iceoryx2)
+        .flat_map(|&l| [TurnMode::Sequential, TurnMode::Parallel].map(|m| report_of(m, l)))
+        .collect();
     let speeds: Vec<f64> = seq.agents.iter().filter_map(|a| a.max_step_m).collect();
     Ok(TurnsReport {
         scenario: seq.name.clone(),
@@ -208,7 +267,73 @@ pub fn run(b: &TurnsBench<'_>, prepared: Prepared, bin: &Path) -> Result<TurnsRe
         parallel_vs_sequential_turn_p50: super::ratio(parallel.turn_us.p50, sequential.turn_us.p50),
         sequential,
         parallel,
+        over_zenoh,
     })
+}
+
+/// Agents a run over the veth pair has this long to leave once it ended.
+const REMOTE_LEAVE: Duration = Duration::from_secs(5);
+
+/// One run of `scenario` over `link` (`host`: the second host, for [`Link::ZenohVeth`]).
+fn run_over(
+    scenario: &Scenario,
+    path: &[Pose],
+    options: &RunOptions,
+    bin: &Path,
+    link: Link,
+    host: Option<&crate::netns::NetnsHost>,
+) -> Result<RunOutcome, CliError> {
+    let free_port = |ip: std::net::Ipv4Addr| -> anyhow::Result<u16> {
+        Ok(std::net::TcpListener::bind((ip, 0))?.local_addr()?.port())
+    };
+    let endpoint = |ip: std::net::Ipv4Addr| -> anyhow::Result<net::Endpoint> {
+        Ok(net::Endpoint::parse(&format!(
+            "tcp/{ip}:{}",
+            free_port(ip)?
+        ))?)
+    };
+    let mut options = options.clone();
+    let mut remote_agents = Vec::new();
+    match (link, host) {
+        (Link::Iceoryx2, _) => {}
+        (Link::ZenohLoopback, _) => {
+            let listen = endpoint(std::net::Ipv4Addr::LOCALHOST)?;
+            options.network = Some(NetworkOptions::plain(listen));
+        }
+        (Link::ZenohVeth, Some(host)) => {
+            let listen = endpoint(host.local_ip)?;
+            let n = scenario.agents.len();
+            for i in 0..n {
+                let args = [
+                    "--connect".to_string(),
+                    listen.to_string(),
+                    "--agent".to_string(),
+                    i.to_string(),
+                    "--allow-plain-tcp".to_string(),
+                ];
+                remote_agents.push(host.spawn(bin, &args)?);
+            }
+            options.network = Some(NetworkOptions {
+                remote: (0..n).collect(),
+                allow_plain_tcp: true,
+                ..NetworkOptions::plain(listen)
+            });
+        }
+        (Link::ZenohVeth, None) => {
+            return Err(CliError::Other(anyhow::anyhow!("no second host")));
+        }
+    }
+    let outcome = run_scenario(scenario, path, &options);
+    // The remote agents leave when told; those that do not are killed.
+    let until = std::time::Instant::now() + REMOTE_LEAVE;
+    for child in &mut remote_agents {
+        while std::time::Instant::now() < until && matches!(child.try_wait(), Ok(None)) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+    outcome.map_err(|failure| CliError::Other(failure.error))
 }
 
 /// The comparison as a table for people.
@@ -243,7 +368,7 @@ pub fn table(t: &TurnsReport) -> String {
     );
     let _ = writeln!(
         s,
-        "  {:<12}{:>10}{:>14}{:>14}{:>14}{:>16}{:>8}{:>12}",
+        "  {:<12}{:>10}{:>14}{:>14}{:>14}{:>16}{:>8}{:>12}  transport",
         "mode",
         "steps/s",
         "groups/step",
@@ -253,10 +378,13 @@ pub fn table(t: &TurnsReport) -> String {
         "faults",
         "collisions"
     );
-    for m in [&t.sequential, &t.parallel] {
+    for m in [&t.sequential, &t.parallel]
+        .into_iter()
+        .chain(&t.over_zenoh)
+    {
         let _ = writeln!(
             s,
-            "  {:<12}{:>10.2}{:>14.2}{:>14.1}{:>14.1}{:>16.1}{:>8}{:>12}",
+            "  {:<12}{:>10.2}{:>14.2}{:>14.1}{:>14.1}{:>16.1}{:>8}{:>12}  {}",
             m.mode,
             m.steps_per_s,
             m.mean_groups_per_step,
@@ -264,7 +392,8 @@ pub fn table(t: &TurnsReport) -> String {
             m.turn_us.p99,
             m.compute_us.p50,
             m.faults,
-            m.collisions
+            m.collisions,
+            m.transport
         );
     }
     let _ = writeln!(
@@ -286,7 +415,7 @@ fn runs_list(v: &[f64]) -> String {
 }
 
 /// The figures of `mode` over `runs`.
-fn mode_report(mode: TurnMode, runs: &[RunOutcome]) -> ModeReport {
+fn mode_report(mode: TurnMode, link: Link, runs: &[RunOutcome]) -> ModeReport {
     let summaries: Vec<_> = runs.iter().map(|o| o.run.summary()).collect();
     let steps_per_s_runs: Vec<f64> = runs.iter().map(|o| o.timing.steps_per_s).collect();
     // Every agent's first turn is a warm-up, as in the latency bench.
@@ -297,6 +426,7 @@ fn mode_report(mode: TurnMode, runs: &[RunOutcome]) -> ModeReport {
     };
     ModeReport {
         mode: mode.name(),
+        transport: link.name(),
         steps_per_s: median(&steps_per_s_runs),
         mean_groups_per_step: summaries
             .iter()
@@ -336,6 +466,7 @@ mod tests {
             rounds: 1,
             steps: None,
             verbose: false,
+            links: vec![Link::Iceoryx2],
         };
         let err = prepare(&b).unwrap_err();
         assert_eq!(err.exit_code(), 2);
@@ -350,6 +481,7 @@ mod tests {
             rounds: 1,
             steps: Some(5),
             verbose: false,
+            links: vec![Link::Iceoryx2],
         };
         let p = prepare(&b).unwrap();
         assert_eq!(p.sequential.turns, TurnMode::Sequential);

@@ -1,16 +1,19 @@
-//! A second test host on this machine: a network namespace joined to this one by a veth
-//! pair, with `ip netns` (needs root, as CI has). Processes started in it also get their
-//! own mount namespace with a /dev/shm of their own, so nothing is shared with this host
-//! but the veth link. Removed (with everything in it) when dropped.
+//! A second host on this machine, for tests and benchmarks of agents over the network:
+//! a network namespace joined to this one by a veth pair, made with `ip netns` (iproute2;
+//! needs root). Processes started in it also get a mount namespace of their own with a
+//! fresh /dev/shm, so nothing is shared with this host but the veth link. Removed, with
+//! the link, when dropped.
 
 use std::net::Ipv4Addr;
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicU32, Ordering};
 
+use anyhow::{Context, bail};
+
 static NEXT: AtomicU32 = AtomicU32::new(0);
 
 /// A network namespace with one veth link to this host's namespace.
-pub struct TestHost {
+pub struct NetnsHost {
     /// The namespace's name.
     pub name: String,
     /// This host's end of the veth pair.
@@ -21,21 +24,24 @@ pub struct TestHost {
     pub remote_ip: Ipv4Addr,
 }
 
-fn ip(args: &[&str]) {
+fn ip(args: &[&str]) -> anyhow::Result<()> {
     let out = Command::new("ip")
         .args(args)
         .output()
-        .unwrap_or_else(|e| panic!("ip {args:?}: {e} (iproute2 is needed)"));
-    assert!(
-        out.status.success(),
-        "ip {args:?}: {} (network namespaces need root)",
-        String::from_utf8_lossy(&out.stderr).trim()
-    );
+        .with_context(|| format!("ip {}: iproute2 is needed", args.join(" ")))?;
+    if !out.status.success() {
+        bail!(
+            "ip {}: {} (network namespaces need root)",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).trim()
+        );
+    }
+    Ok(())
 }
 
-impl TestHost {
+impl NetnsHost {
     /// A new namespace with a veth link, addresses on a /30 of its own, and loopback up.
-    pub fn new() -> Self {
+    pub fn new() -> anyhow::Result<Self> {
         let n = NEXT.fetch_add(1, Ordering::Relaxed);
         let pid = std::process::id();
         let tag = format!("{:x}", (pid % 0xffff) * 16 + n % 16);
@@ -50,13 +56,14 @@ impl TestHost {
             .args(["netns", "del", &name])
             .stderr(Stdio::null())
             .status();
-        ip(&["netns", "add", &name]);
+        ip(&["netns", "add", &name])?;
         let host = Self {
             name: name.clone(),
             local_link: local_link.clone(),
             local_ip,
             remote_ip,
         };
+        // From here on, a failure removes what was made (drop).
         ip(&[
             "link",
             "add",
@@ -66,14 +73,14 @@ impl TestHost {
             "peer",
             "name",
             &remote_link,
-        ]);
-        ip(&["link", "set", &remote_link, "netns", &name]);
-        ip(&["addr", "add", &format!("{local_ip}/30"), "dev", &local_link]);
-        ip(&["link", "set", &local_link, "up"]);
+        ])?;
+        ip(&["link", "set", &remote_link, "netns", &name])?;
+        ip(&["addr", "add", &format!("{local_ip}/30"), "dev", &local_link])?;
+        ip(&["link", "set", &local_link, "up"])?;
         let inside = |args: &[&str]| {
             let mut all = vec!["netns", "exec", &name, "ip"];
             all.extend_from_slice(args);
-            ip(&all);
+            ip(&all)
         };
         inside(&[
             "addr",
@@ -81,15 +88,15 @@ impl TestHost {
             &format!("{remote_ip}/30"),
             "dev",
             &remote_link,
-        ]);
-        inside(&["link", "set", &remote_link, "up"]);
-        inside(&["link", "set", "lo", "up"]);
-        host
+        ])?;
+        inside(&["link", "set", &remote_link, "up"])?;
+        inside(&["link", "set", "lo", "up"])?;
+        Ok(host)
     }
 
     /// Start `program args` on the test host, in a mount namespace of its own with a
     /// fresh /dev/shm. The child is the program itself (every wrapper execs).
-    pub fn spawn(&self, program: &std::path::Path, args: &[String]) -> Child {
+    pub fn spawn(&self, program: &std::path::Path, args: &[String]) -> anyhow::Result<Child> {
         Command::new("ip")
             .args([
                 "netns",
@@ -111,21 +118,21 @@ impl TestHost {
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()
-            .expect("start a process on the test host")
+            .with_context(|| format!("starting {} in {}", program.display(), self.name))
     }
 
     /// Take the link down (from this host's end) or up again.
-    pub fn set_link(&self, up: bool) {
+    pub fn set_link(&self, up: bool) -> anyhow::Result<()> {
         ip(&[
             "link",
             "set",
             &self.local_link,
             if up { "up" } else { "down" },
-        ]);
+        ])
     }
 }
 
-impl Drop for TestHost {
+impl Drop for NetnsHost {
     fn drop(&mut self) {
         // Deleting the namespace deletes the veth pair with it.
         let _ = Command::new("ip")
