@@ -57,12 +57,20 @@ fn assert_equal_runs(got: &Run, want: &Run, name: &str) {
     assert_eq!(fault_keys(got), fault_keys(want), "{name}");
 }
 
-fn assert_clean(prefix: &str) {
+/// Nothing of the run is left: no file, no relay, and no agent the relays started (they
+/// name the run's endpoint).
+fn assert_clean(prefix: &str, listen: &Endpoint) {
     assert!(support::leftovers(prefix).is_empty(), "files left");
     assert!(
         support::processes_mentioning(prefix).is_empty(),
         "relays left running"
     );
+    let endpoint = listen.local_connect().to_string();
+    let until = Instant::now() + Duration::from_secs(2);
+    while !support::processes_mentioning(&endpoint).is_empty() {
+        assert!(Instant::now() < until, "agents of {endpoint} left running");
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 /// Wait for a process the test started, killing it if it has not left in `timeout`.
@@ -88,10 +96,11 @@ fn agents_over_zenoh_on_the_loopback_match_the_reference_to_the_bit() {
     for scenario in [Scenario::paper(), parallel] {
         let path = plan_centre_path(&scenario).expect("centre path");
         let reference = simulate_along(&scenario, &path).expect("reference");
-        let outcome = run_scenario(&scenario, &path, &options(loopback())).expect("zenoh run");
+        let network = loopback();
+        let outcome = run_scenario(&scenario, &path, &options(network.clone())).expect("zenoh run");
         assert!(outcome.run.completed);
         assert_equal_runs(&outcome.run, &reference, &scenario.name);
-        assert_clean(&outcome.prefix);
+        assert_clean(&outcome.prefix, &network.listen);
     }
 }
 
@@ -103,12 +112,13 @@ fn an_agent_killed_over_zenoh_is_frozen_as_in_the_reference() {
     let path = plan_centre_path(&scenario).expect("centre path");
     let deaths = [(2, 40)];
     let reference = simulate_along_with_deaths(&scenario, &path, &deaths).expect("reference");
-    let mut opts = options(loopback());
+    let network = loopback();
+    let mut opts = options(network.clone());
     opts.deaths = deaths.to_vec();
     let outcome = run_scenario(&scenario, &path, &opts).expect("zenoh run");
     assert_equal_runs(&outcome.run, &reference, "paper with a death");
     assert_eq!(outcome.run.summary().collisions, 0);
-    assert_clean(&outcome.prefix);
+    assert_clean(&outcome.prefix, &network.listen);
 }
 
 /// Half the paper example's agents on another host: they connect from their own network
@@ -139,7 +149,7 @@ fn half_the_agents_on_another_host_match_the_reference_to_the_bit() {
     let network = NetworkOptions {
         remote,
         allow_plain_tcp: true,
-        ..NetworkOptions::plain(listen)
+        ..NetworkOptions::plain(listen.clone())
     };
     let scenario = Scenario::paper();
     let path = plan_centre_path(&scenario).expect("centre path");
@@ -153,7 +163,7 @@ fn half_the_agents_on_another_host_match_the_reference_to_the_bit() {
     assert_equal_runs(&outcome.run, &reference, "paper across hosts");
     assert!(outcome.run.completed);
     assert_eq!(left, [true; 3], "remote agents did not leave after the run");
-    assert_clean(&outcome.prefix);
+    assert_clean(&outcome.prefix, &listen);
 }
 
 /// What goes wrong with the remote agent at step 40.
@@ -197,7 +207,7 @@ fn survive(trouble: Trouble) {
     let network = NetworkOptions {
         remote: vec![4],
         allow_plain_tcp: true,
-        ..NetworkOptions::plain(listen)
+        ..NetworkOptions::plain(listen.clone())
     };
     let scenario = Scenario::paper();
     let path = plan_centre_path(&scenario).expect("centre path");
@@ -250,7 +260,7 @@ fn survive(trouble: Trouble) {
             "{:?}",
             run.faults
         );
-        assert_clean(&outcome.prefix);
+        assert_clean(&outcome.prefix, &listen);
         return;
     }
     assert!(
@@ -269,7 +279,7 @@ fn survive(trouble: Trouble) {
             .enumerate()
             .all(|(i, a)| a.alive || i == 4)
     );
-    assert_clean(&outcome.prefix);
+    assert_clean(&outcome.prefix, &listen);
 }
 
 #[test]
@@ -343,7 +353,7 @@ fn no_stranger_joins_a_run_over_tls() {
     let network = NetworkOptions {
         remote: vec![4, 5],
         tls_dir: Some(ours),
-        ..NetworkOptions::plain(listen)
+        ..NetworkOptions::plain(listen.clone())
     };
     let scenario = Scenario::paper();
     let path = plan_centre_path(&scenario).expect("centre path");
@@ -377,5 +387,64 @@ fn no_stranger_joins_a_run_over_tls() {
     assert!(!run.faults.iter().any(|f| f.agent < 4), "{:?}", run.faults);
     // The strangers never got a session: each gave up and exited with an error.
     assert!(plain_left && forged_left, "a stranger was still running");
-    assert_clean(&outcome.prefix);
+    assert_clean(&outcome.prefix, &listen);
+}
+
+/// A misbehaving agent over Zenoh, as a user runs it (`coordinator run --transport
+/// zenoh --misbehave 3=MODE`): what it sends crosses the network and its relay, and is
+/// refused like a local agent's; extra and stale moves never reach the coordinator.
+#[test]
+fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
+    for (mode, kind) in [
+        ("nan", Some("rejected")),
+        ("teleport", Some("rejected")),
+        ("through-obstacle", Some("rejected")),
+        ("garbage", Some("rejected")),
+        ("silent", Some("hung")),
+        ("replay", None),
+        ("early", None),
+        ("flood", None),
+    ] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let listen = format!("tcp/127.0.0.1:{}", free_port(Ipv4Addr::LOCALHOST));
+        let misbehave = format!("3={mode}");
+        let args = [
+            "--transport",
+            "zenoh",
+            "--listen",
+            &listen,
+            "--misbehave",
+            &misbehave,
+        ];
+        let (output, pid) = support::run_to_end(&args, &out);
+        assert!(
+            output.status.success(),
+            "{mode}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = support::summary(&out);
+        support::assert_safe(&s);
+        assert_eq!(s["completed"], true, "{mode}");
+        match kind {
+            Some(kind) => {
+                let found = support::faults_of(&s, kind);
+                assert!(!found.is_empty(), "{mode}: no {kind} fault: {s:#}");
+                assert!(found.iter().all(|f| f["agent"] == 3), "{mode}");
+            }
+            // The relay passes on only the move that answers the turn.
+            None => assert_eq!(
+                s["faults"].as_array().map(Vec::len),
+                Some(0),
+                "{mode}: {s:#}"
+            ),
+        }
+        support::assert_nothing_left(pid);
+        let endpoint = Endpoint::parse(&listen).expect("endpoint");
+        let until = Instant::now() + Duration::from_secs(2);
+        while !support::processes_mentioning(&endpoint.to_string()).is_empty() {
+            assert!(Instant::now() < until, "{mode}: agents left running");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
 }

@@ -10,12 +10,13 @@ use net::zenoh::Wait;
 use net::zenoh::handlers::FifoChannelHandler;
 use net::zenoh::liveliness::LivelinessToken;
 use net::zenoh::pubsub::{Publisher, Subscriber};
-use net::zenoh::sample::{Sample, SampleKind};
+use net::zenoh::sample::Sample;
 use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
 use shared::geometry::{Point, Pose};
 use shared::scenario::Scenario;
 use shared::vocabulary::{MAX_AGENTS, Move};
 
+use crate::relay::Token;
 use crate::transport::{Command, MissionView, Transport, TurnInput};
 
 /// The agent's Zenoh session and ports.
@@ -26,8 +27,8 @@ pub struct NetTransport {
     down: Subscriber<FifoChannelHandler<Sample>>,
     up: Publisher<'static>,
     coordinator: Subscriber<FifoChannelHandler<Sample>>,
-    /// Whether the coordinator's token was seen (its loss then means it is gone).
-    coordinator_seen: bool,
+    /// The coordinator's token as last seen.
+    coordinator_token: Token,
     mission: Option<MissionView>,
     liveness: Duration,
 }
@@ -70,7 +71,7 @@ impl NetTransport {
             down,
             up,
             coordinator,
-            coordinator_seen: false,
+            coordinator_token: Token::Unseen,
             mission: None,
             liveness,
         })
@@ -84,15 +85,13 @@ impl NetTransport {
             .map_err(|e| anyhow::anyhow!("zenoh: {e}"))
     }
 
-    /// Whether the coordinator's token came and went.
+    /// Whether the coordinator's token came and has been gone for a while
+    /// ([`Token::gone`]).
     fn coordinator_gone(&mut self) -> bool {
         while let Ok(Some(sample)) = self.coordinator.try_recv() {
-            match sample.kind() {
-                SampleKind::Put => self.coordinator_seen = true,
-                SampleKind::Delete => return self.coordinator_seen,
-            }
+            self.coordinator_token = self.coordinator_token.after(sample.kind());
         }
-        false
+        self.coordinator_token.gone()
     }
 
     /// The next message from the relay, waiting at most `timeout`; a message that does

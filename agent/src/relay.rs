@@ -67,7 +67,42 @@ struct Link {
     down: Publisher<'static>,
     up: Subscriber<FifoChannelHandler<Sample>>,
     alive: Subscriber<FifoChannelHandler<Sample>>,
-    seen_alive: bool,
+    /// The agent's token, as last seen.
+    token: Token,
+}
+
+/// A liveliness token as a watcher sees it: never yet, there, or gone since when. A
+/// token that comes back within [`REJOIN_GRACE`] (the session was dropped and the client
+/// reconnected) is taken as never gone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Token {
+    /// Not seen yet.
+    Unseen,
+    /// There.
+    Present,
+    /// Gone since then.
+    GoneSince(Instant),
+}
+
+/// How long a token seen before may be gone before its owner counts as gone: a client
+/// whose session dropped reconnects (and declares its token again) within about a lease.
+pub(crate) const REJOIN_GRACE: Duration = net::LINK_LEASE;
+
+impl Token {
+    /// The state after `sample`.
+    pub(crate) fn after(self, kind: SampleKind) -> Self {
+        match (self, kind) {
+            (_, SampleKind::Put) => Self::Present,
+            (Self::Unseen, SampleKind::Delete) => Self::Unseen,
+            (Self::GoneSince(t), SampleKind::Delete) => Self::GoneSince(t),
+            (Self::Present, SampleKind::Delete) => Self::GoneSince(Instant::now()),
+        }
+    }
+
+    /// Whether the token was seen and has been gone for [`REJOIN_GRACE`].
+    pub(crate) fn gone(self) -> bool {
+        matches!(self, Self::GoneSince(t) if t.elapsed() >= REJOIN_GRACE)
+    }
 }
 
 impl Link {
@@ -79,16 +114,21 @@ impl Link {
             .map_err(|e| anyhow::anyhow!("zenoh: {e}"))
     }
 
-    /// Fails once the agent's liveliness token, seen before, is gone.
+    /// Fails once the agent's liveliness token, seen before, has been gone for
+    /// [`REJOIN_GRACE`].
     fn check_alive(&mut self) -> anyhow::Result<()> {
         while let Ok(Some(sample)) = self.alive.try_recv() {
-            match sample.kind() {
-                SampleKind::Put => self.seen_alive = true,
-                SampleKind::Delete if self.seen_alive => {
-                    bail!("agent {}: its session is gone", self.agent)
-                }
-                SampleKind::Delete => {}
+            let before = self.token;
+            self.token = self.token.after(sample.kind());
+            if matches!(before, Token::GoneSince(_)) && self.token == Token::Present {
+                tracing::warn!(
+                    "relay of agent {}: the agent's session dropped and came back",
+                    self.agent
+                );
             }
+        }
+        if self.token.gone() {
+            bail!("agent {}: its session is gone", self.agent);
         }
         Ok(())
     }
@@ -186,7 +226,7 @@ pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
             .history(true)
             .wait()
             .map_err(z)?,
-        seen_alive: false,
+        token: Token::Unseen,
     };
     let _spawned = match &settings.spawn_agent {
         Some(extra) => Some(spawn_agent(settings, extra)?),
@@ -264,4 +304,28 @@ fn spawn_agent(settings: &RelaySettings, extra: &[String]) -> anyhow::Result<Spa
     }
     let child = command.spawn().context("starting the agent")?;
     Ok(SpawnedAgent(child))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_token_counts_as_gone_only_after_the_grace_and_not_before_it_was_seen() {
+        let t = Token::Unseen.after(SampleKind::Delete);
+        assert_eq!(t, Token::Unseen);
+        assert!(!t.gone());
+        let present = t.after(SampleKind::Put);
+        assert_eq!(present, Token::Present);
+        let dropped = present.after(SampleKind::Delete);
+        assert!(matches!(dropped, Token::GoneSince(_)));
+        assert!(!dropped.gone(), "gone at once, before the grace");
+        // A second delete keeps the first time; a put brings it back.
+        assert_eq!(dropped.after(SampleKind::Delete), dropped);
+        assert_eq!(dropped.after(SampleKind::Put), Token::Present);
+        let long_ago = Instant::now()
+            .checked_sub(REJOIN_GRACE + Duration::from_millis(1))
+            .expect("a monotonic clock that far back");
+        assert!(Token::GoneSince(long_ago).gone());
+    }
 }
