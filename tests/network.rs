@@ -448,3 +448,50 @@ fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
         }
     }
 }
+
+/// Bad network flags are refused with exit code 2 and one line naming the flag, before
+/// anything runs: no output folder, no process.
+#[test]
+fn bad_network_flags_are_refused_before_anything_runs() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["--transport", "zenoh", "--listen", "udp/127.0.0.1:7447"],
+            "tcp/HOST:PORT",
+        ),
+        (
+            &["--transport", "zenoh", "--listen", "tcp/127.0.0.1:0"],
+            "port",
+        ),
+        (
+            &["--transport", "zenoh", "--listen", "tcp/10.1.2.3:7447"],
+            "plain TCP beyond the loopback",
+        ),
+        (
+            &["--transport", "zenoh", "--listen", "tls/127.0.0.1:7447"],
+            "--tls-dir",
+        ),
+        (
+            &[
+                "--transport",
+                "zenoh",
+                "--listen",
+                "tls/127.0.0.1:7447",
+                "--tls-dir",
+                "/nonexistent",
+            ],
+            "ca.pem is missing",
+        ),
+        (&["--remote", "3"], "need --transport zenoh"),
+        (&["--transport", "zenoh", "--remote", "9"], "--remote 9"),
+    ];
+    for (i, (args, says)) in cases.iter().enumerate() {
+        let out = dir.path().join(format!("out{i}"));
+        let (output, pid) = support::run_to_end(args, &out);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(says), "{args:?}: {stderr}");
+        assert!(!out.exists(), "{args:?}: the output folder was made");
+        support::assert_nothing_left(pid);
+    }
+}

@@ -34,6 +34,28 @@ impl NetworkOptions {
         }
     }
 
+    /// Check the options before anything runs: the endpoint against the security (TLS
+    /// needs `tls/` and `--tls-dir`, plain TCP the loopback or `--allow-plain-tcp`) and
+    /// that every TLS file is there.
+    pub fn check(&self) -> Result<(), String> {
+        for role in ["coordinator", "agent"] {
+            let security = self.security(role);
+            net::check_security(&self.listen, &security, self.allow_plain_tcp)
+                .map_err(|e| e.to_string())?;
+            if let Security::Tls(files) = &security {
+                for path in [&files.ca, &files.certificate, &files.private_key] {
+                    if !path.is_file() {
+                        return Err(format!(
+                            "--tls-dir: {} is missing (scripts/make-tls-dir makes the files)",
+                            path.display()
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn security(&self, role: &str) -> Security {
         match &self.tls_dir {
             Some(dir) => Security::Tls(TlsFiles::in_dir(dir, role)),

@@ -57,7 +57,7 @@ impl TlsFiles {
 pub enum SessionError {
     /// Plain TCP on an endpoint beyond the loopback without the user's consent.
     #[error(
-        "{0}: plain TCP beyond the loopback lets anyone on the network join; use tls/ with --tls-dir, or allow plain TCP explicitly"
+        "{0}: plain TCP beyond the loopback lets anyone on the network join; use tls/ with --tls-dir, or pass --allow-plain-tcp"
     )]
     PlainBeyondLoopback(Endpoint),
     /// The endpoint's protocol and the security disagree.
