@@ -51,6 +51,8 @@ impl NetTransport {
             .map_err(z)?;
         let up = session
             .declare_publisher(net::agent_up_key(agent))
+            // Sent at once, never held back to be batched with others.
+            .express(true)
             .wait()
             .map_err(z)?;
         let coordinator = session

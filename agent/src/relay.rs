@@ -214,6 +214,8 @@ pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
         agent,
         down: session
             .declare_publisher(net::agent_down_key(agent))
+            // Sent at once, never held back to be batched with others.
+            .express(true)
             .wait()
             .map_err(z)?,
         up: session
