@@ -213,7 +213,7 @@ fn survive(trouble: Trouble) {
     let path = plan_centre_path(&scenario).expect("centre path");
     let mut opts = options(network);
     // A silent agent is declared hung after a few missed turns of this length.
-    opts.turn_deadline = Duration::from_millis(300);
+    opts.turn_deadline = Duration::from_secs(1);
     opts.respawn = trouble == Trouble::KillAndRestart;
     let agent_pid = agent.id();
     let mut restarted: Option<Child> = None;
