@@ -80,11 +80,7 @@ impl NetTransport {
     }
 
     fn send(&self, message: &Up) -> anyhow::Result<()> {
-        let bytes = net::encode(message)?;
-        self.up
-            .put(bytes)
-            .wait()
-            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))
+        Ok(net::send(&self.up, message)?)
     }
 
     /// Whether the coordinator's token came and has been gone for a while
@@ -99,19 +95,13 @@ impl NetTransport {
     /// The next message from the relay, waiting at most `timeout`; a message that does
     /// not decode is logged and skipped.
     fn receive(&mut self, timeout: Duration) -> anyhow::Result<Option<Down>> {
-        let Some(sample) = self
-            .down
-            .recv_timeout(timeout)
-            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))?
-        else {
-            return Ok(None);
-        };
-        match net::decode::<Down>(&sample.payload().to_bytes()) {
-            Ok(message) => Ok(Some(message)),
-            Err(e) => {
+        match net::receive::<Down>(&self.down, timeout)? {
+            Some(Ok(message)) => Ok(Some(message)),
+            Some(Err(e)) => {
                 tracing::warn!("agent {}: from the relay: {e}", self.agent);
                 Ok(None)
             }
+            None => Ok(None),
         }
     }
 

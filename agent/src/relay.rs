@@ -107,11 +107,7 @@ impl Token {
 
 impl Link {
     fn send(&self, message: &Down) -> anyhow::Result<()> {
-        let bytes = net::encode(message)?;
-        self.down
-            .put(bytes)
-            .wait()
-            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))
+        Ok(net::send(&self.down, message)?)
     }
 
     /// Fails once the agent's liveliness token, seen before, has been gone for
@@ -137,19 +133,13 @@ impl Link {
     /// logged and skipped (the agent is another machine: untrusted).
     fn receive(&mut self, timeout: Duration) -> anyhow::Result<Option<Up>> {
         self.check_alive()?;
-        let Some(sample) = self
-            .up
-            .recv_timeout(timeout)
-            .map_err(|e| anyhow::anyhow!("zenoh: {e}"))?
-        else {
-            return Ok(None);
-        };
-        match net::decode::<Up>(&sample.payload().to_bytes()) {
-            Ok(message) => Ok(Some(message)),
-            Err(e) => {
+        match net::receive::<Up>(&self.up, timeout)? {
+            Some(Ok(message)) => Ok(Some(message)),
+            Some(Err(e)) => {
                 tracing::warn!("relay of agent {}: {e}", self.agent);
                 Ok(None)
             }
+            None => Ok(None),
         }
     }
 }

@@ -17,6 +17,7 @@
 //! One concept per module:
 //! - `endpoint`: `tcp/HOST:PORT` and `tls/HOST:PORT` ([`Endpoint`]);
 //! - `message`: the messages and their bounded decoding ([`decode`]);
+//! - `port`: sending and receiving them on Zenoh ports ([`send`], [`receive`]);
 //! - `keys`: the key expressions;
 //! - `session`: opening the router and the clients, plain or TLS ([`Security`]).
 #![warn(missing_docs)]
@@ -24,11 +25,13 @@
 mod endpoint;
 mod keys;
 mod message;
+mod port;
 mod session;
 
 pub use endpoint::{Endpoint, EndpointError, LinkProtocol};
 pub use keys::{COORDINATOR_ALIVE_KEY, agent_alive_key, agent_down_key, agent_up_key};
 pub use message::{Down, MAX_MESSAGE_BYTES, MessageError, NetMove, NetTurn, Up, decode, encode};
+pub use port::{PortError, receive, send};
 pub use session::{
     CONNECT_TIMEOUT, LINK_LEASE, Security, SessionError, TlsFiles, check_security, open_client,
     open_router,
