@@ -495,3 +495,56 @@ fn bad_network_flags_are_refused_before_anything_runs() {
         support::assert_nothing_left(pid);
     }
 }
+
+/// When the coordinator is killed (SIGKILL) mid-run, an agent on another machine sees
+/// its liveliness token go and leaves, and the relays and the agents they started go
+/// with the coordinator.
+#[test]
+fn agents_leave_when_the_coordinator_is_killed() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let listen = format!("tcp/127.0.0.1:{}", free_port(Ipv4Addr::LOCALHOST));
+    // Agent 4 never comes: the coordinator waits for it, with agent 5 ready and waiting.
+    let args = [
+        "--transport",
+        "zenoh",
+        "--listen",
+        &listen,
+        "--remote",
+        "4,5",
+    ];
+    let mut coordinator = support::coordinator(&args, &out)
+        .spawn()
+        .expect("start the coordinator");
+    let mut agent = std::process::Command::new(support::agent_bin())
+        .args(["--connect", &listen, "--agent", "5", "--liveness-ms", "100"])
+        .stdin(std::process::Stdio::null())
+        .spawn()
+        .expect("start agent 5");
+    // Until agent 5 has shaken hands with its relay and the others are up.
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(
+        matches!(agent.try_wait(), Ok(None)),
+        "agent 5 left before the coordinator was killed"
+    );
+    coordinator.kill().expect("SIGKILL the coordinator");
+    let _ = coordinator.wait();
+    // The liveness period, the rejoin grace (a lease) and room for a loaded machine.
+    assert!(
+        reap(&mut agent, net::LINK_LEASE * 2 + Duration::from_secs(3)),
+        "agent 5 did not leave after the coordinator was killed"
+    );
+    let until = Instant::now() + Duration::from_secs(3);
+    while !support::processes_mentioning(&listen).is_empty() {
+        assert!(
+            Instant::now() < until,
+            "relays or their agents left running"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // The dead coordinator's files are cleaned by the next run.
+    let (output, next) = support::run_to_end(&[], &dir.path().join("next"));
+    assert!(output.status.success());
+    support::assert_nothing_left(coordinator.id());
+    support::assert_nothing_left(next);
+}

@@ -189,6 +189,13 @@ impl IpcTransport {
         getppid() != self.parent
     }
 
+    /// Whether this process should leave now: asked to (SIGTERM, SIGINT: noted by
+    /// iceoryx2's handler), or its coordinator is gone. For loops that wait on something
+    /// else than this channel (the relay's).
+    pub fn should_leave(&self) -> bool {
+        SignalHandler::termination_requested() || self.coordinator_gone()
+    }
+
     /// The newest world sample as a turn, if it is this agent's turn.
     fn read_world(&mut self) -> anyhow::Result<Option<TurnInput>> {
         let mut turn = None;

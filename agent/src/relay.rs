@@ -231,6 +231,9 @@ pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
     let mut probed = Instant::now() - PROBE_PERIOD;
     let mut mission_sent = false;
     loop {
+        if ipc.should_leave() {
+            return Ok(());
+        }
         if !mission_sent && probed.elapsed() >= PROBE_PERIOD {
             link.send(&Down::Probe { nonce })?;
             probed = Instant::now();
@@ -259,7 +262,7 @@ pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
         };
         link.send(&Down::Turn(net_turn(&turn)))?;
         let asked = Instant::now();
-        while asked.elapsed() < MOVE_WAIT {
+        while asked.elapsed() < MOVE_WAIT && !ipc.should_leave() {
             let Some(Up::Move(m)) = link.receive(MOVE_WAIT - asked.elapsed().min(MOVE_WAIT))?
             else {
                 continue;
