@@ -302,10 +302,11 @@ fn a_remote_agent_restarted_by_its_user_is_readmitted_with_respawn() {
     survive(Trouble::KillAndRestart);
 }
 
-/// `scripts/make-tls-dir DIR 127.0.0.1`: the TLS folder a user makes.
+/// `scripts/make-tls-dir --agents 6 DIR 127.0.0.1`: the TLS folder a user makes.
 fn tls_dir(parent: &std::path::Path, name: &str) -> std::path::PathBuf {
     let dir = parent.join(name);
     let out = std::process::Command::new(support::repo_root().join("scripts/make-tls-dir"))
+        .args(["--agents", "6"])
         .arg(&dir)
         .arg("127.0.0.1")
         .output()
@@ -547,4 +548,94 @@ fn agents_leave_when_the_coordinator_is_killed() {
     assert!(output.status.success());
     support::assert_nothing_left(coordinator.id());
     support::assert_nothing_left(next);
+}
+
+/// A spy joins the run at step 1 with agent 5's identity (over TLS, agent 5's
+/// certificate), listens on every agent's keys and sends a forged move for agent 2 every
+/// step. Returns how many samples of other agents it heard, and checks that the run still
+/// equals the reference to the bit (a forged move never carries the turn's token).
+fn spy_on_a_run(tls: bool) -> usize {
+    use net::zenoh::Wait;
+    let temp = tempfile::tempdir().expect("tempdir");
+    let port = free_port(Ipv4Addr::LOCALHOST);
+    let (listen, network, spy_security) = if tls {
+        let ours = tls_dir(temp.path(), "ours");
+        let listen = Endpoint::parse(&format!("tls/127.0.0.1:{port}")).expect("endpoint");
+        let network = NetworkOptions {
+            tls_dir: Some(ours.clone()),
+            ..NetworkOptions::plain(listen.clone())
+        };
+        let files = net::TlsFiles::in_dir(&ours, net::Role::Agent(5));
+        (listen, network, net::Security::Tls(files))
+    } else {
+        let network = loopback();
+        (network.listen.clone(), network, net::Security::Plain)
+    };
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference");
+    let heard = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let mut spy: Option<(net::zenoh::Session, _, _)> = None;
+    let outcome = run_scenario_with(&scenario, &path, &options(network), &mut |between| {
+        if between.step == 1 {
+            // The router is up: the spy joins.
+            let session = net::open_client(&listen, &spy_security)?;
+            let counter = heard.clone();
+            let z = |e: net::zenoh::Error| anyhow::anyhow!("zenoh: {e}");
+            let all = session
+                .declare_subscriber("formation/agent/**")
+                // What crosses the router, not the spy's own forgeries.
+                .allowed_origin(net::zenoh::sample::Locality::Remote)
+                .callback(move |sample| {
+                    if !sample.key_expr().as_str().starts_with("formation/agent/5/") {
+                        counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    }
+                })
+                .wait()
+                .map_err(z)?;
+            let forger = session
+                .declare_publisher(net::agent_up_key(2))
+                .wait()
+                .map_err(z)?;
+            spy = Some((session, all, forger));
+        }
+        if let Some((_, _, forger)) = &spy {
+            let step = between.step as u64;
+            let forged = net::Up::Move(net::NetMove {
+                agent: 2,
+                seq: step,
+                step,
+                token: step,
+                status: 0,
+                compute_ns: 0,
+                slot: [0.0, 0.0],
+                best: [0.0, 0.0],
+                waypoints: vec![[0.0, 0.0]],
+            });
+            net::send(forger, &forged)?;
+        }
+        Ok(())
+    });
+    let outcome = outcome.unwrap_or_else(|f| panic!("{:#}", f.error));
+    assert!(spy.is_some(), "the spy never joined");
+    assert_equal_runs(&outcome.run, &reference, "paper with a spy");
+    assert_clean(&outcome.prefix, &listen);
+    heard.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Over TLS each agent may use only its own keys: a certified agent that listens on every
+/// key of the run hears nothing of the others, and its forged moves for another agent
+/// change nothing. Over plain TCP (loopback only, for this reason) the same spy hears
+/// the others' turns: the check can fail.
+#[test]
+fn a_certified_agent_can_neither_read_nor_answer_another_agents_turns() {
+    assert_eq!(
+        spy_on_a_run(true),
+        0,
+        "over TLS the spy heard others' traffic"
+    );
+    assert!(
+        spy_on_a_run(false) > 0,
+        "over plain TCP the spy heard nothing"
+    );
 }

@@ -44,8 +44,8 @@ pub struct Args {
     /// Relay mode: start the agent itself, on this host.
     #[arg(long, requires = "relay")]
     pub spawn_agent: bool,
-    /// The folder of TLS files (`ca.pem`, `agent.pem`, `agent-key.pem`) for a `tls/`
-    /// endpoint.
+    /// The folder of TLS files for a `tls/` endpoint: `ca.pem`, and this agent's
+    /// `agent-I.pem` and `agent-I-key.pem` (a relay: `relay.pem`, `relay-key.pem`).
     #[arg(long, value_name = "DIR")]
     pub tls_dir: Option<std::path::PathBuf>,
     /// Allow plain TCP to a host beyond the loopback (anyone on the network could join
@@ -103,8 +103,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         #[cfg(target_os = "linux")]
         let _ = nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGKILL);
     }
+    // An agent shows its own certificate; a relay, the relays'.
+    let role = if args.relay.is_some() {
+        net::Role::Relay
+    } else {
+        net::Role::Agent(args.agent)
+    };
     let security = match &args.tls_dir {
-        Some(dir) => net::Security::Tls(net::TlsFiles::in_dir(dir, "agent")),
+        Some(dir) => net::Security::Tls(net::TlsFiles::in_dir(dir, role)),
         None => net::Security::Plain,
     };
     if let Some(connect) = &args.connect {

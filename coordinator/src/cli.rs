@@ -127,8 +127,9 @@ pub struct NetworkArgs {
     /// others on this host.
     #[arg(long, value_name = "AGENTS", value_delimiter = ',')]
     pub remote: Vec<usize>,
-    /// With a `tls/` endpoint: the folder of `ca.pem`, `coordinator.pem`,
-    /// `coordinator-key.pem` (and `agent.pem`, `agent-key.pem` for the agents started here).
+    /// With a `tls/` endpoint: the folder of TLS files, `ca.pem`, `coordinator.pem`,
+    /// `relay.pem` and `agent-I.pem` for each agent started here, each with its
+    /// `-key.pem` (`scripts/make-tls-dir --agents N DIR ADDRESS...`).
     #[arg(long, value_name = "DIR")]
     pub tls_dir: Option<PathBuf>,
     /// Allow plain TCP beyond the loopback: anyone who reaches the port could join.

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use net::zenoh::Wait;
 use net::zenoh::liveliness::LivelinessToken;
-use net::{Endpoint, Security, TlsFiles};
+use net::{Endpoint, Role, Security, TlsFiles};
 
 /// How agents reach the coordinator over Zenoh.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -16,8 +16,9 @@ pub struct NetworkOptions {
     /// The agents the user starts (on other machines, `agent --connect`); the coordinator
     /// starts the others itself, on this host.
     pub remote: Vec<usize>,
-    /// The folder of TLS files (`ca.pem`, `coordinator.pem`, `coordinator-key.pem`; the
-    /// relays use `agent.pem` and `agent-key.pem`) for a `tls/` endpoint.
+    /// The folder of TLS files for a `tls/` endpoint: `ca.pem`, `coordinator.pem`,
+    /// `relay.pem`, `agent-I.pem` for every agent started here, each with its `-key.pem`
+    /// (`scripts/make-tls-dir`).
     pub tls_dir: Option<PathBuf>,
     /// Allow plain TCP beyond the loopback.
     pub allow_plain_tcp: bool,
@@ -37,8 +38,15 @@ impl NetworkOptions {
     /// Check the options before anything runs: the endpoint against the security (TLS
     /// needs `tls/` and `--tls-dir`, plain TCP the loopback or `--allow-plain-tcp`) and
     /// that every TLS file is there.
-    pub fn check(&self) -> Result<(), String> {
-        for role in ["coordinator", "agent"] {
+    pub fn check(&self, agents: usize) -> Result<(), String> {
+        // The agents started here need their own files; remote ones bring theirs.
+        let local_agents = (0..agents)
+            .filter(|i| !self.remote.contains(i))
+            .map(Role::Agent);
+        for role in [Role::Coordinator, Role::Relay]
+            .into_iter()
+            .chain(local_agents)
+        {
             let security = self.security(role);
             net::check_security(&self.listen, &security, self.allow_plain_tcp)
                 .map_err(|e| e.to_string())?;
@@ -56,7 +64,7 @@ impl NetworkOptions {
         Ok(())
     }
 
-    fn security(&self, role: &str) -> Security {
+    fn security(&self, role: Role) -> Security {
         match &self.tls_dir {
             Some(dir) => Security::Tls(TlsFiles::in_dir(dir, role)),
             None => Security::Plain,
@@ -89,11 +97,11 @@ pub struct Router {
 }
 
 impl Router {
-    /// Open the router on `options.listen`.
-    pub fn open(options: &NetworkOptions) -> anyhow::Result<Self> {
-        let security = options.security("coordinator");
+    /// Open the router on `options.listen` for a run of `agents` agents.
+    pub fn open(options: &NetworkOptions, agents: usize) -> anyhow::Result<Self> {
+        let security = options.security(Role::Coordinator);
         net::check_security(&options.listen, &security, options.allow_plain_tcp)?;
-        let session = net::open_router(&options.listen, &security)
+        let session = net::open_router(&options.listen, &security, agents)
             .with_context(|| format!("listening on {}", options.listen))?;
         let token = session
             .liveliness()

@@ -36,7 +36,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     }
     let network = args.network.options().map_err(CliError::Usage)?;
     if let Some(n) = &network {
-        n.check().map_err(CliError::Usage)?;
+        n.check(scenario.agents.len()).map_err(CliError::Usage)?;
     }
     if let Some(a) = network.as_ref().and_then(|n| {
         n.remote

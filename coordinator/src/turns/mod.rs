@@ -315,7 +315,12 @@ pub fn run_scenario_with(
             return Err(fail(e, &recorder, progress));
         }
     };
-    let router = match options.network.as_ref().map(Router::open).transpose() {
+    let router = match options
+        .network
+        .as_ref()
+        .map(|network| Router::open(network, n))
+        .transpose()
+    {
         Ok(router) => router,
         Err(e) => {
             drop(ipc);

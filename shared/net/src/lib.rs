@@ -33,7 +33,7 @@ pub use keys::{COORDINATOR_ALIVE_KEY, agent_alive_key, agent_down_key, agent_up_
 pub use message::{Down, MAX_MESSAGE_BYTES, MessageError, NetMove, NetTurn, Up, decode, encode};
 pub use port::{PortError, receive, send};
 pub use session::{
-    CONNECT_TIMEOUT, LINK_LEASE, Security, SessionError, TlsFiles, check_security, open_client,
-    open_router,
+    CONNECT_TIMEOUT, LINK_LEASE, Role, Security, SessionError, TlsFiles, check_security,
+    open_client, open_router,
 };
 pub use zenoh;

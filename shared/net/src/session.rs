@@ -28,9 +28,33 @@ pub enum Security {
     Tls(TlsFiles),
 }
 
+/// Who a TLS certificate names (its common name, `formation ROLE`): the router lets each
+/// do only its part ([`open_router`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// The coordinator's router.
+    Coordinator,
+    /// A relay, on the coordinator's host: any key of the run.
+    Relay,
+    /// Agent I: its own keys, and the coordinator's liveliness.
+    Agent(usize),
+}
+
+impl Role {
+    /// The file stem (`coordinator`, `relay`, `agent-I`); the certificate's common name is
+    /// `formation ` and this.
+    pub fn stem(self) -> String {
+        match self {
+            Self::Coordinator => "coordinator".into(),
+            Self::Relay => "relay".into(),
+            Self::Agent(i) => format!("agent-{i}"),
+        }
+    }
+}
+
 /// The PEM files of one side of a TLS link, in a folder (`--tls-dir`): `ca.pem` (the
-/// authority both sides trust), `ROLE.pem` and `ROLE-key.pem` (this side's certificate
-/// and private key; ROLE is `coordinator` or `agent`).
+/// authority every side trusts), `STEM.pem` and `STEM-key.pem` (this side's certificate
+/// and private key, [`Role::stem`]); `scripts/make-tls-dir` makes them.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct TlsFiles {
     /// The certificate authority.
@@ -42,12 +66,13 @@ pub struct TlsFiles {
 }
 
 impl TlsFiles {
-    /// The files of `role` (`coordinator` or `agent`) in `dir`.
-    pub fn in_dir(dir: &Path, role: &str) -> Self {
+    /// The files of `role` in `dir`.
+    pub fn in_dir(dir: &Path, role: Role) -> Self {
+        let stem = role.stem();
         Self {
             ca: dir.join("ca.pem"),
-            certificate: dir.join(format!("{role}.pem")),
-            private_key: dir.join(format!("{role}-key.pem")),
+            certificate: dir.join(format!("{stem}.pem")),
+            private_key: dir.join(format!("{stem}-key.pem")),
         }
     }
 }
@@ -175,9 +200,71 @@ fn base_config(
     Ok(config)
 }
 
-/// Open the coordinator's router, listening on `listen`.
-pub fn open_router(listen: &Endpoint, security: &Security) -> Result<Session, SessionError> {
+/// The router's access control for `agents` agents (TLS only: it names clients by their
+/// certificate). Denied unless allowed: a relay may use every key of the run; agent I
+/// only its own keys (`formation/agent/I/...`), and may watch the coordinator's
+/// liveliness token but not declare it. So a certified agent can neither read another's
+/// turns (and their tokens) nor answer them.
+fn access_control(agents: usize) -> String {
+    let name = |role: Role| json_string(&format!("formation {}", role.stem()));
+    let mut rules = vec![
+        r#"{ id: "relay", permission: "allow", flows: ["ingress", "egress"],
+            messages: ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
+                       "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"],
+            key_exprs: ["formation/**"] }"#
+            .to_string(),
+        format!(
+            r#"{{ id: "watch-coordinator-in", permission: "allow", flows: ["ingress"],
+                messages: ["declare_liveliness_subscriber", "liveliness_query"],
+                key_exprs: [{key}] }}"#,
+            key = json_string(crate::COORDINATOR_ALIVE_KEY)
+        ),
+        format!(
+            r#"{{ id: "watch-coordinator-out", permission: "allow", flows: ["egress"],
+                messages: ["liveliness_token", "reply"],
+                key_exprs: [{key}] }}"#,
+            key = json_string(crate::COORDINATOR_ALIVE_KEY)
+        ),
+    ];
+    let mut subjects = vec![format!(
+        r#"{{ id: "relay", cert_common_names: [{}] }}"#,
+        name(Role::Relay)
+    )];
+    let mut policies = vec![r#"{ rules: ["relay"], subjects: ["relay"] }"#.to_string()];
+    for i in 0..agents {
+        rules.push(format!(
+            r#"{{ id: "agent-{i}", permission: "allow", flows: ["ingress", "egress"],
+                messages: ["put", "declare_subscriber", "liveliness_token",
+                           "declare_liveliness_subscriber", "liveliness_query", "reply"],
+                key_exprs: ["formation/agent/{i}/**"] }}"#
+        ));
+        subjects.push(format!(
+            r#"{{ id: "agent-{i}", cert_common_names: [{}] }}"#,
+            name(Role::Agent(i))
+        ));
+        policies.push(format!(
+            r#"{{ rules: ["agent-{i}", "watch-coordinator-in", "watch-coordinator-out"], subjects: ["agent-{i}"] }}"#
+        ));
+    }
+    format!(
+        "{{ enabled: true, default_permission: \"deny\", rules: [{}], subjects: [{}], policies: [{}] }}",
+        rules.join(", "),
+        subjects.join(", "),
+        policies.join(", ")
+    )
+}
+
+/// Open the coordinator's router for `agents` agents, listening on `listen`. Over TLS,
+/// each client may do only its part ([`Role`]).
+pub fn open_router(
+    listen: &Endpoint,
+    security: &Security,
+    agents: usize,
+) -> Result<Session, SessionError> {
     let mut config = base_config("router", security, true)?;
+    if matches!(security, Security::Tls(_)) {
+        insert(&mut config, "access_control", &access_control(agents))?;
+    }
     insert(
         &mut config,
         "listen/endpoints",
