@@ -1,6 +1,8 @@
 //! Agents over Zenoh: on the loopback, and on a second test host (a network namespace
 //! with a mount namespace of its own, joined by a veth pair). The run equals the
 //! reference to the bit; a killed remote agent and a link taken down are survived.
+//! Built with the feature `zenoh` (the README's test command turns it on).
+#![cfg(feature = "zenoh")]
 
 mod support;
 

@@ -6,8 +6,10 @@
 
 pub mod ipc;
 pub mod misbehave;
+#[cfg(feature = "zenoh")]
 pub mod net_transport;
 pub mod pingpong;
+#[cfg(feature = "zenoh")]
 pub mod relay;
 pub mod rogue;
 pub mod transport;
@@ -96,6 +98,10 @@ pub fn init_logging() {
         .try_init();
 }
 
+/// What an agent built without Zenoh says when asked to use it.
+#[cfg(not(feature = "zenoh"))]
+const NO_ZENOH: &str = "this agent was built without Zenoh: build it with `cargo build --release --features zenoh -p agent -p coordinator`";
+
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
@@ -115,9 +121,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     if let Some(connect) = &args.connect {
         net::check_security(connect, &security, args.allow_plain_tcp)?;
-        let mut transport =
-            net_transport::NetTransport::connect(connect, &security, args.agent, liveness)?;
-        return serve(&mut transport, args.agent, args.misbehave);
+        #[cfg(feature = "zenoh")]
+        {
+            let mut transport =
+                net_transport::NetTransport::connect(connect, &security, args.agent, liveness)?;
+            return serve(&mut transport, args.agent, args.misbehave);
+        }
+        #[cfg(not(feature = "zenoh"))]
+        bail!("{NO_ZENOH}");
     }
     let Some(prefix) = args.run.as_deref() else {
         bail!("either --run (started by the coordinator) or --connect ENDPOINT");
@@ -129,23 +140,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     if let Some(connect) = &args.relay {
         net::check_security(connect, &security, args.allow_plain_tcp)?;
-        let mut extra = vec!["--die-with-parent".to_string()];
-        if let Some(mode) = args.misbehave {
-            extra.extend(["--misbehave".to_string(), mode.to_string()]);
-        }
-        if args.allow_plain_tcp {
-            extra.push("--allow-plain-tcp".to_string());
-        }
-        return relay::run(&relay::RelaySettings {
-            prefix,
-            agent: args.agent,
-            generation: args.generation,
-            liveness,
-            connect,
-            security: &security,
-            tls_dir: args.tls_dir.as_deref(),
-            spawn_agent: args.spawn_agent.then_some(extra),
-        });
+        #[cfg(feature = "zenoh")]
+        return run_relay(args, prefix, connect, &security, liveness);
+        #[cfg(not(feature = "zenoh"))]
+        bail!("{NO_ZENOH}");
     }
     if args.misbehave == Some(Misbehave::Fork) {
         misbehave::start_strays(prefix)?;
@@ -171,6 +169,35 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         std::process::exit(3);
     }
     serve(&mut transport, args.agent, args.misbehave)
+}
+
+/// Serve as the relay of agent `args.agent` ([`relay::run`]); with `--spawn-agent`, the
+/// agent is started here, with this agent's test mode and settings.
+#[cfg(feature = "zenoh")]
+fn run_relay(
+    args: &Args,
+    prefix: &str,
+    connect: &net::Endpoint,
+    security: &net::Security,
+    liveness: Duration,
+) -> anyhow::Result<()> {
+    let mut extra = vec!["--die-with-parent".to_string()];
+    if let Some(mode) = args.misbehave {
+        extra.extend(["--misbehave".to_string(), mode.to_string()]);
+    }
+    if args.allow_plain_tcp {
+        extra.push("--allow-plain-tcp".to_string());
+    }
+    relay::run(&relay::RelaySettings {
+        prefix,
+        agent: args.agent,
+        generation: args.generation,
+        liveness,
+        connect,
+        security,
+        tls_dir: args.tls_dir.as_deref(),
+        spawn_agent: args.spawn_agent.then_some(extra),
+    })
 }
 
 /// Read the turn's bodies into `others` (every listed agent but `agent`, with its radius

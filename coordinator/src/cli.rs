@@ -150,6 +150,9 @@ impl NetworkArgs {
                 }
                 Ok(None)
             }
+            #[cfg(not(feature = "zenoh"))]
+            TransportKind::Zenoh => Err(crate::network::NO_ZENOH.into()),
+            #[cfg(feature = "zenoh")]
             TransportKind::Zenoh => Ok(Some(crate::network::NetworkOptions {
                 listen: self.listen.clone(),
                 remote: self.remote.clone(),

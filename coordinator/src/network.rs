@@ -3,9 +3,6 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
-use net::zenoh::Wait;
-use net::zenoh::liveliness::LivelinessToken;
 use net::{Endpoint, Role, Security, TlsFiles};
 
 /// How agents reach the coordinator over Zenoh.
@@ -91,14 +88,18 @@ impl NetworkOptions {
 }
 
 /// The coordinator's router and its liveliness token, for the run's length.
+#[cfg(feature = "zenoh")]
 pub struct Router {
-    _token: LivelinessToken,
+    _token: net::zenoh::liveliness::LivelinessToken,
     session: net::zenoh::Session,
 }
 
+#[cfg(feature = "zenoh")]
 impl Router {
     /// Open the router on `options.listen` for a run of `agents` agents.
     pub fn open(options: &NetworkOptions, agents: usize) -> anyhow::Result<Self> {
+        use anyhow::Context;
+        use net::zenoh::Wait;
         let security = options.security(Role::Coordinator);
         net::check_security(&options.listen, &security, options.allow_plain_tcp)?;
         let session = net::open_router(&options.listen, &security, agents)
@@ -116,9 +117,29 @@ impl Router {
 
     /// Close the router: agents still connected see the coordinator go.
     pub fn close(self) {
+        use net::zenoh::Wait;
         drop(self._token);
         if let Err(e) = self.session.close().wait() {
             tracing::warn!("closing the zenoh router: {e}");
         }
     }
 }
+
+/// Without Zenoh there is no router: a run asked to use one is refused.
+#[cfg(not(feature = "zenoh"))]
+pub struct Router;
+
+#[cfg(not(feature = "zenoh"))]
+impl Router {
+    /// Refuse: this coordinator was built without Zenoh.
+    pub fn open(_options: &NetworkOptions, _agents: usize) -> anyhow::Result<Self> {
+        anyhow::bail!("{NO_ZENOH}")
+    }
+
+    /// Nothing to close.
+    pub fn close(self) {}
+}
+
+/// What a coordinator built without Zenoh says when asked to use it.
+#[cfg(not(feature = "zenoh"))]
+pub const NO_ZENOH: &str = "this coordinator was built without Zenoh: build it with `cargo build --release --features zenoh -p agent -p coordinator`";

@@ -22,7 +22,7 @@ fn binary(name: &str) -> PathBuf {
     let path = target_dir().join(name);
     assert!(
         path.is_file(),
-        "{} is missing: run the tests with `cargo test --workspace` so the binaries are built",
+        "{} is missing: run the tests with `cargo test --workspace --all-features` so the binaries are built",
         path.display()
     );
     path

@@ -99,6 +99,10 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
     }
     // The turns scenario is checked before anything runs (a bad one: exit code 2).
     let zenoh = args.transport == crate::cli::TransportKind::Zenoh;
+    #[cfg(not(feature = "zenoh"))]
+    if zenoh {
+        return Err(CliError::Usage(crate::network::NO_ZENOH.into()));
+    }
     if zenoh && args.turns_scenario.is_none() {
         return Err(CliError::Usage(
             "--transport zenoh: measured on a --turns-scenario FILE (beside iceoryx2)".into(),

@@ -19,21 +19,29 @@
 //! - `message`: the messages and their bounded decoding ([`decode`]);
 //! - `port`: sending and receiving them on Zenoh ports ([`send`], [`receive`]);
 //! - `keys`: the key expressions;
-//! - `session`: opening the router and the clients, plain or TLS ([`Security`]).
+//! - `security`: plain or TLS, the files and names of each side ([`Security`], [`Role`]);
+//! - `session`: opening the router and the clients (feature `zenoh`).
+//!
+//! Without the feature `zenoh` only the parts that need no Zenoh are built (endpoints,
+//! messages, security): enough for the coordinator's and the agent's command lines.
 #![warn(missing_docs)]
 
 mod endpoint;
 mod keys;
 mod message;
+#[cfg(feature = "zenoh")]
 mod port;
+mod security;
+#[cfg(feature = "zenoh")]
 mod session;
 
 pub use endpoint::{Endpoint, EndpointError, LinkProtocol};
 pub use keys::{COORDINATOR_ALIVE_KEY, agent_alive_key, agent_down_key, agent_up_key};
 pub use message::{Down, MAX_MESSAGE_BYTES, MessageError, NetMove, NetTurn, Up, decode, encode};
+#[cfg(feature = "zenoh")]
 pub use port::{PortError, receive, send};
-pub use session::{
-    CONNECT_TIMEOUT, LINK_LEASE, Role, Security, SessionError, TlsFiles, check_security,
-    open_client, open_router,
-};
+pub use security::{Role, Security, SessionError, TlsFiles, check_security};
+#[cfg(feature = "zenoh")]
+pub use session::{CONNECT_TIMEOUT, LINK_LEASE, open_client, open_router};
+#[cfg(feature = "zenoh")]
 pub use zenoh;

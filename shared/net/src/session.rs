@@ -2,12 +2,13 @@
 //! clients (relays and agents) connecting to it. Explicit endpoints only: no multicast
 //! or gossip scouting, which many networks (and CI) block.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 
 use zenoh::{Session, Wait};
 
-use crate::endpoint::{Endpoint, LinkProtocol};
+use crate::endpoint::Endpoint;
+use crate::security::{Role, Security, SessionError};
 
 /// A link's lease: a peer silent this long (its process gone, its link down) is dropped
 /// and its liveliness tokens with it. Zenoh's default is 10 s; 1 s dropped healthy agents
@@ -17,116 +18,6 @@ pub const LINK_LEASE: Duration = Duration::from_millis(3000);
 
 /// How long a client tries to reach the router before giving up.
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
-
-/// Who may talk to whom.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Security {
-    /// Plain TCP: anyone who reaches the port may join. Loopback only, unless the user
-    /// says otherwise ([`check_security`]).
-    Plain,
-    /// TLS with certificates on both sides, signed by one certificate authority.
-    Tls(TlsFiles),
-}
-
-/// Who a TLS certificate names (its common name, `formation ROLE`): the router lets each
-/// do only its part ([`open_router`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Role {
-    /// The coordinator's router.
-    Coordinator,
-    /// A relay, on the coordinator's host: any key of the run.
-    Relay,
-    /// Agent I: its own keys, and the coordinator's liveliness.
-    Agent(usize),
-}
-
-impl Role {
-    /// The file stem (`coordinator`, `relay`, `agent-I`); the certificate's common name is
-    /// `formation ` and this.
-    pub fn stem(self) -> String {
-        match self {
-            Self::Coordinator => "coordinator".into(),
-            Self::Relay => "relay".into(),
-            Self::Agent(i) => format!("agent-{i}"),
-        }
-    }
-}
-
-/// The PEM files of one side of a TLS link, in a folder (`--tls-dir`): `ca.pem` (the
-/// authority every side trusts), `STEM.pem` and `STEM-key.pem` (this side's certificate
-/// and private key, [`Role::stem`]); `scripts/make-tls-dir` makes them.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct TlsFiles {
-    /// The certificate authority.
-    pub ca: PathBuf,
-    /// This side's certificate.
-    pub certificate: PathBuf,
-    /// This side's private key.
-    pub private_key: PathBuf,
-}
-
-impl TlsFiles {
-    /// The files of `role` in `dir`.
-    pub fn in_dir(dir: &Path, role: Role) -> Self {
-        let stem = role.stem();
-        Self {
-            ca: dir.join("ca.pem"),
-            certificate: dir.join(format!("{stem}.pem")),
-            private_key: dir.join(format!("{stem}-key.pem")),
-        }
-    }
-}
-
-/// Why a session cannot be opened.
-#[derive(Debug, thiserror::Error)]
-pub enum SessionError {
-    /// Plain TCP on an endpoint beyond the loopback without the user's consent.
-    #[error(
-        "{0}: plain TCP beyond the loopback lets anyone on the network join; use tls/ with --tls-dir, or pass --allow-plain-tcp"
-    )]
-    PlainBeyondLoopback(Endpoint),
-    /// The endpoint's protocol and the security disagree.
-    #[error("{0}: {1}")]
-    Mismatch(Endpoint, &'static str),
-    /// A TLS file is missing or unreadable.
-    #[error("{}: {source}", path.display())]
-    TlsFile {
-        /// The file.
-        path: PathBuf,
-        /// Why it cannot be read.
-        source: std::io::Error,
-    },
-    /// Zenoh refused the configuration or could not open the session.
-    #[error("zenoh: {0}")]
-    Zenoh(String),
-}
-
-/// Check that `endpoint` may be used with `security`: TLS needs `tls/`, plain needs
-/// `tcp/` and, unless `allow_plain_beyond_loopback`, a loopback host.
-pub fn check_security(
-    endpoint: &Endpoint,
-    security: &Security,
-    allow_plain_beyond_loopback: bool,
-) -> Result<(), SessionError> {
-    match (security, endpoint.protocol) {
-        (Security::Tls(_), LinkProtocol::Tls) => Ok(()),
-        (Security::Tls(_), LinkProtocol::Tcp) => Err(SessionError::Mismatch(
-            endpoint.clone(),
-            "certificates given (--tls-dir) for a tcp/ endpoint: use tls/",
-        )),
-        (Security::Plain, LinkProtocol::Tls) => Err(SessionError::Mismatch(
-            endpoint.clone(),
-            "a tls/ endpoint needs certificates (--tls-dir)",
-        )),
-        (Security::Plain, LinkProtocol::Tcp) => {
-            if endpoint.is_loopback() || allow_plain_beyond_loopback {
-                Ok(())
-            } else {
-                Err(SessionError::PlainBeyondLoopback(endpoint.clone()))
-            }
-        }
-    }
-}
 
 fn zenoh_err(e: impl std::fmt::Display) -> SessionError {
     SessionError::Zenoh(e.to_string())
