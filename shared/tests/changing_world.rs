@@ -4,9 +4,9 @@
 //!   discovered wall makes the centre replan, and the path it follows keeps clear of the
 //!   wall.
 //! - A property: with random moving obstacles slower than the agents in open fields, no
-//!   agent move ever enters an obstacle, and every obstacle motion that comes within reach
-//!   of an agent is recorded as a collision, checked here with plain geometry independent
-//!   of the recorder's own checks.
+//!   agent move ever enters an obstacle, every obstacle motion that comes within reach
+//!   of an agent is recorded as a collision, and such strikes are rare, checked here with
+//!   plain geometry independent of the recorder's own checks.
 
 use proptest::prelude::*;
 use shared::geometry::{Point, distance_polyline_polyline};
@@ -231,19 +231,30 @@ fn moves_gap_and_strikes(scenario: &Scenario, run: &Run) -> (f64, Vec<(usize, us
     (gap, strikes)
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+/// How many fields of the property below had a strike so far.
+static STRUCK_FIELDS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
-    /// With random moving obstacles slower than the agents in open fields: no agent move
-    /// ever enters a moving obstacle where it stands, and every strike (an obstacle's
-    /// motion coming within reach of an agent standing) is seen by the record and counted
-    /// as a collision, exactly those the plain geometry here finds.
+proptest! {
+    // A fixed seed: the same 48 fields on every run (after the regression file's past
+    // failures), so the count of struck fields below is the same on every run.
+    #![proptest_config(ProptestConfig {
+        cases: 48,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(15),
+        ..ProptestConfig::default()
+    })]
+
+    /// With random moving obstacles slower than the agents (up to 0.9 of their top
+    /// speed) in open fields: no agent move ever enters an obstacle where it stands;
+    /// every strike (an obstacle's motion coming within reach of an agent standing) is
+    /// seen by the record and counted as a collision, exactly those the plain geometry
+    /// here finds; and strikes are rare: at most one field of the 48 has any.
     ///
-    /// Strikes themselves are not ruled out: an agent boxed in by its formation mates can
-    /// be caught by an obstacle crossing the formation (see the scenario documentation);
-    /// the shipped scenarios have none (the tests above).
+    /// Strikes are not ruled out: an agent caught between obstacles closing in, or boxed
+    /// in by its mates, can find no way out (the README measures how often). Without the
+    /// look-ahead along the obstacles' routes this fails: the regression file's past
+    /// failures alone are two struck fields.
     #[test]
-    fn no_move_enters_a_moving_obstacle_and_every_strike_is_recorded(
+    fn no_move_enters_a_moving_obstacle_and_strikes_are_rare_and_recorded(
         movers in prop::collection::vec(mover(), 1..=6)
     ) {
         let scenario = open_field(&movers);
@@ -260,6 +271,10 @@ proptest! {
         prop_assert!(s.collisions >= strikes.len());
         if strikes.is_empty() {
             prop_assert_eq!(s.collisions, 0);
+        } else {
+            let struck_fields =
+                STRUCK_FIELDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            prop_assert!(struck_fields <= 1, "{} fields with a strike: {:?}", struck_fields, strikes);
         }
     }
 }
@@ -496,10 +511,11 @@ centre_clearance_m = 0.5
     }
 }
 
-/// A moving obstacle driving up and down the formation's own line at 0.45 m per step
-/// (nearly the agents' 0.5 m) strikes the agent at the centre now and then; a struck
-/// agent is not pinned: its next move (checked by the recorder, which lets a struck
-/// agent move only away from the obstacle's centre) takes it away, never refused.
+/// A large moving obstacle driving up and down the formation's own line at 0.499 m per
+/// step (nearly the agents' 0.5 m), sensed only as near as validation requires (too late
+/// to look ahead), strikes an agent now and then; a struck agent is not pinned: its next
+/// move (checked by the recorder, which lets a struck agent move only away from the
+/// obstacle's centre) takes it away, never refused.
 #[test]
 fn a_struck_agent_gets_away_from_the_obstacle() {
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/strike.toml");
