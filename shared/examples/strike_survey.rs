@@ -16,31 +16,13 @@ use rand::{Rng, SeedableRng};
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
 
-/// The formation and path of every field: four agents crossing from west to east.
-const FORMATION_AND_PATH: &str = r#"
-[formation]
-agent_radius_m = 0.3
-max_step_m = 0.5
-slots = [
-  { r_m = 0.0, theta_deg = 0.0 },
-  { r_m = 1.0, theta_deg = 90.0 },
-  { r_m = 1.0, theta_deg = -90.0 },
-  { r_m = 1.0, theta_deg = 180.0 },
-]
-[path]
-start = { x_m = 3.0, y_m = 10.0, heading_deg = 0.0 }
-goal = { x_m = 27.0, y_m = 10.0, heading_deg = 0.0 }
-turning_radius_m = 2.0
-step_m = 0.25
-centre_clearance_m = 0.5
-"#;
+/// The field, formation and path of every field: four agents crossing from west to east.
+const OPEN_FIELD: &str = include_str!("../../tests/data/open-field.toml");
 
 /// The scenario text of field `seed`, its obstacles at `min..max` metres per step.
 fn random_field(seed: u64, min: f64, max: f64) -> String {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let mut text = String::from(
-        "name = \"open-field\"\n[field]\nwidth_m = 30.0\nheight_m = 20.0\n[obstacles]\nradius_m = 0.8\n",
-    );
+    let mut text = String::from(OPEN_FIELD);
     let movers = rng.random_range(1..=6);
     let mut drawn = 0;
     while drawn < movers {
@@ -69,7 +51,7 @@ fn random_field(seed: u64, min: f64, max: f64) -> String {
         );
         drawn += 1;
     }
-    text + FORMATION_AND_PATH
+    text
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

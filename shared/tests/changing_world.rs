@@ -138,15 +138,17 @@ fn a_patrol_crossing_the_path_makes_the_centre_replan_or_wait() {
     }
 }
 
-/// An open field (no static obstacle) 30 x 20 m, a formation of four crossing it with a top
-/// speed of 0.5 m per step, and `movers` random moving obstacles slower than that.
 /// A random moving obstacle: radius, waypoints, speed, and whether its route loops.
 type MoverSpec = (f64, Vec<(f64, f64)>, f64, bool);
 
+/// `tests/data/open-field.toml` (an open field 30 x 20 m, a formation of four crossing it
+/// with a top speed of 0.5 m per step) with `movers`, random moving obstacles slower than
+/// that.
 fn open_field(movers: &[MoverSpec]) -> Scenario {
-    let mut text = String::from(
-        "name = \"open-field\"\n[field]\nwidth_m = 30.0\nheight_m = 20.0\n[obstacles]\nradius_m = 0.8\n",
-    );
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/open-field.toml");
+    let mut text =
+        std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     for (radius_m, waypoints, speed, looped) in movers {
         let points: Vec<String> = waypoints
             .iter()
@@ -158,23 +160,6 @@ fn open_field(movers: &[MoverSpec]) -> Scenario {
             if *looped { "loop" } else { "back-and-forth" }
         );
     }
-    text += r#"
-[formation]
-agent_radius_m = 0.3
-max_step_m = 0.5
-slots = [
-  { r_m = 0.0, theta_deg = 0.0 },
-  { r_m = 1.0, theta_deg = 90.0 },
-  { r_m = 1.0, theta_deg = -90.0 },
-  { r_m = 1.0, theta_deg = 180.0 },
-]
-[path]
-start = { x_m = 3.0, y_m = 10.0, heading_deg = 0.0 }
-goal = { x_m = 27.0, y_m = 10.0, heading_deg = 0.0 }
-turning_radius_m = 2.0
-step_m = 0.25
-centre_clearance_m = 0.5
-"#;
     Scenario::parse(&text, "open-field.toml").unwrap_or_else(|e| panic!("{e}\n{text}"))
 }
 
