@@ -481,17 +481,42 @@ impl TurnPlanner {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
         let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
         let slot = planned.slot;
-        // Standing at `p` from the end of turn `from` on: for how many turns (up to
-        // LOOKAHEAD_STEPS) it stays outside every reach disk, and the gap at the first
-        // turn it does not (infinite when it always does).
+        // Nothing to weigh when the planned end stays outside every reach disk for the
+        // next LOOKAHEAD_TRIGGER_STEPS turns.
+        let end = planned.end();
+        let safe_for_now = (1..=LOOKAHEAD_TRIGGER_STEPS).all(|j| {
+            sensed.iter().all(|m| {
+                let reach = m.reach_disk_at(step + j);
+                (end - reach.centre).norm() - reach.radius_m - keep_m >= 0.0
+            })
+        });
+        if safe_for_now {
+            return planned;
+        }
+        // The reach disk at each turn looked at, grown by the agent's radius (centres by
+        // turn, 0 this one; radius), of every sensed obstacle that can come near enough
+        // to matter: within the agent's top speed for every turn looked at.
+        let turns = LOOKAHEAD_STEPS + LOOKAHEAD_RUN_STEPS;
+        let far_m = (turns + 1) as f64 * budget_m;
+        let ahead: Vec<(Vec<Point>, f64)> = sensed
+            .iter()
+            .filter(|m| {
+                let reach_m = m.radius_m + (turns + 1) as f64 * m.speed_m_per_step + keep_m;
+                (me - m.position_at(step)).norm() < reach_m + far_m
+            })
+            .map(|m| {
+                let centres = (0..=turns).map(|j| m.position_at(step + j)).collect();
+                (centres, m.radius_m + m.speed_m_per_step + keep_m)
+            })
+            .collect();
+        // Standing at `p` from the end of turn `from` (counted from this one) on: for how
+        // many turns (up to LOOKAHEAD_STEPS) it stays outside every reach disk, and the
+        // gap at the first turn it does not (infinite when it always does).
         let clear_from = |p: &Point, from: usize| -> (usize, f64) {
             for j in 1..=LOOKAHEAD_STEPS {
-                let gap_m = sensed
+                let gap_m = ahead
                     .iter()
-                    .map(|m| {
-                        let reach = m.reach_disk_at(from + j);
-                        (p - reach.centre).norm() - reach.radius_m - keep_m
-                    })
+                    .map(|(centres, big_r)| (p - centres[from + j]).norm() - big_r)
                     .fold(f64::INFINITY, f64::min);
                 if gap_m < 0.0 {
                     return (j - 1, gap_m);
@@ -506,18 +531,20 @@ impl TurnPlanner {
         // reach disks and in the field) and then standing; the gap where that horizon
         // ends; and the distance from `q` to the slot.
         let score = |q: &Point, v: Option<Vector>| -> (usize, usize, f64, f64) {
-            let (standing, mut gap_m) = clear_from(q, step);
+            let (standing, mut gap_m) = clear_from(q, 0);
             let mut horizon = standing;
             for n in (1..=LOOKAHEAD_RUN_STEPS).take_while(|_| v.is_some()) {
+                if horizon == LOOKAHEAD_STEPS {
+                    break;
+                }
                 let p = q + (n as f64 * budget_m) * v.unwrap_or_default();
-                let inside_reach = sensed.iter().any(|m| {
-                    let reach = m.reach_disk_at(step + n);
-                    (p - reach.centre).norm() < reach.radius_m + keep_m
-                });
+                let inside_reach = ahead
+                    .iter()
+                    .any(|(centres, big_r)| (p - centres[n]).norm() < *big_r);
                 if inside_reach || self.field.signed_inset_m(&p) < clear_m {
                     break;
                 }
-                let (c, g) = clear_from(&p, step + n);
+                let (c, g) = clear_from(&p, n);
                 if (n + c).min(LOOKAHEAD_STEPS) > horizon {
                     (horizon, gap_m) = ((n + c).min(LOOKAHEAD_STEPS), g);
                 }
@@ -538,10 +565,7 @@ impl TurnPlanner {
                 a.3 < b.3
             }
         };
-        let kept = score(&planned.end(), None);
-        if kept.0 >= LOOKAHEAD_TRIGGER_STEPS {
-            return planned;
-        }
+        let kept = score(&end, None);
         let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
         let mut best: Option<((usize, usize, f64, f64), Point)> = None;
