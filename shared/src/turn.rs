@@ -533,15 +533,17 @@ impl TurnPlanner {
         let score = |q: &Point, v: Option<Vector>| -> (usize, usize, f64, f64) {
             let (standing, mut gap_m) = clear_from(q, 0);
             let mut horizon = standing;
-            for n in (1..=LOOKAHEAD_RUN_STEPS).take_while(|_| v.is_some()) {
-                if horizon == LOOKAHEAD_STEPS {
-                    break;
-                }
-                let p = q + (n as f64 * budget_m) * v.unwrap_or_default();
+            // Going on along `v`, as long as each turn ends outside its reach disks and
+            // in the field, and the horizon can still grow.
+            for (n, v) in (1..=LOOKAHEAD_RUN_STEPS).flat_map(|n| v.map(|v| (n, v))) {
+                let p = q + (n as f64 * budget_m) * v;
                 let inside_reach = ahead
                     .iter()
                     .any(|(centres, big_r)| (p - centres[n]).norm() < *big_r);
-                if inside_reach || self.field.signed_inset_m(&p) < clear_m {
+                if horizon == LOOKAHEAD_STEPS
+                    || inside_reach
+                    || self.field.signed_inset_m(&p) < clear_m
+                {
                     break;
                 }
                 let (c, g) = clear_from(&p, n);
