@@ -13,7 +13,9 @@
 //! ```
 
 use rand::{Rng, SeedableRng};
-use shared::scenario::Scenario;
+use shared::geometry::Point;
+use shared::moving_obstacle::{MovingObstacle, Route};
+use shared::scenario::{Scenario, moving_obstacle_table};
 use shared::simulate::simulate;
 
 /// The field, formation and path of every field: four agents crossing from west to east.
@@ -40,15 +42,13 @@ fn random_field(seed: u64, min: f64, max: f64) -> String {
         {
             continue;
         }
-        let points: Vec<String> = waypoints
-            .iter()
-            .map(|(x, y)| format!("[{x}, {y}]"))
-            .collect();
-        text += &format!(
-            "[[obstacles.moving]]\nradius_m = {radius_m}\nwaypoints_m = [{}]\nspeed_m_per_step = {speed}\nroute = \"{}\"\n",
-            points.join(", "),
-            if looped { "loop" } else { "back-and-forth" }
-        );
+        let route = if looped {
+            Route::Loop
+        } else {
+            Route::BackAndForth
+        };
+        let points = waypoints.iter().map(|&(x, y)| Point::new(x, y)).collect();
+        text += &moving_obstacle_table(&MovingObstacle::new(radius_m, points, speed, route));
         drawn += 1;
     }
     text

@@ -13,7 +13,7 @@ use shared::geometry::{Point, distance_polyline_polyline};
 use shared::moving_obstacle::{MovingObstacle, Route};
 use shared::record::Run;
 use shared::safety::SAFETY_TOLERANCE_M;
-use shared::scenario::Scenario;
+use shared::scenario::{Scenario, moving_obstacle_table};
 use shared::simulate::simulate;
 
 fn scenarios_dir() -> std::path::PathBuf {
@@ -150,15 +150,13 @@ fn open_field(movers: &[MoverSpec]) -> Scenario {
     let mut text =
         std::fs::read_to_string(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     for (radius_m, waypoints, speed, looped) in movers {
-        let points: Vec<String> = waypoints
-            .iter()
-            .map(|(x, y)| format!("[{x}, {y}]"))
-            .collect();
-        text += &format!(
-            "[[obstacles.moving]]\nradius_m = {radius_m}\nwaypoints_m = [{}]\nspeed_m_per_step = {speed}\nroute = \"{}\"\n",
-            points.join(", "),
-            if *looped { "loop" } else { "back-and-forth" }
-        );
+        let route = if *looped {
+            Route::Loop
+        } else {
+            Route::BackAndForth
+        };
+        let points = waypoints.iter().map(|&(x, y)| Point::new(x, y)).collect();
+        text += &moving_obstacle_table(&MovingObstacle::new(*radius_m, points, *speed, route));
     }
     Scenario::parse(&text, "open-field.toml").unwrap_or_else(|e| panic!("{e}\n{text}"))
 }

@@ -30,7 +30,7 @@ pub use check::{
 pub use error::ScenarioError;
 pub use file::{PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
 pub use model::{PathSpec, Scenario};
-pub use resolved::ResolveError;
+pub use resolved::{ResolveError, moving_obstacle_table};
 
 /// A small valid scenario for the tests of this module: two agents, no obstacles.
 #[cfg(test)]

@@ -5,6 +5,7 @@
 use super::Scenario;
 use super::check::MAX_ANGLE_DEG;
 use super::file::{default_agent_radius_m, default_obstacle_radius_m};
+use crate::moving_obstacle::MovingObstacle;
 
 /// Why a scenario has no resolved TOML form (only a scenario built by hand, not one this
 /// module parsed, can meet these).
@@ -93,16 +94,8 @@ impl Scenario {
         }
         let _ = writeln!(t, "]");
         for m in &self.moving {
-            let _ = writeln!(t, "\n[[obstacles.moving]]");
-            let _ = writeln!(t, "radius_m = {}", toml_f64(m.radius_m));
-            let waypoints: Vec<String> = m
-                .waypoints_m
-                .iter()
-                .map(|p| format!("[{}, {}]", toml_f64(p.x), toml_f64(p.y)))
-                .collect();
-            let _ = writeln!(t, "waypoints_m = [{}]", waypoints.join(", "));
-            let _ = writeln!(t, "speed_m_per_step = {}", toml_f64(m.speed_m_per_step));
-            let _ = writeln!(t, "route = {}", toml_string(m.route.name()));
+            t.push('\n');
+            t.push_str(&moving_obstacle_table(m));
         }
         for o in &self.unknown {
             let _ = writeln!(t, "\n[[obstacles.unknown]]");
@@ -204,6 +197,41 @@ fn toml_f64(v: f64) -> String {
         // `1.5e16`), both valid TOML floats.
         format!("{v:?}")
     }
+}
+
+/// `obstacle` as a `[[obstacles.moving]]` table of a scenario file, numbers in their
+/// shortest round-trip form, ending in a newline: what [`Scenario::to_resolved_toml`]
+/// writes for it, and what a program adding moving obstacles to a scenario text appends.
+///
+/// ```
+/// use shared::geometry::Point;
+/// use shared::moving_obstacle::{MovingObstacle, Route};
+/// use shared::scenario::moving_obstacle_table;
+/// let patrol = MovingObstacle::new(
+///     0.5,
+///     vec![Point::new(15.0, 2.0), Point::new(15.0, 18.0)],
+///     0.4,
+///     Route::Loop,
+/// );
+/// assert_eq!(
+///     moving_obstacle_table(&patrol),
+///     "[[obstacles.moving]]\nradius_m = 0.5\nwaypoints_m = [[15.0, 2.0], [15.0, 18.0]]\n\
+///      speed_m_per_step = 0.4\nroute = \"loop\"\n"
+/// );
+/// ```
+pub fn moving_obstacle_table(obstacle: &MovingObstacle) -> String {
+    let waypoints: Vec<String> = obstacle
+        .waypoints_m
+        .iter()
+        .map(|p| format!("[{}, {}]", toml_f64(p.x), toml_f64(p.y)))
+        .collect();
+    format!(
+        "[[obstacles.moving]]\nradius_m = {}\nwaypoints_m = [{}]\nspeed_m_per_step = {}\nroute = {}\n",
+        toml_f64(obstacle.radius_m),
+        waypoints.join(", "),
+        toml_f64(obstacle.speed_m_per_step),
+        toml_string(obstacle.route.name())
+    )
 }
 
 /// A TOML basic string, quoted and escaped.
