@@ -46,5 +46,6 @@ pub mod safety;
 pub mod scenario;
 pub mod sensing;
 pub mod simulate;
+pub mod survival_grid;
 pub mod turn;
 pub mod vocabulary;

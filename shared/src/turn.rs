@@ -17,6 +17,7 @@ use crate::geometry::{
 };
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaPlanner;
+use crate::survival_grid::SurvivalGrid;
 use crate::vocabulary::{
     AgentSpec, Body, CbfSettingsError, MAX_WAYPOINTS, Move, MoveStatus, PlannerKind, PlannerSpec,
 };
@@ -34,9 +35,20 @@ pub const LOOKAHEAD_STEPS: usize = 20;
 /// obstacle could reach the planned end within this many of its turns. Measured with
 /// `shared/examples/strike_survey.rs` and `scenarios/moving-field.toml`: replacing every
 /// move not clear for all [`LOOKAHEAD_STEPS`] made agents needlessly wary (the mean
-/// deviation in `moving-field` rose from 0.34 m to 2.2 m); 2 turns left agents struck
-/// in 2 of 150 random fields where 3 left none.
-pub const LOOKAHEAD_TRIGGER_STEPS: usize = 3;
+/// deviation in `moving-field` rose from 0.34 m to 2.2 m); with the lattice sweep
+/// ([`SURVIVAL_TURNS`]), 4 turns left fewer fields struck than 3 (300 random fields a
+/// speed band) or 5 (1 000).
+pub const LOOKAHEAD_TRIGGER_STEPS: usize = 4;
+
+/// How many turns ahead an agent that looks ahead sweeps the lattice of points it could
+/// move through ([`SurvivalGrid`]): can it keep out of every obstacle's reach that long,
+/// moving as it likes?
+pub const SURVIVAL_TURNS: usize = 10;
+
+/// Lattice points per top-speed move along a side of the sweep's lattice
+/// ([`SURVIVAL_TURNS`]): 3 weighed as well as 4 in the strike survey, at about half the
+/// cost.
+pub const SURVIVAL_CELLS_PER_MOVE: usize = 3;
 
 /// How many directions, evenly spread, an agent weighs a straight move in when looking
 /// ahead (every 10 degrees).
@@ -359,8 +371,8 @@ impl TurnPlanner {
     ///
     /// Then it looks ahead ([`Self::look_ahead`]): when the move would end where a sensed
     /// obstacle's reach will be within [`LOOKAHEAD_TRIGGER_STEPS`] steps along its route,
-    /// the straight move that stays clear longest (up to [`LOOKAHEAD_STEPS`]) is taken
-    /// instead.
+    /// the straight move from whose end the agent can keep clear longest (up to
+    /// [`SURVIVAL_TURNS`], moving on as it likes) is taken instead.
     pub fn plan_turn(&self, step: usize, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         if self.moving.is_empty() {
             return self.plan_move(centre, me, others);
@@ -458,15 +470,18 @@ impl TurnPlanner {
     /// [`LOOKAHEAD_TRIGGER_STEPS`] turns, the agent weighs straight moves in
     /// [`LOOKAHEAD_DIRECTIONS`] directions, at its top speed and at half of it, each clear
     /// of every body, the field's edges and the obstacles where they stand and ending
-    /// outside every reach disk (as an escape must). The best one ends clear for the most
-    /// turns (up to the trigger), then has the longest horizon when the agent goes on
-    /// the same way at its top speed for up to [`LOOKAHEAD_RUN_STEPS`] turns before it
-    /// stands (a way out of a closing gap may take several turns), then the smallest
-    /// overlap where that horizon ends, then ends nearest the slot. It replaces the
-    /// planned move when it is better by the same order. So an agent leaves an obstacle's
-    /// path, or a gap obstacles are closing, while there is still room, rather than when
-    /// the obstacle's reach is upon it and its mates are in the way. Without a top speed
-    /// the planned move is kept.
+    /// outside every reach disk (as an escape must). The best one is the one from whose
+    /// end the agent can keep out of every reach disk for the most turns (up to
+    /// [`SURVIVAL_TURNS`]) moving as it likes, its mates standing where they are
+    /// ([`SurvivalGrid`]: a gap the obstacles are closing may take several moves to
+    /// leave); then the one whose end stays clear for the most turns standing there (up
+    /// to the trigger); then the one with the longest horizon when the agent goes on the
+    /// same way at its top speed for up to [`LOOKAHEAD_RUN_STEPS`] turns before it stands;
+    /// then the smallest overlap where that horizon ends; then the one ending nearest the
+    /// slot. It replaces the planned move when it is better by the same order. So an
+    /// agent leaves an obstacle's path, or a gap obstacles are closing, while there is
+    /// still room, rather than when the obstacle's reach is upon it and its mates are in
+    /// the way. Without a top speed the planned move is kept.
     fn look_ahead(
         &self,
         step: usize,
@@ -524,13 +539,46 @@ impl TurnPlanner {
             }
             (LOOKAHEAD_STEPS, f64::INFINITY)
         };
-        // A point `q` reached by a straight move along `v`: for how many turns standing
-        // there stays clear (up to LOOKAHEAD_TRIGGER_STEPS, the least an agent wants);
-        // the longest clear horizon of standing there or going on along `v` at the top
-        // speed for up to LOOKAHEAD_RUN_STEPS turns (each ending outside that turn's
-        // reach disks and in the field) and then standing; the gap where that horizon
-        // ends; and the distance from `q` to the slot.
-        let score = |q: &Point, v: Option<Vector>| -> (usize, usize, f64, f64) {
+        // Where the agent could end each of its next SURVIVAL_TURNS turns: in the field,
+        // clear of the static obstacles and of its mates where they stand (they move
+        // too, but may not make room), and outside that turn's reach disks.
+        let stays_free = |p: &Point| {
+            self.field.signed_inset_m(p) >= clear_m
+                && others
+                    .iter()
+                    .all(|b| (p - b.position).norm() >= b.radius_m + clear_m)
+                && self
+                    .statics
+                    .visit_near(p, clear_m + self.statics.max_radius_m(), |_, d| {
+                        if d.signed_distance_m(p) < clear_m {
+                            std::ops::ControlFlow::Break(())
+                        } else {
+                            std::ops::ControlFlow::Continue(())
+                        }
+                    })
+                    .is_continue()
+        };
+        let reach_at = |n: usize| -> Vec<Disk> {
+            ahead
+                .iter()
+                .map(|(centres, big_r)| Disk {
+                    centre: centres[n],
+                    radius_m: *big_r,
+                })
+                .collect()
+        };
+        let cell_m = budget_m / SURVIVAL_CELLS_PER_MOVE as f64;
+        let sweep = SurvivalGrid::new(me, budget_m, cell_m, SURVIVAL_TURNS, stays_free, reach_at);
+        // A point `q` reached by a straight move along `v`: for how many turns the agent
+        // can keep out of every reach disk from there, moving as it likes (up to
+        // SURVIVAL_TURNS; at least as long as standing there); for how many standing
+        // there does (up to LOOKAHEAD_TRIGGER_STEPS, the least an agent wants); the
+        // longest clear horizon of standing there or going on along `v` at the top speed
+        // for up to LOOKAHEAD_RUN_STEPS turns (each ending outside that turn's reach
+        // disks and in the field) and then standing; the gap where that horizon ends; and
+        // the distance from `q` to the slot.
+        type Score = (usize, usize, usize, f64, f64);
+        let score = |q: &Point, v: Option<Vector>| -> Score {
             let (standing, mut gap_m) = clear_from(q, 0);
             let mut horizon = standing;
             // Going on along `v`, as long as each turn ends outside its reach disks and
@@ -552,25 +600,26 @@ impl TurnPlanner {
                 }
             }
             (
+                sweep.turns_clear(q).max(standing.min(SURVIVAL_TURNS)),
                 standing.min(LOOKAHEAD_TRIGGER_STEPS),
                 horizon,
                 gap_m,
                 (q - slot).norm(),
             )
         };
-        let better = |a: (usize, usize, f64, f64), b: (usize, usize, f64, f64)| {
-            if (a.0, a.1) != (b.0, b.1) {
-                (a.0, a.1) > (b.0, b.1)
-            } else if a.1 < LOOKAHEAD_STEPS && a.2 != b.2 {
-                a.2 > b.2
+        let better = |a: Score, b: Score| {
+            if (a.0, a.1, a.2) != (b.0, b.1, b.2) {
+                (a.0, a.1, a.2) > (b.0, b.1, b.2)
+            } else if a.2 < LOOKAHEAD_STEPS && a.3 != b.3 {
+                a.3 > b.3
             } else {
-                a.3 < b.3
+                a.4 < b.4
             }
         };
         let kept = score(&end, None);
         let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
-        let mut best: Option<((usize, usize, f64, f64), Point)> = None;
+        let mut best: Option<(Score, Point)> = None;
         for k in 0..LOOKAHEAD_DIRECTIONS {
             let rad = std::f64::consts::TAU * k as f64 / LOOKAHEAD_DIRECTIONS as f64;
             let v = Vector::new(rad.cos(), rad.sin());

@@ -4,9 +4,9 @@
 //!   discovered wall makes the centre replan, and the path it follows keeps clear of the
 //!   wall.
 //! - A property: with random moving obstacles slower than the agents in open fields, no
-//!   agent move ever enters an obstacle, every obstacle motion that comes within reach
-//!   of an agent is recorded as a collision, and such strikes are rare, checked here with
-//!   plain geometry independent of the recorder's own checks.
+//!   agent ever comes within the radii of an obstacle (no move enters one, no obstacle's
+//!   motion reaches an agent), checked here with plain geometry independent of the
+//!   recorder's own checks, which must see exactly the same.
 
 use proptest::prelude::*;
 use shared::geometry::{Point, distance_polyline_polyline};
@@ -214,12 +214,9 @@ fn moves_gap_and_strikes(scenario: &Scenario, run: &Run) -> (f64, Vec<(usize, us
     (gap, strikes)
 }
 
-/// How many fields of the property below had a strike so far.
-static STRUCK_FIELDS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-
 proptest! {
     // A fixed seed: the same 48 fields on every run (after the regression file's past
-    // failures), so the count of struck fields below is the same on every run.
+    // failures).
     #![proptest_config(ProptestConfig {
         cases: 48,
         rng_seed: proptest::test_runner::RngSeed::Fixed(15),
@@ -227,17 +224,20 @@ proptest! {
     })]
 
     /// With random moving obstacles slower than the agents (up to 0.9 of their top
-    /// speed) in open fields: no agent move ever enters an obstacle where it stands;
-    /// every strike (an obstacle's motion coming within reach of an agent standing) is
-    /// seen by the record and counted as a collision, exactly those the plain geometry
-    /// here finds; and strikes are rare: at most one field of the 48 has any.
+    /// speed) in open fields: no agent move ever enters an obstacle where it stands, and
+    /// no obstacle's motion ever comes within reach of an agent standing (a strike):
+    /// no agent ever comes within the radii of any obstacle. Every strike would be seen
+    /// by the record and counted as a collision; the record is checked to hold exactly
+    /// those the plain geometry here finds.
     ///
-    /// Strikes are not ruled out: an agent caught between obstacles closing in, or boxed
-    /// in by its mates, can find no way out (the README measures how often). Without the
-    /// look-ahead along the obstacles' routes this fails: the regression file's past
-    /// failures alone are two struck fields.
+    /// Strikes are not ruled out in every field (an agent caught between obstacles
+    /// closing in from several sides, or boxed in by its mates, can find no way out; the
+    /// README measures how often, about 1 field in 5 000): these 48 have none. Without
+    /// the sweep of where an agent can go on to ([`shared::survival_grid`]) this fails
+    /// (one of them: three obstacles closing on the rear agent); without looking ahead
+    /// at all, two of the regression file's fields are struck.
     #[test]
-    fn no_move_enters_a_moving_obstacle_and_strikes_are_rare_and_recorded(
+    fn no_agent_comes_within_the_radii_of_a_moving_obstacle(
         movers in prop::collection::vec(mover(), 1..=6)
     ) {
         let scenario = open_field(&movers);
@@ -250,15 +250,8 @@ proptest! {
             .flat_map(|s| s.struck.iter().map(move |&(m, a, _)| (s.step, m, a)))
             .collect();
         prop_assert_eq!(&recorded, &strikes);
-        let s = run.summary();
-        prop_assert!(s.collisions >= strikes.len());
-        if strikes.is_empty() {
-            prop_assert_eq!(s.collisions, 0);
-        } else {
-            let struck_fields =
-                STRUCK_FIELDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            prop_assert!(struck_fields <= 1, "{} fields with a strike: {:?}", struck_fields, strikes);
-        }
+        prop_assert!(strikes.is_empty(), "struck (step, obstacle, agent): {:?}", strikes);
+        prop_assert_eq!(run.summary().collisions, 0);
     }
 }
 
