@@ -104,11 +104,13 @@ impl SurvivalGrid {
                 let span = |mid_m: f64| {
                     let from = ((mid_m - disk.radius_m) / cell_m).floor().max(lo as f64);
                     let to = ((mid_m + disk.radius_m) / cell_m).ceil().min(hi as f64);
-                    (from as usize, to as usize)
+                    (from <= to).then_some((from as usize, to as usize))
                 };
-                let ((i0, i1), (j0, j1)) = (span(rel.y), span(rel.x));
-                for i in i0..=i1.max(i0) {
-                    for j in j0..=j1.max(j0) {
+                let (Some((i0, i1)), Some((j0, j1))) = (span(rel.y), span(rel.x)) else {
+                    continue;
+                };
+                for i in i0..=i1 {
+                    for j in j0..=j1 {
                         if (point(i, j) - disk.centre).norm() < disk.radius_m {
                             free[i * side + j] = false;
                         }

@@ -115,3 +115,23 @@ fn a_closing_gap_is_left_by_moving_on() {
     let slow = SurvivalGrid::new(&me, 0.25, 0.125, 10, corridor, east);
     assert!(slow.turns_clear(&me) < 10);
 }
+
+/// Disks wholly beyond the lattice, on every side, change nothing; a disk over all of it
+/// leaves the agent no free point.
+#[test]
+fn disks_beyond_the_lattice_change_nothing_and_one_over_it_blocks_all() {
+    let me = Point::new(0.3, -0.2);
+    let far = |_: usize| {
+        vec![
+            Disk::new(40.0, 0.0, 5.0),
+            Disk::new(-40.0, 3.0, 5.0),
+            Disk::new(0.0, 40.0, 5.0),
+            Disk::new(1.0, -40.0, 5.0),
+        ]
+    };
+    let grid = SurvivalGrid::new(&me, 0.5, 0.125, 10, |_: &Point| true, far);
+    assert_eq!(grid.turns_clear(&me), 10);
+    let over = |_: usize| vec![Disk::new(0.0, 0.0, 100.0)];
+    let grid = SurvivalGrid::new(&me, 0.5, 0.125, 10, |_: &Point| true, over);
+    assert_eq!(grid.turns_clear(&me), 0);
+}
