@@ -50,6 +50,9 @@ pub const SURVIVAL_TURNS: usize = 10;
 /// cost.
 pub const SURVIVAL_CELLS_PER_MOVE: usize = 3;
 
+// The sweep looks no farther than the turns the look-ahead lays out.
+const _: () = assert!(SURVIVAL_TURNS <= LOOKAHEAD_STEPS + LOOKAHEAD_RUN_STEPS);
+
 /// How many directions, evenly spread, an agent weighs a straight move in when looking
 /// ahead (every 10 degrees).
 pub const LOOKAHEAD_DIRECTIONS: usize = 36;
@@ -388,13 +391,15 @@ impl TurnPlanner {
                 self.spec.senses(me, &c, m.radius_m)
             })
             .collect();
-        let mv = self.plan_turn_around(step, centre, me, others, &sensed);
-        self.look_ahead(step, me, others, &sensed, mv)
+        // Where each can be until this agent's next turn.
+        let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
+        let mv = self.plan_turn_around(step, centre, me, others, &sensed, &reach);
+        self.look_ahead(step, me, others, &sensed, &reach, mv)
     }
 
     /// [`Self::plan_turn`] before looking ahead: the escape, if any, and the plan round
-    /// the reach disks (with a step to spare) of the `sensed` moving obstacles; `others`
-    /// are the sensed bodies.
+    /// the reach disks `reach` (with a step to spare) of the `sensed` moving obstacles;
+    /// `others` are the sensed bodies.
     fn plan_turn_around(
         &self,
         step: usize,
@@ -402,9 +407,9 @@ impl TurnPlanner {
         me: &Point,
         others: &[Body],
         sensed: &[&MovingObstacle],
+        reach: &[Disk],
     ) -> Move {
         let keep_m = self.spec.radius_m + 2.0 * PLANNING_MARGIN_M;
-        let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
         let spares_m: Vec<f64> = sensed.iter().map(|m| m.speed_m_per_step).collect();
         let inside = reach
             .iter()
@@ -413,11 +418,11 @@ impl TurnPlanner {
             // Every moving obstacle where it stands, sensed or not (an escape is checked
             // against the true bodies).
             let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
-            self.escape_point(me, others, &now, &reach, &spares_m)
+            self.escape_point(me, others, &now, reach, &spares_m)
                 .map(|q| vec![*me, q])
-                .or_else(|| self.escape_path(me, others, &now, &reach, &spares_m))
+                .or_else(|| self.escape_path(me, others, &now, reach, &spares_m))
                 .or_else(|| {
-                    self.flee_point(me, others, &now, &reach)
+                    self.flee_point(me, others, &now, reach)
                         .map(|q| vec![*me, q])
                 })
         } else {
@@ -430,8 +435,8 @@ impl TurnPlanner {
         // Planned around with a second step to spare where there is room, so that an
         // obstacle coming closer seldom catches the agent inside its reach.
         let mut bodies = others.to_vec();
-        for m in sensed {
-            let d = m.reach_disk_at(step).inflated(m.speed_m_per_step);
+        for (m, d) in sensed.iter().zip(reach) {
+            let d = d.inflated(m.speed_m_per_step);
             let room_m = (start - d.centre).norm() - keep_m;
             let radius_m = d.radius_m.min(room_m);
             if radius_m > 0.0 {
@@ -488,6 +493,7 @@ impl TurnPlanner {
         me: &Point,
         others: &[Body],
         sensed: &[&MovingObstacle],
+        reach: &[Disk],
         planned: Move,
     ) -> Move {
         let Some(budget_m) = self.spec.max_step_m else {
@@ -617,14 +623,13 @@ impl TurnPlanner {
             }
         };
         let kept = score(&end, None);
-        let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
         let now: Vec<Disk> = self.moving.iter().map(|m| m.disk_at(step)).collect();
         let mut best: Option<(Score, Point)> = None;
         for k in 0..LOOKAHEAD_DIRECTIONS {
             let rad = std::f64::consts::TAU * k as f64 / LOOKAHEAD_DIRECTIONS as f64;
             let v = Vector::new(rad.cos(), rad.sin());
             for t in [budget_m, 0.5 * budget_m] {
-                if let Some(q) = self.escape_to(me, v, t, others, &reach, &now, true) {
+                if let Some(q) = self.escape_to(me, v, t, others, reach, &now, true) {
                     let s = score(&q, Some(v));
                     if best.is_none_or(|(b, _)| better(s, b)) {
                         best = Some((s, q));
