@@ -8,6 +8,7 @@ use coordinator::turns::{RunOptions, WaitMode, run_scenario};
 use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
+use wire::misbehave::Misbehave;
 
 /// These tests are about determinism, not liveness: a generous turn deadline keeps a
 /// healthy agent that the loaded test machine schedules late from counting as missed
@@ -82,6 +83,38 @@ fn both_wait_modes_match_the_reference_to_the_bit() {
             assert!(support::leftovers(&outcome.prefix).is_empty());
         }
     }
+}
+
+/// With `--wait spin` an agent told its turn comes next is granted it without a ring;
+/// one that does not listen for the notice (sleeping instead) is rung once the spin
+/// budget is spent, and never misses a turn: the run equals the reference to the bit.
+#[test]
+fn an_agent_deaf_to_the_prepare_notice_is_rung_after_the_spin_budget() {
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference simulation");
+    let options = RunOptions {
+        misbehave: vec![(2, Misbehave::DeafToPrepare), (5, Misbehave::DeafToPrepare)],
+        // Every turn of a deaf agent waits out the spin budget: a missed turn would show.
+        turn_deadline: std::time::Duration::from_millis(500),
+        ..options_waiting(WaitMode::Spin)
+    };
+    let outcome = run_scenario(&scenario, &path, &options).expect("multi-process run");
+    assert!(outcome.run.faults.is_empty(), "{:?}", outcome.run.faults);
+    assert_eq!(outcome.run.steps, reference.steps);
+    // Granted without a ring, a deaf agent wakes only when the budget is spent: most of
+    // its turns (all but those whose notice came too long before) take that long.
+    let budget_us = coordinator::turns::SPIN_BUDGET.as_secs_f64() * 1e6;
+    for agent in [2, 5] {
+        let mut turns: Vec<f64> = outcome.turn_latencies_us(agent).collect();
+        turns.sort_by(f64::total_cmp);
+        let median = turns[turns.len() / 2];
+        assert!(
+            median >= budget_us,
+            "agent {agent}: median turn {median} us"
+        );
+    }
+    assert!(support::leftovers(&outcome.prefix).is_empty());
 }
 
 /// On one core a spinning coordinator yields to the agent it waits for, and a spinning

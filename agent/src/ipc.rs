@@ -14,8 +14,8 @@ use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
 use shared::vocabulary::Move;
 use wire::{
-    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN, Role,
-    StateKind, World,
+    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN, PREPARE_SPIN,
+    Role, StateKind, World,
 };
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
@@ -30,6 +30,8 @@ pub struct Tamper {
     pub raw_count_on_ready: bool,
     /// Name this agent in the handshake instead of the agent itself.
     pub ready_as: Option<u32>,
+    /// Ignore the notice that the turn comes next ([`EVENT_PREPARE`]).
+    pub deaf_to_prepare: bool,
 }
 
 /// The raw waypoint counts a tampering agent writes, in turn.
@@ -47,10 +49,6 @@ fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
     // right after the array, inside the sample.
     unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };
 }
-
-/// How long an agent told it is next ([`EVENT_PREPARE`]) spins on its world before it
-/// sleeps again: a few turns' worth.
-const PREPARE_SPIN: Duration = Duration::from_millis(2);
 
 /// The agent's iceoryx2 ports: its own channel ([`AgentServiceNames`]).
 pub struct IpcTransport {
@@ -253,15 +251,16 @@ impl Transport for IpcTransport {
                     EVENT_TURN => turn = true,
                     EVENT_ECHO => echo = true,
                     EVENT_QUIT => quit = true,
-                    EVENT_PREPARE => prepare = true,
+                    EVENT_PREPARE => prepare = !self.tamper.deaf_to_prepare,
                     _ => {}
                 },
                 self.liveness,
             );
             if prepare && !turn && !quit {
                 // Next in line: look at the world without sleeping for a while, so the
-                // grant costs no wake-up; then back to the blocking wait (the turn's own
-                // ring, if it came meanwhile, is then taken off at once).
+                // grant costs no wake-up (the coordinator then publishes the world without
+                // ringing the turn); then back to the blocking wait (a turn rung
+                // meanwhile, late, is then taken off at once).
                 let until = Instant::now() + PREPARE_SPIN;
                 while Instant::now() < until {
                     if let Some(t) = self.read_world()? {

@@ -72,7 +72,7 @@ pub struct Args {
     /// Test mode: misbehave or attack on purpose (the coordinator must survive it):
     /// nan, teleport, through-obstacle, silent, garbage, overspeed, raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard,
-    /// fork, exit-before-ready.
+    /// fork, exit-before-ready, deaf-to-prepare.
     #[arg(long)]
     pub misbehave: Option<Misbehave>,
     /// Benchmark mode (`coordinator bench`): answer the latency floor's iceoryx2
@@ -156,6 +156,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let tamper = Tamper {
         raw_count_on_moves: args.misbehave == Some(Misbehave::RawLength),
         raw_count_on_ready: args.misbehave == Some(Misbehave::RawLengthReady),
+        deaf_to_prepare: args.misbehave == Some(Misbehave::DeafToPrepare),
         ready_as: match args.misbehave {
             Some(Misbehave::SpoofReady { victim }) => u32::try_from(victim).ok(),
             _ => None,

@@ -116,7 +116,8 @@ pub fn corrupt(
         | Misbehave::SpoofReady { .. }
         | Misbehave::Hoard
         | Misbehave::Fork
-        | Misbehave::ExitBeforeReady => Some((honest, status)),
+        | Misbehave::ExitBeforeReady
+        | Misbehave::DeafToPrepare => Some((honest, status)),
         Misbehave::Garbage => {
             // Deterministic nonsense, different at every step.
             let s = (step as f64 * 12.9898).sin() * 43_758.545;

@@ -76,7 +76,8 @@ pub struct RunArgs {
     /// Test mode: agent AGENT misbehaves or attacks on purpose: nan, teleport,
     /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
-    /// exit-before-ready (attacks on the protocol); repeatable, e.g. `--misbehave 3=nan`.
+    /// exit-before-ready (attacks on the protocol); deaf-to-prepare (an agent that ignores
+    /// `--wait spin`'s notice); repeatable, e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
     pub misbehave: Vec<(usize, Misbehave)>,
     /// Do not draw the plots and the animation (`coordinator render DIR` draws them

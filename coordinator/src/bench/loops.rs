@@ -12,7 +12,7 @@ use shared::simulate::simulate_along;
 
 use crate::error::CliError;
 use crate::stats::{Distribution, median};
-use crate::turns::{RunOptions, RunOutcome, WaitMode, run_scenario};
+use crate::turns::{RunOptions, RunOutcome, TurnSample, WaitMode, run_scenario};
 use crate::validate::{Loaded, load_and_plan};
 
 /// Round trips of each floor per round, after [`FLOOR_WARMUP`] unrecorded ones.
@@ -67,6 +67,13 @@ pub struct WaitReport {
     pub compute_us: Distribution,
     /// Turn latency minus compute, per turn: the IPC overhead, microseconds.
     pub ipc_overhead_us: Distribution,
+    /// Where the IPC overhead goes: waking (or reaching) the agent, its reading and
+    /// writing, reaching the coordinator.
+    pub overhead_split: super::report::OverheadSplit,
+    /// The coordinator's own time per turn outside the turns (judging and recording the
+    /// moves, the monitor, building the next world): the step loop's time minus every
+    /// turn's latency, over the turns, microseconds (mean over every run).
+    pub between_turns_us: f64,
     /// Collisions over every run (0 when safe).
     pub collisions: usize,
     /// Faults over every run (0 for clean runs).
@@ -180,11 +187,19 @@ fn loop_s(o: &RunOutcome) -> f64 {
 
 fn wait_report(wait: &'static str, runs: &[RunOutcome], simulate_s: f64) -> WaitReport {
     let loops: Vec<f64> = runs.iter().map(loop_s).collect();
-    let measured = runs
+    let measured: Vec<TurnSample> = runs
         .iter()
-        .flat_map(|o| o.turn_samples.iter().filter(|t| t.step > 1));
+        .flat_map(|o| o.turn_samples.iter().filter(|t| t.step > 1))
+        .copied()
+        .collect();
+    let turns: usize = runs.iter().map(|o| o.turn_samples.len()).sum();
+    let in_turns_us: f64 = runs
+        .iter()
+        .flat_map(|o| o.turn_samples.iter().map(|t| t.latency_us))
+        .sum();
+    let loops_us: f64 = loops.iter().sum::<f64>() * 1e6;
     let (mut turn, mut compute, mut overhead) = (Vec::new(), Vec::new(), Vec::new());
-    for t in measured {
+    for t in &measured {
         turn.push(t.latency_us);
         compute.push(t.compute_us);
         overhead.push(t.latency_us - t.compute_us);
@@ -198,6 +213,12 @@ fn wait_report(wait: &'static str, runs: &[RunOutcome], simulate_s: f64) -> Wait
         turn_us: Distribution::of(&turn),
         compute_us: Distribution::of(&compute),
         ipc_overhead_us: Distribution::of(&overhead),
+        overhead_split: super::report::OverheadSplit::of(&measured),
+        between_turns_us: if turns > 0 {
+            (loops_us - in_turns_us).max(0.0) / turns as f64
+        } else {
+            0.0
+        },
         collisions: runs.iter().map(|o| o.run.summary().collisions).sum(),
         faults: runs.iter().map(|o| o.run.faults.len()).sum(),
     }
@@ -245,5 +266,27 @@ pub fn table(l: &LoopsReport) -> String {
             w.collisions
         );
     }
+    let _ = writeln!(
+        s,
+        "  where a turn's time goes, p50 us: {:<8}{:>14}{:>14}{:>16}{:>16}",
+        "wait", "reach agent", "agent I/O", "reach coord.", "between turns"
+    );
+    for w in [&l.block, &l.spin] {
+        let split = &w.overhead_split;
+        let _ = writeln!(
+            s,
+            "  {:<33}{:<8}{:>14.1}{:>14.1}{:>16.1}{:>16.1}",
+            "",
+            w.wait,
+            split.to_agent_us.p50,
+            split.agent_io_us.p50,
+            split.to_coordinator_us.p50,
+            w.between_turns_us
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  (between turns: the coordinator's own work per turn, the loop's time minus the turns', a mean)"
+    );
     s
 }

@@ -368,19 +368,7 @@ fn bench_one(
         .map(|t| t.latency_us - t.compute_us)
         .collect();
 
-    let splits: Vec<_> = measured
-        .iter()
-        .filter_map(|t| t.split.map(|s| (s, t.compute_us)))
-        .collect();
-    let overhead_split = OverheadSplit {
-        to_agent_us: Distribution::of_iter(splits.iter().map(|(s, _)| s.to_agent_us)),
-        agent_io_us: Distribution::of_iter(
-            splits
-                .iter()
-                .map(|(s, compute)| (s.in_agent_us - compute).max(0.0)),
-        ),
-        to_coordinator_us: Distribution::of_iter(splits.iter().map(|(s, _)| s.to_coordinator_us)),
-    };
+    let overhead_split = OverheadSplit::of(&measured);
     let turn = Distribution::of(&turn_us);
     let overhead = Distribution::of(&overhead_us);
     let floor_d = Distribution::of(&pp.iceoryx2_us);

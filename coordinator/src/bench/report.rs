@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use crate::procfs::IdleCpu;
 use crate::stats::Distribution;
+use crate::turns::TurnSample;
 
 /// The whole report (`{"runs": [...], ...}`).
 #[derive(Clone, Debug, Serialize)]
@@ -108,6 +109,27 @@ pub struct OverheadSplit {
     pub agent_io_us: Distribution,
     /// Move sent to the coordinator holding it: waking the coordinator, microseconds.
     pub to_coordinator_us: Distribution,
+}
+
+impl OverheadSplit {
+    /// The split of the turns in `samples` that carry the agent's stamps.
+    pub(crate) fn of(samples: &[TurnSample]) -> Self {
+        let splits: Vec<_> = samples
+            .iter()
+            .filter_map(|t| t.split.map(|s| (s, t.compute_us)))
+            .collect();
+        Self {
+            to_agent_us: Distribution::of_iter(splits.iter().map(|(s, _)| s.to_agent_us)),
+            agent_io_us: Distribution::of_iter(
+                splits
+                    .iter()
+                    .map(|(s, compute)| (s.in_agent_us - compute).max(0.0)),
+            ),
+            to_coordinator_us: Distribution::of_iter(
+                splits.iter().map(|(s, _)| s.to_coordinator_us),
+            ),
+        }
+    }
 }
 
 /// The echo's round trip in its two wake-ups (what is left is the agent sending its

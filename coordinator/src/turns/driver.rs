@@ -11,7 +11,7 @@ use shared::record::Recorder;
 use shared::scenario::Scenario;
 use shared::sensing::SensedAgents;
 use shared::vocabulary::{MoveStatus, TurnMode};
-use wire::{MalformedState, StateKind, StateMsg, monotonic_ns};
+use wire::{MalformedState, PREPARED_GRANT_WINDOW, StateKind, StateMsg, monotonic_ns};
 
 use super::judge::{Judged, judge_answer, judge_move, settle_group};
 use super::{
@@ -48,6 +48,9 @@ pub(super) struct Driver<'a, 's> {
     pub(super) progress: &'a mut Progress,
     /// Consecutive missed turns per agent.
     pub(super) missed: Vec<u32>,
+    /// When each agent was last told its turn comes next, and its process then
+    /// (`--wait spin`): its turn is granted without a ring if it comes soon enough.
+    pub(super) prepared: Vec<Option<(Instant, Option<u32>)>>,
     /// Spin rather than sleep while a turn is short ([`super::WaitMode`]).
     pub(super) spin: bool,
     /// Whether any agent has a sensing radius (then each world lists what it senses).
@@ -255,7 +258,11 @@ impl Driver<'_, '_> {
                 self.recorder.alive(),
                 visible.as_deref(),
             )?;
-            self.ipc.notify_turn(agent)?;
+            // An agent told it is next polls its world: publishing it is the grant.
+            let rung = !self.polls_world(agent);
+            if rung {
+                self.ipc.notify_turn(agent)?;
+            }
             if self.options.kills.contains(&(agent, step))
                 && let Some(pid) = self.procs.signal_kill(agent)
             {
@@ -267,25 +274,28 @@ impl Driver<'_, '_> {
                     None,
                 );
             }
-            granted.push((agent, self.procs.pid(agent), grant, at, at_ns));
+            granted.push((agent, self.procs.pid(agent), grant, at, at_ns, rung));
         }
         if self.spin {
             // The agents of the next group spin on their world while this one computes.
             for &agent in next {
-                if self.recorder.alive()[agent] && !group.contains(&agent) {
-                    let _ = self.ipc.notify_prepare(agent);
+                if self.recorder.alive()[agent]
+                    && !group.contains(&agent)
+                    && self.ipc.notify_prepare(agent).is_ok()
+                {
+                    self.prepared[agent] = Some((Instant::now(), self.procs.pid(agent)));
                 }
             }
         }
         let mut moves = Vec::with_capacity(granted.len());
-        for (agent, pid, grant, at, at_ns) in granted {
+        for (agent, pid, grant, at, at_ns, rung) in granted {
             // Handled already while a group mate's answer was awaited (killed for
             // intruding, say, and maybe replaced): not this turn's agent any more.
             if !self.recorder.alive()[agent] || self.procs.pid(agent) != pid {
                 continue;
             }
             let slot = self.scenario.agents[agent].slot.ideal_position(centre);
-            match self.wait_answer(step, agent, grant, at)? {
+            match self.wait_answer(step, agent, grant, at, rung)? {
                 Answer::Move(msg) => {
                     let held_ns = monotonic_ns();
                     self.missed[agent] = 0;
@@ -405,13 +415,26 @@ impl Driver<'_, '_> {
         Ok(())
     }
 
-    /// Wait for `agent`'s answer to `grant`, checking its process every slice.
+    /// Whether `agent`'s process was told its turn comes next so lately that it is still
+    /// polling its world ([`PREPARED_GRANT_WINDOW`]); the mark is used up.
+    fn polls_world(&mut self, agent: usize) -> bool {
+        let pid = self.procs.pid(agent);
+        self.prepared
+            .get_mut(agent)
+            .and_then(Option::take)
+            .is_some_and(|(at, told)| told == pid && at.elapsed() < PREPARED_GRANT_WINDOW)
+    }
+
+    /// Wait for `agent`'s answer to `grant`, checking its process every slice. `rung`:
+    /// whether its turn was rung; if not (it was polling its world), it is rung once the
+    /// spin budget is spent, in case the agent stopped polling before the world came.
     pub(super) fn wait_answer(
         &mut self,
         step: usize,
         agent: usize,
         grant: Grant,
         granted: Instant,
+        mut rung: bool,
     ) -> anyhow::Result<Answer> {
         let deadline = granted + self.options.turn_deadline;
         let pid = self.procs.pid(agent);
@@ -435,6 +458,14 @@ impl Driver<'_, '_> {
             // the budget is spent, then wait as usual; liveness is looked at then.
             if self.spin && granted.elapsed() < SPIN_BUDGET {
                 std::thread::yield_now();
+                continue;
+            }
+            if !rung {
+                rung = true;
+                // A ring that fails changes nothing: the agent's process is looked at next.
+                if let Err(e) = self.ipc.notify_turn(agent) {
+                    tracing::debug!("step {step}: ringing agent {agent}'s turn late: {e:#}");
+                }
                 continue;
             }
             if self.ipc.termination_requested() {

@@ -61,8 +61,9 @@ pub enum WaitMode {
     /// per turn (the agent's and the coordinator's).
     Block,
     /// The coordinator spins (yielding) on the agent's state for up to [`SPIN_BUDGET`]
-    /// before sleeping, and the agent whose turn comes next is told so and spins on its
-    /// world meanwhile: no wake-up on the turn's path, at the price of up to two busy
+    /// before sleeping, and the agent whose turn comes next is told so and polls its
+    /// world meanwhile; its turn is then granted by publishing the world alone, without a
+    /// ring: no wake-up and no event on the turn's path, at the price of up to two busy
     /// cores while turns go on. Agents not next in line still sleep.
     Spin,
     /// `Spin` on a machine with two cores or more, `Block` on one core (where a spinning
@@ -171,6 +172,16 @@ pub struct RunOutcome {
     pub(crate) turn_samples: Vec<TurnSample>,
     /// The agents' CPU time while held idle ([`RunOptions::idle_probe`]).
     pub(crate) idle_cpu: Option<IdleCpu>,
+}
+
+impl RunOutcome {
+    /// The latency of each answered turn of `agent`, in order, microseconds.
+    pub fn turn_latencies_us(&self, agent: usize) -> impl Iterator<Item = f64> + '_ {
+        self.turn_samples
+            .iter()
+            .filter(move |t| t.agent == agent)
+            .map(|t| t.latency_us)
+    }
 }
 
 /// A run the coordinator could not finish: what went wrong, and what it recorded up to
@@ -339,6 +350,7 @@ pub fn run_scenario_with(
             recorder: &mut recorder,
             progress: &mut progress,
             missed: vec![0; n],
+            prepared: vec![None; n],
             spin: options.wait.spins(),
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             between_steps,

@@ -62,4 +62,5 @@ pub use run_folder::{
 };
 pub use services::{
     AgentServiceNames, DONE_SERVICE, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN,
+    PREPARE_SPIN, PREPARED_GRANT_WINDOW,
 };

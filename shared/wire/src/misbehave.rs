@@ -54,6 +54,9 @@ pub enum Misbehave {
     Fork,
     /// Open its services, then exit before the ready handshake.
     ExitBeforeReady,
+    /// Ignore the notice that its turn comes next (`--wait spin`) and sleep until its turn
+    /// is rung, as an agent built before the notice existed would; its moves are honest.
+    DeafToPrepare,
 }
 
 /// A mode name that is none of [`Misbehave::ALL`]'s.
@@ -67,7 +70,7 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 16] = [
+    pub const ALL: [Self; 17] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
@@ -84,6 +87,7 @@ impl Misbehave {
         Self::Hoard,
         Self::Fork,
         Self::ExitBeforeReady,
+        Self::DeafToPrepare,
     ];
 
     /// The mode's name on the command line, without the victim (`impersonate` and
@@ -106,6 +110,7 @@ impl Misbehave {
             Self::Hoard => "hoard",
             Self::Fork => "fork",
             Self::ExitBeforeReady => "exit-before-ready",
+            Self::DeafToPrepare => "deaf-to-prepare",
         }
     }
 

@@ -48,9 +48,21 @@ pub const EVENT_QUIT: usize = 2;
 /// without reading the world or planning (`coordinator bench`: the wake-up alone).
 pub const EVENT_ECHO: usize = 3;
 /// Event id on a turn service: your turn comes next (the agent before you has just been
-/// granted its turn); spin on the world for a little while instead of sleeping, so the
-/// grant does not pay for a wake-up (`coordinator run --wait spin`).
+/// granted its turn); poll the world for [`PREPARE_SPIN`] instead of sleeping, so the
+/// grant costs neither a wake-up nor a ring (`coordinator run --wait spin`).
 pub const EVENT_PREPARE: usize = 4;
+
+/// How long an agent told it is next ([`EVENT_PREPARE`]) polls its world after waking,
+/// before it sleeps again: a few turns' worth.
+pub const PREPARE_SPIN: std::time::Duration = std::time::Duration::from_millis(2);
+
+/// How long after ringing [`EVENT_PREPARE`] the coordinator may grant that agent's turn
+/// by publishing its world alone, without ringing [`EVENT_TURN`]: within this window the
+/// agent is still polling (it woke after the ring and polls for [`PREPARE_SPIN`]) or has
+/// yet to wake (and then looks at its world first). Later, the turn is rung as usual.
+pub const PREPARED_GRANT_WINDOW: std::time::Duration = std::time::Duration::from_micros(1500);
+
+const _: () = assert!(PREPARED_GRANT_WINDOW.as_nanos() < PREPARE_SPIN.as_nanos());
 
 /// The run's one done service: event, agents to coordinator, "my state is published",
 /// the event id being the agent's index.
