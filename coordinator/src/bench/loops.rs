@@ -72,8 +72,9 @@ pub struct WaitReport {
     pub overhead_split: super::report::OverheadSplit,
     /// The coordinator's own time per turn outside the turns (judging and recording the
     /// moves, the monitor, building the next world): the step loop's time minus every
-    /// turn's latency, over the turns, microseconds (mean over every run).
-    pub between_turns_us: f64,
+    /// turn's latency, over the turns, microseconds (mean over every run). Sequential
+    /// turns only (`None` with parallel turns, whose latencies overlap).
+    pub between_turns_us: Option<f64>,
     /// Collisions over every run (0 when safe).
     pub collisions: usize,
     /// Faults over every run (0 for clean runs).
@@ -160,6 +161,7 @@ pub fn run(
     }
     session.finish().map_err(CliError::Other)?;
     let simulate_median_s = median(&simulate_s);
+    let sequential = scenario.turns == shared::vocabulary::TurnMode::Sequential;
     Ok(LoopsReport {
         floor_spin_us: Distribution::of(&floor_spin),
         floor_block_us: Distribution::of(&floor_block),
@@ -168,8 +170,8 @@ pub fn run(
         agents: scenario.agents.len(),
         steps: centre_path.len().saturating_sub(1),
         rounds,
-        block: wait_report("block", &block, simulate_median_s),
-        spin: wait_report("spin", &spin, simulate_median_s),
+        block: wait_report("block", &block, simulate_median_s, sequential),
+        spin: wait_report("spin", &spin, simulate_median_s, sequential),
         simulate_s,
         simulate_median_s,
     })
@@ -185,7 +187,12 @@ fn loop_s(o: &RunOutcome) -> f64 {
     }
 }
 
-fn wait_report(wait: &'static str, runs: &[RunOutcome], simulate_s: f64) -> WaitReport {
+fn wait_report(
+    wait: &'static str,
+    runs: &[RunOutcome],
+    simulate_s: f64,
+    sequential: bool,
+) -> WaitReport {
     let loops: Vec<f64> = runs.iter().map(loop_s).collect();
     let measured: Vec<TurnSample> = runs
         .iter()
@@ -214,11 +221,8 @@ fn wait_report(wait: &'static str, runs: &[RunOutcome], simulate_s: f64) -> Wait
         compute_us: Distribution::of(&compute),
         ipc_overhead_us: Distribution::of(&overhead),
         overhead_split: super::report::OverheadSplit::of(&measured),
-        between_turns_us: if turns > 0 {
-            (loops_us - in_turns_us).max(0.0) / turns as f64
-        } else {
-            0.0
-        },
+        between_turns_us: (sequential && turns > 0)
+            .then(|| (loops_us - in_turns_us).max(0.0) / turns as f64),
         collisions: runs.iter().map(|o| o.run.summary().collisions).sum(),
         faults: runs.iter().map(|o| o.run.faults.len()).sum(),
     }
@@ -275,18 +279,19 @@ pub fn table(l: &LoopsReport) -> String {
         let split = &w.overhead_split;
         let _ = writeln!(
             s,
-            "  {:<33}{:<8}{:>14.1}{:>14.1}{:>16.1}{:>16.1}",
+            "  {:<33}{:<8}{:>14.1}{:>14.1}{:>16.1}{:>16}",
             "",
             w.wait,
             split.to_agent_us.p50,
             split.agent_io_us.p50,
             split.to_coordinator_us.p50,
             w.between_turns_us
+                .map_or("-".to_string(), |us| format!("{us:.1}"))
         );
     }
     let _ = writeln!(
         s,
-        "  (between turns: the coordinator's own work per turn, the loop's time minus the turns', a mean)"
+        "  (between turns: the coordinator's own work per turn, the loop's time minus the turns', a mean; sequential turns only)"
     );
     s
 }
