@@ -291,6 +291,37 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
         let turn_p50 = w["turn_us"]["p50"].as_f64().expect("p50");
         let ipc_p50 = w["ipc_overhead_us"]["p50"].as_f64().expect("ipc p50");
         assert!(ipc_p50 <= turn_p50, "{wait}: overhead is part of the turn");
+        // Every agent stamps its moves: every measured turn is split, each part no
+        // longer than the longest turn.
+        let turns = w["turn_us"]["count"].as_u64();
+        let longest = w["turn_us"]["max"].as_f64().expect("max");
+        for part in ["to_agent_us", "agent_io_us", "to_coordinator_us"] {
+            let d = check_distribution(&w["overhead_split"], part);
+            assert_eq!(w["overhead_split"][part]["count"].as_u64(), turns, "{part}");
+            assert!(d[4] <= longest, "{wait} {part}: {d:?} beyond {longest}");
+        }
+        // Parallel turns overlap: no time between turns to tell.
+        assert!(w["between_turns_us"].is_null(), "{wait}");
+    }
+    // With sequential turns, the coordinator's time between turns is told.
+    let sequential = Command::new(support::coordinator_bin())
+        .arg("bench")
+        .arg("--loop-scenario")
+        .arg(support::repo_root().join("scenarios/paper.toml"))
+        .args(["--loop-rounds", "1", "--json", "--out"])
+        .arg(dir.path().join("sequential.json"))
+        .arg("--agent-bin")
+        .arg(support::agent_bin())
+        .output()
+        .expect("running coordinator bench");
+    assert!(sequential.status.success());
+    let report: Value = serde_json::from_slice(&sequential.stdout).expect("JSON");
+    for wait in ["block", "spin"] {
+        let between = report["loops"][wait]["between_turns_us"].as_f64();
+        assert!(
+            between.is_some_and(|us| us.is_finite() && us >= 0.0),
+            "{wait}"
+        );
     }
     // A bad scenario is refused before anything runs.
     let bad = Command::new(support::coordinator_bin())

@@ -112,8 +112,11 @@ impl DiskGrid {
     /// Cell column/row range covering the box `centre ± (half_w, half_h)`, clamped.
     fn cell_range(&self, centre: &Point, half_w: f64, half_h: f64) -> (usize, usize, usize, usize) {
         let to_cell = |v: f64, o: f64, n: usize| -> usize {
-            let k = ((v - o) / self.cell_m).floor();
-            if k <= 0.0 { 0 } else { (k as usize).min(n - 1) }
+            let k = (v - o) / self.cell_m;
+            // Truncation is the floor above 0 (and spares a call to libm's `floor`,
+            // which most of the grid's construction went to); at or below 0, and for
+            // NaN, the first cell.
+            if k > 0.0 { (k as usize).min(n - 1) } else { 0 }
         };
         (
             to_cell(centre.x - half_w, self.origin.x, self.columns),
