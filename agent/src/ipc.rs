@@ -256,11 +256,20 @@ impl Transport for IpcTransport {
                 },
                 self.liveness,
             );
-            if prepare && !turn && !quit {
+            if echo {
+                self.woke_ns = wire::monotonic_ns();
+                let woke_ns = self.woke_ns;
+                self.send_state(|s| {
+                    s.kind = StateKind::Echo as u32;
+                    s.woke_ns = woke_ns;
+                    Ok(())
+                })?;
+            }
+            if prepare && !quit {
                 // Next in line: look at the world without sleeping for a while, so the
                 // grant costs no wake-up (the coordinator then publishes the world without
-                // ringing the turn); then back to the blocking wait (a turn rung
-                // meanwhile, late, is then taken off at once).
+                // ringing the turn); then back to the blocking wait. A turn rung with it
+                // (late, its world maybe taken already) is served by the same look.
                 let until = Instant::now() + PREPARE_SPIN;
                 while Instant::now() < until {
                     if let Some(t) = self.read_world()? {
@@ -270,15 +279,6 @@ impl Transport for IpcTransport {
                     std::thread::yield_now();
                 }
                 continue;
-            }
-            if echo {
-                self.woke_ns = wire::monotonic_ns();
-                let woke_ns = self.woke_ns;
-                self.send_state(|s| {
-                    s.kind = StateKind::Echo as u32;
-                    s.woke_ns = woke_ns;
-                    Ok(())
-                })?;
             }
             match woke {
                 Ok(_) if quit => return Ok(Command::Quit),

@@ -27,7 +27,7 @@ use crate::procfs::{self, IdleCpu};
 /// pollers take cores from the group: measured on 2 vCPUs with `coordinator bench
 /// --loop-scenario scenarios/swarm200-parallel.toml` (parallel turns), the step loop
 /// took 2.48-2.66 s telling the whole next group, 1.66-1.74 s telling one agent, and
-/// 1.71-2.01 s sleeping (`--wait block`). With sequential turns a group is one agent.
+/// 1.71-2.14 s sleeping (`--wait block`). With sequential turns a group is one agent.
 const PREPARED_AT_MOST: usize = 1;
 
 /// What the coordinator learned while waiting for a move.
