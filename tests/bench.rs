@@ -302,6 +302,13 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
         }
         // Parallel turns overlap: no time between turns to tell.
         assert!(w["between_turns_us"].is_null(), "{wait}");
+        // Only a spinning coordinator grants a turn without a ring.
+        let polled = w["polled_share"].as_f64().expect("polled share");
+        assert!((0.0..=1.0).contains(&polled), "{wait}: {polled}");
+        if wait == "block" {
+            assert_eq!(polled, 0.0);
+            assert_eq!(w["polled_to_agent_us"]["count"], 0);
+        }
     }
     // With sequential turns, the coordinator's time between turns is told.
     let sequential = Command::new(support::coordinator_bin())

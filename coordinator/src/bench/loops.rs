@@ -75,6 +75,13 @@ pub struct WaitReport {
     /// turn's latency, over the turns, microseconds (mean over every run). Sequential
     /// turns only (`None` with parallel turns, whose latencies overlap).
     pub between_turns_us: Option<f64>,
+    /// The share of the turns granted without a ring, to an agent told it came next
+    /// (0 when sleeping).
+    pub polled_share: f64,
+    /// Reaching the agent in those turns (the world published to the agent holding it),
+    /// microseconds: near the busy-polled floor when the agent was already polling,
+    /// longer when it woke only after its world came.
+    pub polled_to_agent_us: Distribution,
     /// Collisions over every run (0 when safe).
     pub collisions: usize,
     /// Faults over every run (0 for clean runs).
@@ -221,6 +228,17 @@ fn wait_report(
         compute_us: Distribution::of(&compute),
         ipc_overhead_us: Distribution::of(&overhead),
         overhead_split: super::report::OverheadSplit::of(&measured),
+        polled_share: if measured.is_empty() {
+            0.0
+        } else {
+            measured.iter().filter(|t| t.polled).count() as f64 / measured.len() as f64
+        },
+        polled_to_agent_us: Distribution::of_iter(
+            measured
+                .iter()
+                .filter(|t| t.polled)
+                .filter_map(|t| t.split.map(|s| s.to_agent_us)),
+        ),
         between_turns_us: (sequential && turns > 0)
             .then(|| (loops_us - in_turns_us).max(0.0) / turns as f64),
         collisions: runs.iter().map(|o| o.run.summary().collisions).sum(),
@@ -292,6 +310,14 @@ pub fn table(l: &LoopsReport) -> String {
     let _ = writeln!(
         s,
         "  (between turns: the coordinator's own work per turn, the loop's time minus the turns', a mean; sequential turns only)"
+    );
+    let w = &l.spin;
+    let _ = writeln!(
+        s,
+        "  spin: {:.0} % of the turns granted without a ring (the agent told it came next); reaching it then p50 {:.1} us, p90 {:.1} us (busy-polled floor one way: about half the round trip above)",
+        100.0 * w.polled_share,
+        w.polled_to_agent_us.p50,
+        w.polled_to_agent_us.p90
     );
     s
 }

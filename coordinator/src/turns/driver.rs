@@ -330,6 +330,7 @@ impl Driver<'_, '_> {
                         latency_us: latency_ns as f64 / 1e3,
                         compute_us: msg.compute_ns.min(latency_ns) as f64 / 1e3,
                         split: TurnSplit::of(at_ns, &msg, held_ns),
+                        polled: !rung,
                     };
                     self.progress.latency_us.push(sample.latency_us);
                     self.progress.compute_us.push(sample.compute_us);

@@ -215,6 +215,9 @@ pub(crate) struct TurnSample {
     pub compute_us: f64,
     /// Where the latency went, if the agent stamped its state.
     pub split: Option<TurnSplit>,
+    /// Granted without a ring: the agent had been told it came next and was to be
+    /// polling its world (`--wait spin`).
+    pub polled: bool,
 }
 
 /// What the hook of [`run_scenario_with`] sees between two steps.
