@@ -555,14 +555,9 @@ impl TurnPlanner {
                     .all(|b| (p - b.position).norm() >= b.radius_m + clear_m)
                 && self
                     .statics
-                    .visit_near(p, clear_m + self.statics.max_radius_m(), |_, d| {
-                        if d.signed_distance_m(p) < clear_m {
-                            std::ops::ControlFlow::Break(())
-                        } else {
-                            std::ops::ControlFlow::Continue(())
-                        }
+                    .all_near(p, clear_m + self.statics.max_radius_m(), |d| {
+                        d.signed_distance_m(p) >= clear_m
                     })
-                    .is_continue()
         };
         let reach_at = |n: usize| -> Vec<Disk> {
             ahead
@@ -867,17 +862,9 @@ impl TurnPlanner {
                     segment_clear(d)
                 }
             });
-            let mut clear_of_statics = true;
-            let _ =
+            let clear_of_statics =
                 self.statics
-                    .visit_near(me, t + clear_m + self.statics.max_radius_m(), |_, d| {
-                        if segment_clear(d) {
-                            std::ops::ControlFlow::Continue(())
-                        } else {
-                            clear_of_statics = false;
-                            std::ops::ControlFlow::Break(())
-                        }
-                    });
+                    .all_near(me, t + clear_m + self.statics.max_radius_m(), segment_clear);
             (outside_reach && in_field && clear_of_bodies && clear_of_moving && clear_of_statics)
                 .then_some(q)
         }

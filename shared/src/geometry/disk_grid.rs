@@ -166,6 +166,20 @@ impl DiskGrid {
         ControlFlow::Continue(())
     }
 
+    /// Whether `keep` holds for every disk that may come within `reach_m` of `p` (a
+    /// superset of those that do, as [`DiskGrid::visit_near`]); stops at the first disk
+    /// for which it does not.
+    pub fn all_near(&self, p: &Point, reach_m: f64, mut keep: impl FnMut(&Disk) -> bool) -> bool {
+        self.visit_near(p, reach_m, |_, d| {
+            if keep(d) {
+                ControlFlow::Continue(())
+            } else {
+                ControlFlow::Break(())
+            }
+        })
+        .is_continue()
+    }
+
     /// Visit once each disk that may come within `reach_m` of `p` (a superset).
     pub fn visit_near<B>(
         &self,

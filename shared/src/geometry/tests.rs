@@ -49,6 +49,32 @@ fn grid_box_query_visits_each_overlapping_disk_exactly_once() {
 }
 
 #[test]
+fn all_near_holds_when_no_near_disk_fails_and_stops_at_the_first_that_does() {
+    let grid = DiskGrid::new(vec![Disk::new(1.0, 1.0, 0.5), Disk::new(9.0, 9.0, 0.5)]);
+    let p = Point::new(1.0, 2.0);
+    let clear_by = |m: f64| move |d: &Disk| d.signed_distance_m(&p) >= m;
+    assert!(
+        grid.all_near(&p, 1.0, clear_by(0.5)),
+        "0.5 m from the near disk"
+    );
+    assert!(!grid.all_near(&p, 1.0, clear_by(0.6)));
+    // The far disk is not looked at: a predicate that fails on it changes nothing.
+    let mut looked = Vec::new();
+    assert!(grid.all_near(&p, 1.0, |d| {
+        looked.push(d.centre);
+        d.centre.x < 5.0
+    }));
+    assert_eq!(looked, vec![Point::new(1.0, 1.0)]);
+    // Stops at the first disk that fails.
+    let mut calls = 0;
+    assert!(!grid.all_near(&p, 20.0, |_| {
+        calls += 1;
+        false
+    }));
+    assert_eq!(calls, 1);
+}
+
+#[test]
 fn free_space_point_and_segment_tests_agree_with_the_definition() {
     let grid = DiskGrid::new(vec![Disk::new(5.0, 5.0, 1.0)]);
     let layers = [&grid];
