@@ -5,7 +5,7 @@
 mod support;
 
 use coordinator::turns::{RunOptions, WaitMode, run_scenario};
-use shared::record::Run;
+use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
 use wire::misbehave::Misbehave;
@@ -235,7 +235,7 @@ fn strikes_by_a_moving_obstacle_match_the_reference() {
     let struck = reference
         .faults
         .iter()
-        .filter(|f| f.kind == "struck")
+        .filter(|f| f.kind == FaultKind::Struck)
         .count();
     assert!(struck > 0, "no strike");
     assert_eq!(struck, reference.faults.len(), "{:?}", reference.faults);

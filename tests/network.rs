@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use coordinator::netns::NetnsHost;
 use coordinator::turns::{NetworkOptions, RunOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
-use shared::record::Run;
+use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
 
@@ -42,10 +42,10 @@ fn options(network: NetworkOptions) -> RunOptions {
 
 /// The faults as both sides must agree on them: agent, step and kind (the detail and
 /// the detection time are the coordinator's own).
-fn fault_keys(run: &Run) -> Vec<(usize, usize, String)> {
+fn fault_keys(run: &Run) -> Vec<(usize, usize, FaultKind)> {
     run.faults
         .iter()
-        .map(|f| (f.agent, f.step, f.kind.clone()))
+        .map(|f| (f.agent, f.step, f.kind))
         .collect()
 }
 
@@ -258,7 +258,7 @@ fn survive(trouble: Trouble) {
         assert!(
             run.faults
                 .iter()
-                .any(|f| f.agent == 4 && f.kind == "respawned"),
+                .any(|f| f.agent == 4 && f.kind == FaultKind::Respawned),
             "{:?}",
             run.faults
         );
@@ -377,7 +377,7 @@ fn no_stranger_joins_a_run_over_tls() {
             .iter()
             .find(|f| f.agent == agent)
             .unwrap_or_else(|| panic!("agent {agent} not recorded: {:?}", run.faults));
-        assert_eq!((fault.step, fault.kind.as_str()), (0, "failed-to-start"));
+        assert_eq!((fault.step, fault.kind), (0, FaultKind::FailedToStart));
         assert!(fault.detail.contains("refused"), "{fault:?}");
         // Frozen where it stood from the first move on.
         assert!(run.steps.iter().skip(1).all(|s| !s.agents[agent].alive));

@@ -9,7 +9,7 @@ mod support;
 
 use coordinator::turns::{RunOptions, run_scenario};
 use shared::groups::turn_groups;
-use shared::record::Run;
+use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
 use shared::vocabulary::{Body, MoveStatus, TurnMode};
@@ -37,10 +37,10 @@ fn swarm16() -> Scenario {
 
 /// The faults as the two sides must agree on them: agent, step and kind (the detail and
 /// the detection time are the coordinator's own).
-fn fault_keys(run: &Run) -> Vec<(usize, usize, String)> {
+fn fault_keys(run: &Run) -> Vec<(usize, usize, FaultKind)> {
     run.faults
         .iter()
-        .map(|f| (f.agent, f.step, f.kind.clone()))
+        .map(|f| (f.agent, f.step, f.kind))
         .collect()
 }
 
@@ -69,7 +69,7 @@ fn run_and_compare(scenario: &Scenario, deaths: &[(usize, usize)]) -> Run {
     assert_eq!(fault_keys(&run), fault_keys(&reference));
     // Every death was detected during the agent's turn, by the coordinator's liveness
     // check (its detection time is recorded).
-    for f in run.faults.iter().filter(|f| f.kind == "dead") {
+    for f in run.faults.iter().filter(|f| f.kind == FaultKind::Dead) {
         assert!(f.detection_ms.is_some(), "{f:?}");
         assert!(f.detail.contains("during its turn"), "{f:?}");
     }
@@ -131,8 +131,8 @@ fn an_agent_killed_mid_step_in_a_parallel_group_matches_the_reference_to_the_bit
     assert_eq!(
         fault_keys(&run),
         [
-            (victim, step, "killed".to_string()),
-            (victim, step, "dead".to_string())
+            (victim, step, FaultKind::Killed),
+            (victim, step, FaultKind::Dead)
         ]
     );
     // The victim took no turn from the kill on: frozen where it stood, out of the
@@ -180,7 +180,7 @@ fn two_agents_killed_at_one_step_in_sequential_mode_match_the_reference_to_the_b
     let dead: Vec<(usize, usize)> = run
         .faults
         .iter()
-        .filter(|f| f.kind == "dead")
+        .filter(|f| f.kind == FaultKind::Dead)
         .map(|f| (f.agent, f.step))
         .collect();
     // Detected in turn order.

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::record::Run;
+use shared::record::{FaultKind, Run};
 use shared::scenario::{Scenario, ScenarioError};
 use shared::vocabulary::{PlannerKind, TurnMode};
 
@@ -92,7 +92,11 @@ fn row(run: &Run, planner: PlannerKind, turns: TurnMode, timing: &output::Timing
         planner: planner.name().to_string(),
         completed: s.completed,
         collisions: s.collisions,
-        unsafe_moves: s.faults.iter().filter(|f| f.kind == "rejected").count(),
+        unsafe_moves: s
+            .faults
+            .iter()
+            .filter(|f| f.kind == FaultKind::Rejected)
+            .count(),
         min_clearance_m: s.min_clearance_m,
         mean_deviation_m: s.mean_deviation_m,
         max_deviation_m: s.max_deviation_m,

@@ -11,7 +11,7 @@ use crate::course::Course;
 use crate::geometry::Pose;
 use crate::groups::turn_groups;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
-use crate::record::{Recorder, Run};
+use crate::record::{FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
 use crate::turn::TurnPlanner;
 use crate::vocabulary::CbfSettingsError;
@@ -102,7 +102,7 @@ pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, 
 /// let path = plan_centre_path(&scenario).unwrap();
 /// let run = simulate_along_with_deaths(&scenario, &path, &[(2, 40)]).unwrap();
 /// let kinds: Vec<(usize, usize, &str)> =
-///     run.faults.iter().map(|f| (f.agent, f.step, f.kind.as_str())).collect();
+///     run.faults.iter().map(|f| (f.agent, f.step, f.kind.name())).collect();
 /// assert_eq!(kinds, [(2, 40, "killed"), (2, 40, "dead")]);
 /// assert!(run.steps[40..].iter().all(|s| !s.agents[2].alive));
 /// assert!(run.steps[..40].iter().all(|s| s.agents[2].alive));
@@ -134,14 +134,14 @@ pub fn simulate_along_with_deaths(
                     recorder.note_fault(
                         step,
                         agent,
-                        "killed",
+                        FaultKind::Killed,
                         "fault injection: killed before its group's turns".to_string(),
                         None,
                     );
                     recorder.freeze(
                         step,
                         agent,
-                        "dead",
+                        FaultKind::Dead,
                         "the agent process died during its turn".to_string(),
                         None,
                     );

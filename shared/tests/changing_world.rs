@@ -11,7 +11,7 @@
 use proptest::prelude::*;
 use shared::geometry::{Point, distance_polyline_polyline};
 use shared::moving_obstacle::{MovingObstacle, Route};
-use shared::record::Run;
+use shared::record::{FaultKind, Run};
 use shared::safety::SAFETY_TOLERANCE_M;
 use shared::scenario::{Scenario, moving_obstacle_table};
 use shared::simulate::simulate;
@@ -504,7 +504,7 @@ fn a_struck_agent_gets_away_from_the_obstacle() {
         .collect();
     assert!(!strikes.is_empty(), "the obstacle never caught anyone");
     assert!(
-        run.faults.iter().all(|f| f.kind == "struck"),
+        run.faults.iter().all(|f| f.kind == FaultKind::Struck),
         "{:?}",
         run.faults
     );

@@ -9,6 +9,8 @@
 
 use std::time::Duration;
 
+use shared::record::FaultKind;
+
 use super::driver::Driver;
 
 /// How long a SIGKILLed agent may take to be gone before the run goes on regardless (its
@@ -35,7 +37,7 @@ impl Driver<'_, '_> {
             self.recorder.note_fault(
                 step,
                 agent,
-                "killed",
+                FaultKind::Killed,
                 format!("fault injection: SIGKILL to process {pid} before its group's turns"),
                 None,
             );

@@ -7,10 +7,10 @@ use std::time::{Duration, Instant};
 use shared::course::Course;
 use shared::geometry::{Point, Pose};
 use shared::groups::turn_groups;
-use shared::record::Recorder;
+use shared::record::{FaultKind, Recorder};
 use shared::scenario::Scenario;
 use shared::sensing::SensedAgents;
-use shared::vocabulary::{MoveStatus, TurnMode};
+use shared::vocabulary::TurnMode;
 use wire::{MalformedState, PREPARED_GRANT_WINDOW, StateKind, StateMsg, monotonic_ns};
 
 use super::judge::{Judged, judge_answer, judge_move, settle_group};
@@ -29,6 +29,10 @@ use crate::procfs::{self, IdleCpu};
 /// took 2.48-2.66 s telling the whole next group, 1.66-1.74 s telling one agent, and
 /// 1.71-2.14 s sleeping (`--wait block`). With sequential turns a group is one agent.
 const PREPARED_AT_MOST: usize = 1;
+
+/// The `tracing` target of the line logged when a step is done (`step N done`):
+/// `RUST_LOG=coordinator::progress=info` shows one such line per step on stderr.
+pub const PROGRESS_TARGET: &str = "coordinator::progress";
 
 /// What the coordinator learned while waiting for a move.
 pub(super) enum Answer {
@@ -170,6 +174,8 @@ impl Driver<'_, '_> {
                 self.ipc.drain_done();
             }
             bar.inc(1);
+            // For whoever follows the run from outside (tests time their kills by it).
+            tracing::info!(target: PROGRESS_TARGET, "step {step} done");
             let pids = self.pids();
             (self.between_steps)(BetweenSteps {
                 step,
@@ -277,7 +283,7 @@ impl Driver<'_, '_> {
                 self.recorder.note_fault(
                     step,
                     agent,
-                    "killed",
+                    FaultKind::Killed,
                     format!("fault injection: SIGKILL to process {pid} during its turn"),
                     None,
                 );
@@ -316,7 +322,7 @@ impl Driver<'_, '_> {
                         self.recorder.note_fault(
                             step,
                             agent,
-                            "malformed",
+                            FaultKind::Malformed,
                             format!(
                                 "reports {} ns of compute in a turn of {latency_ns} ns; counted as {latency_ns} ns",
                                 msg.compute_ns
@@ -342,14 +348,8 @@ impl Driver<'_, '_> {
                 Answer::Malformed(why) => {
                     self.missed[agent] = 0;
                     tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
-                    self.recorder.reject_as(
-                        step,
-                        agent,
-                        slot,
-                        MoveStatus::Rejected,
-                        "malformed",
-                        why,
-                    );
+                    self.recorder
+                        .refuse(step, agent, slot, FaultKind::Malformed, why);
                 }
                 Answer::Dead(after) => {
                     self.on_death(step, agent, after, "died during its turn")?;
@@ -406,7 +406,7 @@ impl Driver<'_, '_> {
             self.recorder.note_fault(
                 step,
                 agent,
-                "unsolicited",
+                FaultKind::Unsolicited,
                 format!(
                     "{extra} state(s) arrived between turns (an extra move, or an answer to a turn not yet granted); ignored"
                 ),
@@ -417,7 +417,7 @@ impl Driver<'_, '_> {
             self.recorder.note_fault(
                 step,
                 agent,
-                "malformed",
+                FaultKind::Malformed,
                 format!(
                     "{} sample(s) between turns failed the checks, first: {first}",
                     malformed.len()
@@ -498,7 +498,7 @@ impl Driver<'_, '_> {
             self.recorder.note_fault(
                 step,
                 agent,
-                "unsolicited",
+                FaultKind::Unsolicited,
                 format!(
                     "{unsolicited} state(s) during the turn carried no valid token for it (replayed or guessed); ignored"
                 ),

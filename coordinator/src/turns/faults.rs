@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use shared::geometry::Point;
-use shared::vocabulary::MoveStatus;
+use shared::record::FaultKind;
 
 use super::driver::Driver;
 
@@ -38,7 +38,7 @@ impl Driver<'_, '_> {
                 self.recorder.note_fault(
                     step,
                     c,
-                    "impersonation",
+                    FaultKind::Impersonation,
                     format!("process {pid} {how} agent {channel_agent}'s channel; killed"),
                     None,
                 );
@@ -49,7 +49,7 @@ impl Driver<'_, '_> {
             None => self.recorder.note_fault(
                 step,
                 channel_agent,
-                "impersonation",
+                FaultKind::Impersonation,
                 format!("process {pid}, not an agent of this run, {how} this agent's channel"),
                 None,
             ),
@@ -114,11 +114,11 @@ impl Driver<'_, '_> {
         slot: Point,
     ) -> anyhow::Result<()> {
         self.missed[agent] += 1;
-        self.recorder.reject(
+        self.recorder.refuse(
             step,
             agent,
             slot,
-            MoveStatus::Missed,
+            FaultKind::Missed,
             format!(
                 "no move within the {:?} turn deadline",
                 self.options.turn_deadline
@@ -132,7 +132,7 @@ impl Driver<'_, '_> {
             self.recorder.note_fault(
                 step,
                 agent,
-                "hung",
+                FaultKind::Hung,
                 format!("missed {} turns in a row; killed", self.missed[agent]),
                 None,
             );

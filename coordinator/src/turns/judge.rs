@@ -1,7 +1,7 @@
 //! Judging a sample during a turn, and a move's safety.
 
 use shared::geometry::Point;
-use shared::record::Recorder;
+use shared::record::{FaultKind, Recorder};
 use shared::safety::SAFETY_TOLERANCE_M;
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 use wire::{StateKind, StateMsg};
@@ -93,7 +93,7 @@ pub(super) fn judge_move(
         }),
         Err(why) => {
             tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
-            recorder.reject(step, agent, slot, MoveStatus::Rejected, why);
+            recorder.refuse(step, agent, slot, FaultKind::Rejected, why);
             None
         }
     }
@@ -141,7 +141,7 @@ pub(super) fn settle_group(recorder: &mut Recorder, step: usize, moves: Vec<(usi
                 }
                 .to_string();
                 tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
-                recorder.reject(step, agent, mv.slot, MoveStatus::Rejected, why);
+                recorder.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
             }
         }
     }

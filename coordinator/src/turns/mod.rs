@@ -42,6 +42,7 @@ mod judge;
 mod startup;
 
 use driver::Driver;
+pub use driver::PROGRESS_TARGET;
 
 use crate::agents::{self, AgentProcesses};
 use crate::ipc::{CoordinatorIpc, TurnSplit};

@@ -3,6 +3,7 @@
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
+use shared::record::FaultKind;
 use wire::StateKind;
 
 use super::LIVENESS_SLICE;
@@ -54,7 +55,7 @@ impl Driver<'_, '_> {
                                 self.recorder.note_fault(
                                     step,
                                     agent,
-                                    "respawned",
+                                    FaultKind::Respawned,
                                     format!(
                                         "replacement process {} takes the slot from the last position",
                                         msg.pid
@@ -75,7 +76,7 @@ impl Driver<'_, '_> {
                         Ok(msg) => self.recorder.note_fault(
                             step,
                             agent,
-                            "unsolicited",
+                            FaultKind::Unsolicited,
                             format!("a {:?} message before its handshake; ignored", msg.kind),
                             None,
                         ),
@@ -83,7 +84,7 @@ impl Driver<'_, '_> {
                             self.recorder.note_fault(
                                 step,
                                 agent,
-                                "malformed",
+                                FaultKind::Malformed,
                                 format!("handshake: {why}"),
                                 None,
                             );
@@ -142,7 +143,7 @@ impl Driver<'_, '_> {
                 self.ipc.close_channel(agent);
                 self.ipc.cleanup_dead_nodes();
                 self.recorder
-                    .note_fault(step, agent, "respawn_failed", why, None);
+                    .note_fault(step, agent, FaultKind::RespawnFailed, why, None);
             } else {
                 self.on_failed_start(step, agent, &why)?;
             }
@@ -172,7 +173,7 @@ impl Driver<'_, '_> {
             self.recorder.freeze(
                 step,
                 agent,
-                "failed-to-start",
+                FaultKind::FailedToStart,
                 format!("the agent process did not start: {why}"),
                 None,
             );
@@ -191,8 +192,13 @@ impl Driver<'_, '_> {
             .and_then(|_| self.spawn(agent, true));
         if let Err(e) = opened {
             tracing::warn!("agent {agent}: the replacement did not start: {e:#}");
-            self.recorder
-                .note_fault(step, agent, "respawn_failed", format!("{e:#}"), None);
+            self.recorder.note_fault(
+                step,
+                agent,
+                FaultKind::RespawnFailed,
+                format!("{e:#}"),
+                None,
+            );
             return Ok(());
         }
         // The replacement's own failure is recorded, and not retried (no respawn loop).

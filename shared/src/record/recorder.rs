@@ -1,288 +1,12 @@
-//! The record of a run: what every agent did at every step, the faults, and the figures
-//! the paper reports (deviation, Fig. 9) plus the safety figures (clearance).
-//!
-//! [`Recorder`] holds the world state during a run and is shared by the reference
-//! simulation and the coordinator, so both keep their books the same way.
+//! The world during a run: where every agent stands, who is alive, which moves the
+//! safety invariant lets through, and the record so far.
 
-use serde::Serialize;
-
-use crate::course::{Course, Replan, Wait};
+use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
+use crate::course::Course;
 use crate::geometry::{DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
-
-/// One agent at the end of one step.
-#[derive(Clone, Debug, PartialEq)]
-pub struct AgentStep {
-    /// Where the agent stands.
-    pub position: Point,
-    /// Its ideal slot at this step.
-    pub slot: Point,
-    /// The best point it chose (its position when it did not move); with a top speed it
-    /// may stand short of it ([`MoveStatus::UnderWay`]).
-    pub best: Point,
-    /// `||position - slot||`, in metres.
-    pub deviation_m: f64,
-    /// Distance to the nearest other body (obstacle or agent) minus both radii, in metres.
-    pub clearance_m: f64,
-    /// What it did this step.
-    pub status: MoveStatus,
-    /// Whether it still belongs to the formation (its process is alive).
-    pub alive: bool,
-    /// The polyline it followed this step (its position alone when it did not move).
-    pub waypoints: Vec<Point>,
-}
-
-/// Every agent at the end of one step.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Step {
-    /// Step number; step 0 is the formation at the start pose.
-    pub step: usize,
-    /// The formation centre.
-    pub centre: Pose,
-    /// One entry per agent, in agent order.
-    pub agents: Vec<AgentStep>,
-    /// How many groups of turns the step took (one per live agent in sequential mode).
-    pub groups: usize,
-    /// Where each moving obstacle stands during the step's turns, in scenario order.
-    pub moving: Vec<Point>,
-    /// `(moving obstacle, agent, distance in metres)` for each live agent that a moving
-    /// obstacle's motion at the start of the step came within their radii sum of: empty
-    /// in a safe run.
-    pub struck: Vec<(usize, usize, f64)>,
-}
-
-impl Step {
-    /// The longest move of the step, in metres.
-    pub fn max_move_m(&self) -> f64 {
-        self.agents
-            .iter()
-            .map(|a| polyline_length_m(&a.waypoints))
-            .fold(0.0, f64::max)
-    }
-
-    /// Smallest clearance between any two bodies at the end of the step, in metres.
-    pub fn min_clearance_m(&self) -> f64 {
-        self.agents
-            .iter()
-            .map(|a| a.clearance_m)
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    /// Mean deviation of the live agents (the paper's red curve in Fig. 9); 0 when none
-    /// is alive.
-    pub fn mean_deviation_m(&self) -> f64 {
-        let live: Vec<f64> = self
-            .agents
-            .iter()
-            .filter(|a| a.alive)
-            .map(|a| a.deviation_m)
-            .collect();
-        if live.is_empty() {
-            0.0
-        } else {
-            live.iter().sum::<f64>() / live.len() as f64
-        }
-    }
-}
-
-/// What went wrong with an agent, and when.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Fault {
-    /// The agent.
-    pub agent: usize,
-    /// The step it happened in.
-    pub step: usize,
-    /// What happened, as a short name (`rejected`, `missed`, `dead`, `respawned`, ...).
-    pub kind: String,
-    /// Details for people.
-    pub detail: String,
-    /// For a detected death: milliseconds from the moment the coordinator started waiting
-    /// on the agent (its turn, or the step's liveness check) to the detection.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub detection_ms: Option<f64>,
-}
-
-/// A whole run.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Run {
-    /// The scenario's name.
-    pub scenario: String,
-    /// The formation centre's poses, one per step.
-    pub centre_path: Vec<Pose>,
-    /// Every step recorded, starting with step 0.
-    pub steps: Vec<Step>,
-    /// Every fault, in order.
-    pub faults: Vec<Fault>,
-    /// Whether the run went through the whole centre path.
-    pub completed: bool,
-    /// What the centre's course did in a changing world: replans, waits, obstacles found.
-    pub course: CourseRecord,
-}
-
-/// What the centre's course did during a run ([`Course`]).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct CourseRecord {
-    /// Every replanning, found or not.
-    pub replans: Vec<Replan>,
-    /// Every step the centre held its pose.
-    pub waits: Vec<Wait>,
-    /// For each `[[obstacles.unknown]]` obstacle, the step it became known.
-    pub found_at: Vec<Option<usize>>,
-    /// Whether the run ended because no way through was found for too long.
-    pub gave_up: bool,
-}
-
-impl CourseRecord {
-    /// The record of `course` so far.
-    pub fn of(course: &Course) -> Self {
-        Self {
-            replans: course.replans().to_vec(),
-            waits: course.waits().to_vec(),
-            found_at: course.found_at().to_vec(),
-            gave_up: course.gave_up(),
-        }
-    }
-}
-
-/// The figures of a run (the `summary.json` keys that do not depend on timing).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Summary {
-    /// Scenario name.
-    pub scenario: String,
-    /// Number of agents.
-    pub agents: usize,
-    /// Number of steps recorded after step 0.
-    pub steps: usize,
-    /// Whether the run went through the whole centre path.
-    pub completed: bool,
-    /// Number of (step, agent) records in which the agent overlaps another body (an
-    /// obstacle or an agent) at the end of the step, plus the number of times a moving
-    /// obstacle's motion came within an agent's reach: 0 in a safe run.
-    pub collisions: usize,
-    /// Smallest clearance between two bodies over the run, in metres.
-    pub min_clearance_m: f64,
-    /// Mean of the per-step mean deviation of the live agents, in metres.
-    pub mean_deviation_m: f64,
-    /// Largest deviation of a live agent over the run, in metres.
-    pub max_deviation_m: f64,
-    /// Mean deviation at the last step, in metres.
-    pub final_mean_deviation_m: f64,
-    /// The longest single move of an agent in one step over the run, in metres.
-    pub max_move_m: f64,
-    /// Mean number of turn groups per step (steps 1 to the last): the number of live
-    /// agents in sequential mode, fewer with parallel turns.
-    pub mean_groups_per_step: f64,
-    /// Every fault.
-    pub faults: Vec<Fault>,
-    /// Every replanning of the centre's path (a changing world), found or not.
-    pub replans: Vec<ReplanNote>,
-    /// Every step the centre held its pose, and why.
-    pub waits: Vec<WaitNote>,
-    /// For each `[[obstacles.unknown]]` obstacle, the step it became known (`null`: never).
-    pub unknown_found_at_step: Vec<Option<usize>>,
-    /// Whether the run ended because the centre found no way through for too long.
-    pub gave_up: bool,
-}
-
-/// One replanning, as `summary.json` lists it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ReplanNote {
-    /// The step at whose start it was planned.
-    pub step: usize,
-    /// `found-obstacle` or `moving-obstacle`.
-    pub reason: &'static str,
-    /// Wall time of the planning, in milliseconds.
-    pub planning_ms: f64,
-    /// Whether a path was found and taken (false: the centre waited).
-    pub found: bool,
-}
-
-/// One step the centre held, as `summary.json` lists it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct WaitNote {
-    /// The step.
-    pub step: usize,
-    /// `lag` (an agent too far behind) or `blocked` (no way through yet).
-    pub reason: &'static str,
-}
-
-impl Run {
-    /// The centre path actually followed, one pose per step (waits repeat a pose).
-    pub fn followed_path(&self) -> Vec<Pose> {
-        self.steps.iter().map(|s| s.centre).collect()
-    }
-
-    /// The run's figures.
-    pub fn summary(&self) -> Summary {
-        let moving = &self.steps[self.steps.len().min(1)..];
-        let mean_deviation_m = if moving.is_empty() {
-            0.0
-        } else {
-            moving.iter().map(Step::mean_deviation_m).sum::<f64>() / moving.len() as f64
-        };
-        let collisions = self
-            .steps
-            .iter()
-            .map(|s| {
-                s.agents
-                    .iter()
-                    .filter(|a| a.clearance_m < -SAFETY_TOLERANCE_M)
-                    .count()
-                    + s.struck.len()
-            })
-            .sum();
-        Summary {
-            scenario: self.scenario.clone(),
-            agents: self.steps.first().map_or(0, |s| s.agents.len()),
-            steps: self.steps.len().saturating_sub(1),
-            completed: self.completed,
-            collisions,
-            min_clearance_m: self
-                .steps
-                .iter()
-                .map(Step::min_clearance_m)
-                .fold(f64::INFINITY, f64::min),
-            mean_deviation_m,
-            max_deviation_m: self
-                .steps
-                .iter()
-                .flat_map(|s| s.agents.iter().filter(|a| a.alive).map(|a| a.deviation_m))
-                .fold(0.0, f64::max),
-            final_mean_deviation_m: self.steps.last().map_or(0.0, Step::mean_deviation_m),
-            max_move_m: self.steps.iter().map(Step::max_move_m).fold(0.0, f64::max),
-            mean_groups_per_step: if moving.is_empty() {
-                0.0
-            } else {
-                moving.iter().map(|s| s.groups as f64).sum::<f64>() / moving.len() as f64
-            },
-            faults: self.faults.clone(),
-            replans: self
-                .course
-                .replans
-                .iter()
-                .map(|r| ReplanNote {
-                    step: r.step,
-                    reason: r.reason.name(),
-                    planning_ms: r.planning_ms,
-                    found: r.found,
-                })
-                .collect(),
-            waits: self
-                .course
-                .waits
-                .iter()
-                .map(|w| WaitNote {
-                    step: w.step,
-                    reason: w.reason.name(),
-                })
-                .collect(),
-            unknown_found_at_step: self.course.found_at.clone(),
-            gave_up: self.course.gave_up,
-        }
-    }
-}
 
 /// The world during a run: where every agent stands, who is alive, and the record so far.
 #[derive(Debug)]
@@ -384,7 +108,7 @@ impl<'a> Recorder<'a> {
                     self.run.faults.push(Fault {
                         agent: a,
                         step,
-                        kind: "struck".to_string(),
+                        kind: FaultKind::Struck,
                         detail: format!(
                             "moving obstacle {m}'s motion came {distance_m} m from the agent, within their radii sum {reach_m} m"
                         ),
@@ -503,7 +227,7 @@ impl<'a> Recorder<'a> {
                     self.pending[agent] = Some(mv);
                 }
                 Err(v) => {
-                    self.reject(step, agent, mv.slot, MoveStatus::Rejected, v.to_string());
+                    self.refuse(step, agent, mv.slot, FaultKind::Rejected, v.to_string());
                 }
             }
         }
@@ -543,31 +267,24 @@ impl<'a> Recorder<'a> {
         Ok(())
     }
 
-    /// Record that `agent` did not move this step because its move was refused
-    /// ([`MoveStatus::Rejected`]) or never came ([`MoveStatus::Missed`]): it stays where
-    /// it was, and a fault named after the status is recorded.
-    pub fn reject(
+    /// Record that `agent` did not move this step: its answer was refused (`kind`
+    /// [`FaultKind::Rejected`] by the safety checks, [`FaultKind::Malformed`] before any
+    /// geometry was looked at; status [`MoveStatus::Rejected`]) or never came
+    /// ([`FaultKind::Missed`]; status [`MoveStatus::Missed`]). It stays where it was, and
+    /// the fault is recorded.
+    pub fn refuse(
         &mut self,
         step: usize,
         agent: usize,
         slot: Point,
-        status: MoveStatus,
+        kind: FaultKind,
         detail: String,
     ) {
-        self.reject_as(step, agent, slot, status, status.name(), detail);
-    }
-
-    /// [`Self::reject`] recording a fault of `kind` (e.g. `malformed` for an answer that
-    /// failed the checks before any geometry was looked at).
-    pub fn reject_as(
-        &mut self,
-        step: usize,
-        agent: usize,
-        slot: Point,
-        status: MoveStatus,
-        kind: &str,
-        detail: String,
-    ) {
+        let status = if kind == FaultKind::Missed {
+            MoveStatus::Missed
+        } else {
+            MoveStatus::Rejected
+        };
         let here = self.bodies[agent].position;
         self.pending[agent] = Some(Move {
             slot,
@@ -584,14 +301,14 @@ impl<'a> Recorder<'a> {
         &mut self,
         step: usize,
         agent: usize,
-        kind: &str,
+        kind: FaultKind,
         detail: String,
         detection_ms: Option<f64>,
     ) {
         self.run.faults.push(Fault {
             agent,
             step,
-            kind: kind.to_string(),
+            kind,
             detail,
             detection_ms,
         });
@@ -601,16 +318,17 @@ impl<'a> Recorder<'a> {
     /// obstacle where it stands, and the death is recorded with how long it took to
     /// notice.
     pub fn freeze_dead(&mut self, step: usize, agent: usize, detail: String, detection_ms: f64) {
-        self.freeze(step, agent, "dead", detail, Some(detection_ms));
+        self.freeze(step, agent, FaultKind::Dead, detail, Some(detection_ms));
     }
 
     /// Take `agent` out of the formation: it stays as a static obstacle where it stands,
-    /// and a fault of `kind` is recorded (`dead`, `failed-to-start`, ...).
+    /// and a fault of `kind` is recorded ([`FaultKind::Dead`],
+    /// [`FaultKind::FailedToStart`], ...).
     pub fn freeze(
         &mut self,
         step: usize,
         agent: usize,
-        kind: &str,
+        kind: FaultKind,
         detail: String,
         detection_ms: Option<f64>,
     ) {
