@@ -1,0 +1,213 @@
+//! The paper's planner for one agent: the exact best point, then the shortest path to
+//! it.
+
+use crate::best_point::{self, BestPointError};
+use crate::disk_path::{self, DiskPath};
+use crate::formation::Slot;
+use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
+use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
+
+use super::PLANNING_MARGIN_M;
+#[cfg(doc)]
+use super::TurnPlanner;
+
+/// The paper's planner for one agent (exact best point, then the shortest path to it):
+/// everything the agent needs to take its turns; built once, reused every step.
+///
+/// The agent is planned as a point: every other body is inflated by the agent's radius
+/// plus [`PLANNING_MARGIN_M`], and the field is shrunk by the same amount on every side.
+/// The planners take a field anchored at the origin, so planning happens in a frame
+/// shifted by that inset; results are mapped back (exactly for the slot and the agent's
+/// own position).
+#[derive(Clone, Debug)]
+pub struct BestPointPlanner {
+    /// The field the agent's centre may use, in the planning frame.
+    field: Field,
+    /// Planning frame origin in world coordinates (the inset on both axes).
+    offset: Vector,
+    slot: Slot,
+    radius_m: f64,
+    /// Static obstacles inflated by this agent's radius and the planning margin, in the
+    /// planning frame.
+    obstacles: DiskGrid,
+    /// With limited sensing: the obstacles with their true radii in world coordinates
+    /// (same order as `obstacles`), to pick the ones the agent senses each turn.
+    sensed_from: Option<DiskGrid>,
+    spec: AgentSpec,
+}
+
+impl BestPointPlanner {
+    /// The planner of agent `spec` in `field` among `obstacles` (true radii).
+    pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
+        let grow_m = spec.radius_m + PLANNING_MARGIN_M;
+        let offset = Vector::new(grow_m, grow_m);
+        Self {
+            field: Field::new(
+                (field.width_m - 2.0 * grow_m).max(0.0),
+                (field.height_m - 2.0 * grow_m).max(0.0),
+            ),
+            offset,
+            slot: spec.slot,
+            radius_m: spec.radius_m,
+            obstacles: DiskGrid::new(
+                obstacles
+                    .iter()
+                    .map(|o| Disk {
+                        centre: o.centre - offset,
+                        radius_m: o.radius_m + grow_m,
+                    })
+                    .collect(),
+            ),
+            sensed_from: spec
+                .sensing_radius_m
+                .map(|_| DiskGrid::new(obstacles.to_vec())),
+            spec: *spec,
+        }
+    }
+
+    /// The inflated obstacles (planning frame) the agent senses from `me`, in obstacle
+    /// order; `None` when it senses everything.
+    fn sensed_obstacles(&self, me: &Point) -> Option<DiskGrid> {
+        let (grid, sensing_m) = (self.sensed_from.as_ref()?, self.spec.sensing_radius_m?);
+        let mut seen = Vec::new();
+        let _ = grid.visit_near(me, sensing_m + grid.max_radius_m(), |i, d| {
+            if self.spec.senses(me, &d.centre, d.radius_m) {
+                seen.push(i);
+            }
+            std::ops::ControlFlow::<()>::Continue(())
+        });
+        seen.sort_unstable();
+        let inflated = self.obstacles.disks();
+        Some(DiskGrid::new(seen.iter().map(|&i| inflated[i]).collect()))
+    }
+
+    /// This agent's radius, in metres.
+    pub fn radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// The ideal slot when the centre is at `centre`.
+    pub fn slot_position(&self, centre: &Pose) -> Point {
+        self.slot.ideal_position(centre)
+    }
+
+    /// Plan this agent's move while every `other` body stands still: the reachable free
+    /// point nearest to the slot and the shortest path there. With limited sensing, only
+    /// the obstacles it senses are planned around (`others` are taken as given: see
+    /// [`TurnPlanner::plan_move`], which picks the sensed ones); the top speed is
+    /// [`TurnPlanner`]'s business too.
+    pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        self.plan_move_within(centre, me, others, self.spec.max_step_m)
+    }
+
+    /// [`Self::plan_move`] with the path cut at `max_step_m` (absent: not cut) instead of
+    /// the agent's top speed: what is left of a turn that began with another motion.
+    pub fn plan_move_within(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        others: &[Body],
+        max_step_m: Option<f64>,
+    ) -> Move {
+        let slot = self.slot_position(centre);
+        let grow_m = self.radius_m + PLANNING_MARGIN_M;
+        let agents = DiskGrid::new(
+            others
+                .iter()
+                .map(|b| Disk {
+                    centre: b.position - self.offset,
+                    radius_m: b.radius_m + grow_m,
+                })
+                .collect(),
+        );
+        let sensed = self.sensed_obstacles(me);
+        let layers = [sensed.as_ref().unwrap_or(&self.obstacles), &agents];
+        let space = FreeSpace::new(self.field, &layers);
+        let (slot_p, me_p) = (slot - self.offset, me - self.offset);
+        // Back to world coordinates, keeping the slot and the start bit-exact.
+        let to_world = |p: &Point| -> Point {
+            if *p == slot_p {
+                slot
+            } else if *p == me_p {
+                *me
+            } else {
+                p + self.offset
+            }
+        };
+        let stay = |status| Move {
+            slot,
+            best: *me,
+            status,
+            waypoints: vec![*me],
+        };
+
+        let mut found: Option<(Point, DiskPath)> = None;
+        let best = best_point::nearest_reachable_free_point(&space, &slot_p, &me_p, {
+            // One context for every candidate of the turn (same space, same start): it
+            // answers as `disk_path::shortest_path` does, but proves most candidates in
+            // another free component unreachable without a search.
+            let mut paths = disk_path::PathsFrom::new(&space, &me_p);
+            let found = &mut found;
+            move |p| match paths.shortest_path(p) {
+                Ok(path) => {
+                    *found = Some((*p, path));
+                    true
+                }
+                Err(_) => false,
+            }
+        });
+        let best_p = match best {
+            Ok(p) => p,
+            Err(BestPointError::NoFreePoint) => return stay(MoveStatus::NoFreePoint),
+        };
+        let best = to_world(&best_p);
+        if best_p == me_p {
+            let status = if (slot - best).norm() <= 1e-9 {
+                MoveStatus::AtSlot
+            } else {
+                MoveStatus::Stayed
+            };
+            return stay(status);
+        }
+        // The closure accepted `best` last, so `found` holds its path.
+        let path = match found {
+            Some((p, path)) if p == best_p => path,
+            _ => return stay(MoveStatus::Stayed),
+        };
+        // With a top speed the agent follows the path that far: cut on the path itself
+        // (on an arc's circle, not on a chord), so it stops at a free point.
+        let under_way = max_step_m.and_then(|s| path.prefix(s));
+        let followed = under_way.as_ref().unwrap_or(&path);
+        let mut waypoints: Vec<Point> = followed
+            .polyline(0.5 * PLANNING_MARGIN_M)
+            .iter()
+            .map(to_world)
+            .collect();
+        if waypoints.len() > MAX_WAYPOINTS {
+            return stay(MoveStatus::PathTooLong);
+        }
+        // The polyline starts at the agent and ends at the best point (or the cut),
+        // exactly.
+        if let Some(first) = waypoints.first_mut() {
+            *first = *me;
+        }
+        if under_way.is_none()
+            && let Some(last) = waypoints.last_mut()
+        {
+            *last = best;
+        }
+        let status = if under_way.is_some() {
+            MoveStatus::UnderWay
+        } else if (slot - best).norm() <= 1e-9 {
+            MoveStatus::AtSlot
+        } else {
+            MoveStatus::Deviated
+        };
+        Move {
+            slot,
+            best,
+            status,
+            waypoints,
+        }
+    }
+}

@@ -1,0 +1,211 @@
+//! One agent's turn (the inner loop of the paper's Fig. 5): ideal slot, reachable best
+//! point, shortest collision-free path to it, as a polyline the agent then follows.
+//!
+//! This is the one place the decision is made: the reference simulation and the agent
+//! process both call [`TurnPlanner::plan_move`] (the paper's [`BestPointPlanner`] or a
+//! barrier planner), so their trajectories agree to the bit.
+//!
+//! One concept a file: here the dispatch over the controllers ([`TurnPlanner`]); in
+//! `best_point_planner.rs` the paper's planner; in `escape.rs` a turn among moving
+//! obstacles (the escape from an obstacle's reach and the plan round the reach disks);
+//! in `look_ahead.rs` the look-ahead along the moving obstacles' routes.
+
+use std::borrow::Cow;
+
+use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
+use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, polyline_prefix};
+use crate::moving_obstacle::MovingObstacle;
+use crate::orca::OrcaPlanner;
+use crate::vocabulary::{
+    AgentSpec, Body, CbfSettingsError, Move, MoveStatus, PlannerKind, PlannerSpec,
+};
+
+mod best_point_planner;
+mod escape;
+mod look_ahead;
+
+pub use best_point_planner::BestPointPlanner;
+pub use look_ahead::{
+    LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_STEPS, LOOKAHEAD_STEPS, LOOKAHEAD_TRIGGER_STEPS,
+    SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
+};
+
+/// Extra inflation of every disk when choosing the best point and planning the path, in
+/// metres. It absorbs rounding and the chords of arcs: the followed polyline stays at
+/// least half of it away from every true body.
+pub const PLANNING_MARGIN_M: f64 = 1e-3;
+
+/// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
+/// top speed applied: what the reference simulation and the agent processes call.
+#[derive(Clone, Debug)]
+pub struct TurnPlanner {
+    controller: Controller,
+    spec: AgentSpec,
+    /// The moving obstacles of the scenario ([`Self::with_moving`]).
+    moving: Vec<MovingObstacle>,
+    /// With moving obstacles: the static ones (true radii), to check an escape against.
+    statics: DiskGrid,
+    field: Field,
+}
+
+/// The controllers.
+#[derive(Clone, Debug)]
+enum Controller {
+    /// The paper's method, exact ([`BestPointPlanner`]).
+    BestPoint(BestPointPlanner),
+    /// The control-barrier-function QP.
+    Cbf(CbfPlanner),
+    /// The paper's failed LogSumExp barrier, for comparison.
+    ZcbfLogSumExp(ZcbfLogSumExpPlanner),
+    /// ORCA, the reactive baseline.
+    Orca(OrcaPlanner),
+}
+
+impl TurnPlanner {
+    /// The planner `planner.kind` for agent `spec` in `field` among `obstacles` (true
+    /// radii). A barrier planner senses no farther than the agent does.
+    pub fn new(
+        planner: &PlannerSpec,
+        field: Field,
+        obstacles: &[Disk],
+        spec: &AgentSpec,
+    ) -> Result<Self, CbfSettingsError> {
+        let mut cbf = planner.cbf;
+        if let Some(sensing_m) = spec.sensing_radius_m {
+            cbf.sensing_radius_m = cbf.sensing_radius_m.min(sensing_m);
+        }
+        let controller = match planner.kind {
+            PlannerKind::BestPoint => {
+                Controller::BestPoint(BestPointPlanner::new(field, obstacles, spec))
+            }
+            PlannerKind::Cbf => Controller::Cbf(CbfPlanner::new(field, obstacles, spec, cbf)?),
+            PlannerKind::ZcbfLogsumexp => Controller::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
+                field,
+                obstacles,
+                spec,
+                cbf,
+                planner.lse_sharpness_per_m,
+            )?),
+            // Its maximum speed is the top speed; without one, the barrier planners' step.
+            PlannerKind::Orca => Controller::Orca(OrcaPlanner::new(
+                field,
+                obstacles,
+                spec,
+                spec.max_step_m.unwrap_or(cbf.max_speed_m_per_s * cbf.dt_s),
+                spec.sensing_radius_m,
+            )),
+        };
+        Ok(Self {
+            controller,
+            spec: *spec,
+            moving: Vec::new(),
+            statics: DiskGrid::new(Vec::new()),
+            field,
+        })
+    }
+
+    /// This planner in a world with `moving` obstacles: [`Self::plan_turn`] plans around
+    /// them. `obstacles` are the static ones given to [`Self::new`] (true radii).
+    pub fn with_moving(mut self, moving: &[MovingObstacle], obstacles: &[Disk]) -> Self {
+        if !moving.is_empty() {
+            self.moving = moving.to_vec();
+            self.statics = DiskGrid::new(obstacles.to_vec());
+        }
+        self
+    }
+
+    /// The agent this planner moves.
+    pub fn spec(&self) -> &AgentSpec {
+        &self.spec
+    }
+
+    /// Plan this agent's move while every `other` body stands still.
+    ///
+    /// With a sensing radius the controller sees only the bodies of `others` (and the
+    /// obstacles) whose disks come within it, so bodies beyond it change nothing; `others`
+    /// may be all bodies or any superset of the sensed ones. With a top speed the move is
+    /// the first `max_step_m` of the controller's path, with status
+    /// [`MoveStatus::UnderWay`] when it stops short of the best point.
+    pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        self.plan_move_within(centre, me, others, self.spec.max_step_m)
+    }
+
+    /// Plan this agent's turn at `step` while every `other` body stands still and every
+    /// moving obstacle stands where it is at `step` ([`crate::moving_obstacle`]).
+    ///
+    /// The agent plans around each moving obstacle it senses as around a disk grown by
+    /// twice the obstacle's speed, or as much of that as leaves it outside: at least the
+    /// obstacle's reach ([`MovingObstacle::reach_disk_at`], where it can be until the
+    /// agent's next turn), so a move that ends outside it is still clear after the
+    /// obstacle's next motion, and a step to spare where there is room. An agent that starts its turn inside such a disk (the
+    /// obstacle came closer since its last turn) first escapes: a straight motion out of
+    /// the disk, radially or up to 150 degrees off, that is clear of every body and
+    /// within its top speed, or else the shortest path out round the bodies in its way
+    /// (`escape.rs`); the rest of the turn is planned from there with what is left
+    /// of the top speed. Without an escape, the disk is shrunk to leave the agent outside.
+    /// Without moving obstacles this is [`Self::plan_move`].
+    ///
+    /// Then it looks ahead (`look_ahead.rs`): when the move would end where a sensed
+    /// obstacle's reach will be within [`LOOKAHEAD_TRIGGER_STEPS`] steps along its route,
+    /// the straight move from whose end the agent can keep clear longest (up to
+    /// [`SURVIVAL_TURNS`], moving on as it likes) is taken instead.
+    pub fn plan_turn(&self, step: usize, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        if self.moving.is_empty() {
+            return self.plan_move(centre, me, others);
+        }
+        // What the agent senses from where it stands, once: the coordinator sends an
+        // agent process only that, and an escape must not see more.
+        let others = &*self.sensed_bodies(me, others);
+        let sensed: Vec<&MovingObstacle> = self
+            .moving
+            .iter()
+            .filter(|m| {
+                let c = m.position_at(step);
+                self.spec.senses(me, &c, m.radius_m)
+            })
+            .collect();
+        // Where each can be until this agent's next turn.
+        let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
+        let mv = self.plan_turn_around(step, centre, me, others, &sensed, &reach);
+        self.look_ahead(step, me, others, &sensed, &reach, mv)
+    }
+
+    /// The bodies of `others` this agent senses from `me` (all of them without a sensing
+    /// radius).
+    fn sensed_bodies<'b>(&self, me: &Point, others: &'b [Body]) -> Cow<'b, [Body]> {
+        if self.spec.sensing_radius_m.is_none() {
+            return Cow::Borrowed(others);
+        }
+        Cow::Owned(
+            others
+                .iter()
+                .filter(|b| self.spec.senses(me, &b.position, b.radius_m))
+                .copied()
+                .collect(),
+        )
+    }
+
+    /// [`Self::plan_move`] with the move cut at `max_step_m` (absent: not cut).
+    fn plan_move_within(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        others: &[Body],
+        max_step_m: Option<f64>,
+    ) -> Move {
+        let others = &*self.sensed_bodies(me, others);
+        let mut mv = match &self.controller {
+            Controller::BestPoint(p) => p.plan_move_within(centre, me, others, max_step_m),
+            Controller::Cbf(p) => p.plan_move(centre, me, others),
+            Controller::ZcbfLogSumExp(p) => p.plan_move(centre, me, others),
+            Controller::Orca(p) => p.plan_move(centre, me, others),
+        };
+        if let Some(max_step_m) = max_step_m
+            && let Some(prefix) = polyline_prefix(&mv.waypoints, max_step_m)
+        {
+            mv.waypoints = prefix;
+            mv.status = MoveStatus::UnderWay;
+        }
+        mv
+    }
+}
