@@ -9,8 +9,8 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use shared::clcbs::{ClcbsInstance, default_clcbs_dir};
 use shared::hybrid_astar::{HybridAStarSettings, plan};
+use testkit::clcbs::{ClcbsInstance, default_clcbs_dir};
 
 const TURNING_RADIUS_M: f64 = 2.5;
 const CLEARANCE_M: f64 = 0.5;

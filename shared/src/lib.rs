@@ -28,7 +28,6 @@
 
 pub mod best_point;
 pub mod cbf;
-pub mod clcbs;
 pub mod course;
 pub mod curve;
 pub mod disk_path;

@@ -4,11 +4,11 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use shared::clcbs::{CLCBS_DIR_ENV, CLCBS_INSTANCE_FILES, ClcbsInstance, default_clcbs_dir};
 use shared::geometry::{Disk, Field, Pose, distance_point_segment, wrap_angle_rad};
 use shared::hybrid_astar::{
     HybridAStarSettings, PlanError, path_length_m, plan, plan_with_stats, resample,
 };
+use testkit::clcbs::{CLCBS_DIR_ENV, CLCBS_INSTANCE_FILES, ClcbsInstance, default_clcbs_dir};
 
 const TURNING_RADIUS_M: f64 = 2.5;
 const CLEARANCE_M: f64 = 0.5;

@@ -6,11 +6,11 @@
 use std::path::PathBuf;
 
 use proptest::prelude::*;
-use shared::clcbs::{CLCBS_DIR_ENV, CLCBS_OBSTACLE_RADIUS_M, ClcbsInstance, default_clcbs_dir};
 use shared::geometry::{Disk, Field, Pose, distance_point_segment};
 use shared::hybrid_astar::{
     HybridAStarSettings, PlanError, Replanner, first_blocked_pose, path_length_m, plan,
 };
+use testkit::clcbs::{CLCBS_DIR_ENV, CLCBS_OBSTACLE_RADIUS_M, ClcbsInstance, default_clcbs_dir};
 
 const TURNING_RADIUS_M: f64 = 2.5;
 const CLEARANCE_M: f64 = 0.5;

@@ -1,0 +1,7 @@
+//! Test and benchmark support: readers of the real inputs that the tests and the
+//! benchmarks of the formation controller reuse. Not part of any shipped program.
+//!
+//! - [`clcbs`]: the CL-CBS benchmark instances (real obstacle fields for the planners).
+#![warn(missing_docs)]
+
+pub mod clcbs;
