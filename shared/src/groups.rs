@@ -7,10 +7,16 @@
 //! `j`'s. The split is a greedy colouring in agent order (each agent joins the first group
 //! holding no agent it could meet), so it depends on the positions alone and the
 //! reference simulation and the coordinator find the same groups.
+//!
+//! A group's moves are still checked against each other before any is taken
+//! ([`group_meetings`]): the check is written once here and given the distance between
+//! two moves as a closure, so the coordinator's monitor (parry) and the recorder (plain
+//! geometry) differ in their geometry only.
 
 use std::collections::BTreeMap;
 
-use crate::geometry::Point;
+use crate::geometry::{Point, polyline_length_m};
+use crate::safety::SAFETY_TOLERANCE_M;
 use crate::vocabulary::{AgentSpec, Body, TurnMode};
 
 /// The groups of one step, in turn order, each listing its agents in agent order. Dead
@@ -109,6 +115,91 @@ fn parallel_groups(
     groups
 }
 
+/// One move of a group of turns, as [`group_meetings`] looks at it.
+#[derive(Clone, Copy, Debug)]
+pub struct GroupMove<'a> {
+    /// The moving agent's radius, in metres.
+    pub radius_m: f64,
+    /// Its move, from where it stands.
+    pub waypoints: &'a [Point],
+    /// Already refused on its own: it will not be taken, so it meets no one.
+    pub refused: bool,
+}
+
+/// Two moves of one group that come within their radii sum of each other.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Meeting {
+    /// The other move's index in the group.
+    pub mate: usize,
+    /// The smallest distance between the two moves, in metres.
+    pub distance_m: f64,
+    /// The two agents' radii sum, in metres.
+    pub reach_m: f64,
+}
+
+/// For each move of a group (agents that planned against one snapshot and move at once),
+/// the first group mate whose whole move comes within their radii sum of it, less
+/// [`SAFETY_TOLERANCE_M`]; `None` for a move that meets no mate. Both moves of a meeting
+/// are refused, so a move refused already (on its own, or by an earlier meeting) is not
+/// looked at again. Pairs are taken in the order `(1, 0), (2, 0), (2, 1), (3, 0), ...`.
+///
+/// `distance_m(a, b)`: the smallest distance between two polylines. Every point of a
+/// move lies within its length of its start, so pairs whose starts are farther apart
+/// than both lengths and the radii sum are never measured.
+///
+/// ```
+/// use shared::geometry::{Point, distance_polyline_polyline};
+/// use shared::groups::{GroupMove, group_meetings};
+/// let a = [Point::new(0.0, 0.0), Point::new(2.0, 0.0)];
+/// let b = [Point::new(4.0, 0.0), Point::new(2.5, 0.0)];
+/// let far = [Point::new(20.0, 0.0)];
+/// let mv = |waypoints| GroupMove { radius_m: 0.5, waypoints, refused: false };
+/// let meets = group_meetings(&[mv(&a), mv(&b), mv(&far)], distance_polyline_polyline);
+/// assert_eq!(meets[0].map(|m| m.mate), Some(1));
+/// assert_eq!(meets[1].map(|m| m.mate), Some(0));
+/// assert_eq!(meets[2], None);
+/// ```
+pub fn group_meetings(
+    moves: &[GroupMove<'_>],
+    distance_m: impl Fn(&[Point], &[Point]) -> f64,
+) -> Vec<Option<Meeting>> {
+    let lengths_m: Vec<f64> = moves
+        .iter()
+        .map(|m| polyline_length_m(m.waypoints))
+        .collect();
+    let mut meetings: Vec<Option<Meeting>> = vec![None; moves.len()];
+    let out = |i: usize, meetings: &[Option<Meeting>]| moves[i].refused || meetings[i].is_some();
+    for i in 0..moves.len() {
+        for j in 0..i {
+            if out(i, &meetings) || out(j, &meetings) {
+                continue;
+            }
+            let (a, b) = (&moves[i], &moves[j]);
+            let (Some(start_a), Some(start_b)) = (a.waypoints.first(), b.waypoints.first()) else {
+                continue;
+            };
+            let reach_m = a.radius_m + b.radius_m;
+            if (start_a - start_b).norm() > lengths_m[i] + lengths_m[j] + reach_m {
+                continue;
+            }
+            let d_m = distance_m(a.waypoints, b.waypoints);
+            if d_m < reach_m - SAFETY_TOLERANCE_M {
+                meetings[i] = Some(Meeting {
+                    mate: j,
+                    distance_m: d_m,
+                    reach_m,
+                });
+                meetings[j] = Some(Meeting {
+                    mate: i,
+                    distance_m: d_m,
+                    reach_m,
+                });
+            }
+        }
+    }
+    meetings
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -153,5 +244,35 @@ mod tests {
             groups.len() < alive.iter().filter(|a| **a).count(),
             "some parallelism"
         );
+    }
+
+    #[test]
+    fn a_move_refused_or_met_already_meets_no_one() {
+        use crate::geometry::distance_polyline_polyline;
+        let a = [Point::new(0.0, 0.0), Point::new(2.0, 0.0)];
+        let b = [Point::new(4.0, 0.0), Point::new(2.5, 0.0)];
+        let c = [Point::new(1.0, 3.0), Point::new(1.0, 0.2)];
+        let mv = |waypoints, refused| GroupMove {
+            radius_m: 0.5,
+            waypoints,
+            refused,
+        };
+        // b and c both come near a; a meets b first, so c (which meets only a) goes.
+        let meets = group_meetings(&[mv(&a, false), mv(&b, false), mv(&c, false)], |p, q| {
+            distance_polyline_polyline(p, q)
+        });
+        assert_eq!(
+            meets.iter().map(|m| m.map(|m| m.mate)).collect::<Vec<_>>(),
+            [Some(1), Some(0), None]
+        );
+        // a refused on its own: nobody meets it.
+        let meets = group_meetings(
+            &[mv(&a, true), mv(&b, false), mv(&c, false)],
+            distance_polyline_polyline,
+        );
+        assert_eq!(meets, vec![None; 3]);
+        // The distance is the closure's: a closure that says "far" finds no meeting.
+        let meets = group_meetings(&[mv(&a, false), mv(&b, false)], |_, _| 10.0);
+        assert_eq!(meets, vec![None; 2]);
     }
 }

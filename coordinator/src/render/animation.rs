@@ -15,12 +15,12 @@ use super::canvas::{self, Backend, Figure};
 use super::data::RunData;
 use super::geom::Xy;
 use super::gif_writer::GifWriter;
+use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::{MapLayout, Margins};
 use super::metrics::StepMetrics;
 use super::palette;
 use super::scene::{
-    self, Header, LegendItem, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, Swatch, alpha,
-    fill, line, solid,
+    self, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, alpha, fill, line, solid,
 };
 use super::text::TextSetter;
 
@@ -91,8 +91,8 @@ impl<'a> Animation<'a> {
         let s = &data.scenario;
         let sensing_circles =
             sensing_circles && s.agents.iter().any(|a| a.sensing_radius_m.is_some());
-        let (margin_m, mut legend) = scene::obstacle_legend(s);
-        legend.extend(scene::changing_world_legend(s, true));
+        let (margin_m, mut legend) = header::obstacle_legend(s);
+        legend.extend(header::changing_world_legend(s, true));
         legend.extend([
             LegendItem::new(
                 Swatch::Disk {
@@ -152,7 +152,7 @@ impl<'a> Animation<'a> {
             ));
         }
         let header = Header {
-            title: scene::title(format!("{}: formation run", s.name), s),
+            title: header::title(format!("{}: formation run", s.name), s),
             // Written per frame; reserve its row.
             subtitle: Some(String::new()),
             legend,

@@ -13,11 +13,11 @@ use super::canvas::{Backend, Figure};
 use super::data::RunData;
 use super::font;
 use super::geom::{self, Xy};
+use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::{MapLayout, Margins};
 use super::palette;
 use super::scene::{
-    self, Header, LegendItem, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, Swatch, alpha,
-    fmt_m, line, solid,
+    self, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, alpha, fmt_m, line, solid,
 };
 
 /// Largest plotting area of the field figure, in pixels.
@@ -39,8 +39,8 @@ impl<'a> FieldFigure<'a> {
     /// Lay out the field figure of `data`.
     pub fn new(data: &'a RunData) -> Self {
         let s = &data.scenario;
-        let (margin_m, mut legend) = scene::obstacle_legend(s);
-        legend.extend(scene::changing_world_legend(s, true));
+        let (margin_m, mut legend) = header::obstacle_legend(s);
+        legend.extend(header::changing_world_legend(s, true));
         if !s.moving.is_empty() {
             legend.push(LegendItem::new(
                 Swatch::Disk {
@@ -88,7 +88,7 @@ impl<'a> FieldFigure<'a> {
             LegendItem::new(pose_swatch(palette::GOAL), "goal pose"),
         ]);
         let header = Header {
-            title: scene::title(format!("{}: obstacle field and centre path", s.name), s),
+            title: header::title(format!("{}: obstacle field and centre path", s.name), s),
             subtitle: Some(format!(
                 "{} x {} m field, {} obstacles{}; {} centre steps of {} m, turning radius {} m{}",
                 fmt_m(s.field.width_m),

@@ -10,11 +10,11 @@ use super::canvas::{Backend, Figure};
 use super::data::RunData;
 use super::font;
 use super::geom::{View, Xy};
+use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::{MapLayout, Margins};
 use super::palette;
 use super::scene::{
-    self, Header, LegendItem, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, Swatch, alpha,
-    fmt_m, line, solid,
+    self, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, alpha, fmt_m, line, solid,
 };
 
 /// Largest plotting area of the formation figure, in pixels.
@@ -64,7 +64,7 @@ impl<'a> FormationFigure<'a> {
         let half_w = ((x1 - x0) / 2.0 + pad).max(extent * 0.4);
         let half_h = ((y1 - y0) / 2.0 + pad).max(extent * 0.3);
 
-        let (margin_m, obstacle_items) = scene::obstacle_legend(s);
+        let (margin_m, obstacle_items) = header::obstacle_legend(s);
         let mut legend = vec![
             LegendItem::new(
                 Swatch::Disk {
@@ -112,7 +112,7 @@ impl<'a> FormationFigure<'a> {
             "too many agents to label"
         };
         let header = Header {
-            title: scene::title(format!("{}: formation at the start pose", s.name), s),
+            title: header::title(format!("{}: formation at the start pose", s.name), s),
             subtitle: Some(format!(
                 "{n} agents around the centre ({}, {}) m, heading {}°; {labels}",
                 fmt_m(start.x_m),

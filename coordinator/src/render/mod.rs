@@ -31,6 +31,7 @@ pub(crate) mod font;
 pub mod formation;
 mod geom;
 mod gif_writer;
+mod header;
 pub mod layout;
 pub mod metrics;
 mod palette;

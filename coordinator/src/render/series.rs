@@ -10,9 +10,10 @@ use super::canvas::{Backend, Figure};
 use super::data::{FaultRecord, RunData};
 use super::font;
 use super::geom::{View, Xy};
+use super::header::{self, Header, LegendItem, Swatch};
 use super::metrics::{self, StepMetrics};
 use super::palette;
-use super::scene::{self, Header, LegendItem, Swatch, alpha, fill, fmt_m, line, solid};
+use super::scene::{alpha, fill, fmt_m, line, solid};
 
 /// Canvas width of a time series, in pixels.
 pub const WIDTH_PX: u32 = 1200;
@@ -135,7 +136,7 @@ impl<'a> SeriesFigure<'a> {
         ];
         legend.extend(fault_legend(&data.faults));
         let header = Header {
-            title: scene::title(
+            title: header::title(
                 format!("{}: deviation from the formation slots", data.scenario.name),
                 &data.scenario,
             ),
@@ -240,7 +241,7 @@ impl<'a> SeriesFigure<'a> {
             })
             .count();
         let header = Header {
-            title: scene::title(
+            title: header::title(
                 format!("{}: minimum clearance per step", data.scenario.name),
                 &data.scenario,
             ),

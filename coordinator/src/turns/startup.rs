@@ -6,8 +6,8 @@ use anyhow::bail;
 use shared::record::FaultKind;
 use wire::StateKind;
 
-use super::LIVENESS_SLICE;
 use super::driver::Driver;
+use super::options::LIVENESS_SLICE;
 use crate::agents::Exit;
 
 /// How long a replacement process has to shake hands.

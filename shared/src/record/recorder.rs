@@ -4,6 +4,7 @@
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
 use crate::geometry::{DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
+use crate::groups::{GroupMove, group_meetings};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
@@ -188,36 +189,23 @@ impl<'a> Recorder<'a> {
             .iter()
             .map(|(agent, mv)| self.check_alone(*agent, mv))
             .collect();
-        // Every point of a move lies within its length of its start: far-apart pairs need
-        // no polyline distance.
-        let lengths_m: Vec<f64> = moves
+        let group: Vec<GroupMove<'_>> = moves
             .iter()
-            .map(|(_, mv)| polyline_length_m(&mv.waypoints))
+            .zip(&verdicts)
+            .map(|((agent, mv), verdict)| GroupMove {
+                radius_m: self.bodies[*agent].radius_m,
+                waypoints: &mv.waypoints,
+                refused: verdict.is_err(),
+            })
             .collect();
-        for i in 0..moves.len() {
-            for j in 0..i {
-                if verdicts[i].is_err() || verdicts[j].is_err() {
-                    continue;
-                }
-                let ((a, ma), (b, mb)) = (&moves[i], &moves[j]);
-                let reach_m = self.bodies[*a].radius_m + self.bodies[*b].radius_m;
-                let start_gap_m = (self.bodies[*a].position - self.bodies[*b].position).norm();
-                if start_gap_m > lengths_m[i] + lengths_m[j] + reach_m {
-                    continue;
-                }
-                let distance_m = distance_polyline_polyline(&ma.waypoints, &mb.waypoints);
-                if distance_m < reach_m - SAFETY_TOLERANCE_M {
-                    verdicts[i] = Err(Violation::MeetsGroupMate {
-                        agent: *b,
-                        distance_m,
-                        reach_m,
-                    });
-                    verdicts[j] = Err(Violation::MeetsGroupMate {
-                        agent: *a,
-                        distance_m,
-                        reach_m,
-                    });
-                }
+        let meetings = group_meetings(&group, distance_polyline_polyline);
+        for (verdict, meeting) in verdicts.iter_mut().zip(meetings) {
+            if let Some(m) = meeting {
+                *verdict = Err(Violation::MeetsGroupMate {
+                    agent: moves[m.mate].0,
+                    distance_m: m.distance_m,
+                    reach_m: m.reach_m,
+                });
             }
         }
         for ((agent, mv), verdict) in moves.into_iter().zip(&verdicts) {

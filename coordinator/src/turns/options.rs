@@ -1,0 +1,115 @@
+//! How a run is carried out: the options, the wait mode of the hand-over, the time
+//! limits.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use wire::misbehave::Misbehave;
+
+use crate::network::NetworkOptions;
+
+/// How often the coordinator checks an agent's process while it waits for its move.
+pub(super) const LIVENESS_SLICE: Duration = Duration::from_millis(10);
+
+/// How the coordinator waits for a move, and how an agent waits for its turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum WaitMode {
+    /// Sleep in a blocking event wait on both sides: no CPU spent waiting, two wake-ups
+    /// per turn (the agent's and the coordinator's).
+    Block,
+    /// The coordinator spins (yielding) on the agent's state for up to [`SPIN_BUDGET`]
+    /// before sleeping, and the agent whose turn comes next is told so and polls its
+    /// world meanwhile; its turn is then granted by publishing the world alone, without a
+    /// ring: no wake-up and no event on the turn's path, at the price of up to two busy
+    /// cores while turns go on. Agents not next in line still sleep.
+    Spin,
+    /// `Spin` on a machine with two cores or more, `Block` on one core (where a spinning
+    /// process would take the core from the one it waits for).
+    #[default]
+    Auto,
+}
+
+impl WaitMode {
+    /// Whether to spin on this machine.
+    pub fn spins(&self) -> bool {
+        match self {
+            Self::Block => false,
+            Self::Spin => true,
+            Self::Auto => std::thread::available_parallelism().is_ok_and(|n| n.get() >= 2),
+        }
+    }
+}
+
+/// How long the coordinator spins on an agent's state before it sleeps (`--wait spin`):
+/// a turn computes in tens of microseconds; a longer one pays a wake-up as before.
+pub const SPIN_BUDGET: Duration = Duration::from_millis(1);
+
+/// How a run is carried out.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The agent executable (default: beside the coordinator).
+    pub agent_bin: Option<PathBuf>,
+    /// How long an agent has for its turn.
+    pub turn_deadline: Duration,
+    /// How long every agent together has to start and shake hands, plus
+    /// [`STARTUP_PER_AGENT`] for each agent ([`RunOptions::startup_timeout_for`]).
+    pub startup_timeout: Duration,
+    /// Consecutive missed turns after which a live but silent agent is declared hung,
+    /// killed and frozen.
+    pub max_missed_turns: u32,
+    /// Start a replacement process for every agent that dies.
+    pub respawn: bool,
+    /// Fault injection: kill agent `.0` with SIGKILL right after granting its turn at
+    /// step `.1`.
+    pub kills: Vec<(usize, usize)>,
+    /// Deterministic fault injection: agent `.0` dies at step `.1` before its turn. Its
+    /// process is killed with SIGKILL (and waited for) once the step's groups are formed,
+    /// just before its group's turns are granted, so the death is always detected during
+    /// its turn and its group mates still move: the run equals
+    /// [`shared::simulate::simulate_along_with_deaths`] to the bit.
+    pub deaths: Vec<(usize, usize)>,
+    /// Test mode: start agent `.0` with `--misbehave .1` (its replacements behave).
+    pub misbehave: Vec<(usize, Misbehave)>,
+    /// Show a progress bar on stderr (only drawn on a terminal).
+    pub progress: bool,
+    /// How turns are handed over: sleeping, spinning, or chosen by the core count.
+    pub wait: WaitMode,
+    /// Benchmark hook: after the ready handshake, hold every agent idle this long (no
+    /// turn) and measure the CPU time they used meanwhile ([`RunOutcome::idle_cpu`]).
+    pub idle_probe: Option<Duration>,
+    /// Agents over Zenoh: each agent's process is a relay to the agent itself, which runs
+    /// here or on another machine ([`NetworkOptions`]); `None`: every agent on iceoryx2.
+    pub network: Option<NetworkOptions>,
+}
+
+/// Start-up time allowed per agent on top of [`RunOptions::startup_timeout`]: the agents
+/// start on the machine's few cores at once, so their handshakes take time in proportion
+/// to their number (measured on 2 vCPUs: 780 agents ready 6.6 s after the run began, 8.5
+/// ms per agent; this leaves room for a machine that is busy with other work).
+pub const STARTUP_PER_AGENT: Duration = Duration::from_millis(25);
+
+impl RunOptions {
+    /// How long `agents` agents together have to start and shake hands.
+    pub fn startup_timeout_for(&self, agents: usize) -> Duration {
+        self.startup_timeout + STARTUP_PER_AGENT * u32::try_from(agents).unwrap_or(u32::MAX)
+    }
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            agent_bin: None,
+            turn_deadline: Duration::from_millis(250),
+            startup_timeout: Duration::from_secs(30),
+            max_missed_turns: 3,
+            respawn: false,
+            kills: Vec::new(),
+            deaths: Vec::new(),
+            misbehave: Vec::new(),
+            progress: true,
+            wait: WaitMode::default(),
+            idle_probe: None,
+            network: None,
+        }
+    }
+}

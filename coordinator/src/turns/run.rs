@@ -1,0 +1,150 @@
+//! A run from end to end: set-up (the agent binary, the run's prefix and private
+//! folder, the mission file, the channels, the Zenoh router), the driven steps, and the
+//! clean-up that happens whatever went wrong.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::time::{Duration, Instant};
+
+use shared::geometry::Pose;
+use shared::record::Recorder;
+use shared::scenario::Scenario;
+use wire::{RunPrefix, RunRoot};
+
+use super::driver::{BetweenSteps, Driver};
+use super::hand_over::HandOver;
+use super::options::RunOptions;
+use super::outcome::{Progress, RunFailure, RunOutcome, outcome};
+use crate::agents::{self, AgentProcesses};
+use crate::ipc::CoordinatorIpc;
+use crate::network::Router;
+
+/// Run `scenario` along `centre_path` with one agent process per agent.
+pub fn run_scenario(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    options: &RunOptions,
+) -> Result<RunOutcome, RunFailure> {
+    run_scenario_with(scenario, centre_path, options, &mut |_| Ok(()))
+}
+
+/// [`run_scenario`] calling `between_steps` after every step (benchmarks measure their
+/// references there, in the same run; an error ends the run).
+pub fn run_scenario_with(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    options: &RunOptions,
+    between_steps: &mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
+) -> Result<RunOutcome, RunFailure> {
+    let started = Instant::now();
+    let n = scenario.agents.len();
+    let mut recorder = Recorder::new(
+        scenario,
+        centre_path.first().copied().unwrap_or(scenario.path.start),
+    );
+    let mut progress = Progress::default();
+    let fail = |error: anyhow::Error, recorder: &Recorder, progress: Progress| RunFailure {
+        error,
+        partial: Box::new(outcome(
+            recorder.snapshot(),
+            progress,
+            String::new(),
+            started,
+        )),
+    };
+    let bin = match agents::locate_agent_binary(options.agent_bin.as_deref()) {
+        Ok(bin) => bin,
+        Err(e) => return Err(fail(e, &recorder, progress)),
+    };
+    if let Err(e) = agents::raise_fd_limit(n) {
+        return Err(fail(e, &recorder, progress));
+    }
+    crate::stale_runs::clean_stale_runs();
+    // No other run on this machine uses it, and no one can predict it.
+    let prefix = match RunPrefix::new_random() {
+        Ok(prefix) => prefix.to_string(),
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
+    };
+    // The run's private folder, made before anything else of the run (a folder already
+    // there is refused); dropped last: after the agents and the node.
+    let _root = match RunRoot::create(&prefix) {
+        Ok(root) => root,
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
+    };
+    // The scenario as run, for the agents to read at start-up.
+    if let Err(e) = wire::write_mission(&prefix, scenario) {
+        return Err(fail(e.into(), &recorder, progress));
+    }
+    let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
+        Ok(ipc) => ipc,
+        Err(e) => {
+            crate::stale_runs::remove_run_files(&prefix);
+            return Err(fail(e, &recorder, progress));
+        }
+    };
+    let router = match options
+        .network
+        .as_ref()
+        .map(|network| Router::open(network, n))
+        .transpose()
+    {
+        Ok(router) => router,
+        Err(e) => {
+            drop(ipc);
+            crate::stale_runs::remove_run_files(&prefix);
+            return Err(fail(e, &recorder, progress));
+        }
+    };
+    let mut procs = AgentProcesses::new(bin, &prefix, n);
+
+    let driven = catch_unwind(AssertUnwindSafe(|| {
+        Driver {
+            scenario,
+            options,
+            ipc: &mut ipc,
+            procs: &mut procs,
+            recorder: &mut recorder,
+            progress: &mut progress,
+            missed: vec![0; n],
+            hand_over: HandOver::new(options.wait.spins(), n),
+            senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
+            between_steps,
+        }
+        .drive(centre_path, started)
+    }));
+
+    // Whatever happened, stop the agents and clean up before reporting.
+    for i in procs.running() {
+        let _ = ipc.notify_quit(i);
+    }
+    procs.stop_all(Duration::from_secs(2));
+    drop(procs);
+    if let Some(router) = router {
+        router.close();
+    }
+    let cleaned = ipc.shut_down();
+    let error = match driven {
+        Ok(Ok(())) => cleaned.err(),
+        Ok(Err(e)) => Some(e),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".to_string());
+            Some(anyhow::anyhow!("the coordinator panicked: {what}"))
+        }
+    };
+    let run = if progress.completed && !progress.gave_up && error.is_none() {
+        recorder.finish(true)
+    } else {
+        recorder.snapshot()
+    };
+    let result = outcome(run, progress, prefix, started);
+    match error {
+        None => Ok(result),
+        Some(error) => Err(RunFailure {
+            error,
+            partial: Box::new(result),
+        }),
+    }
+}

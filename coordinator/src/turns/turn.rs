@@ -1,0 +1,186 @@
+//! One group's turns: every agent of the group granted its turn at once (each sees the
+//! same snapshot, filtered to what it senses), the agent of the next group told it comes
+//! next, then each answer collected in order and judged, and the group's moves settled
+//! together.
+
+use std::time::Instant;
+
+use shared::geometry::{Point, Pose};
+use shared::record::FaultKind;
+use shared::sensing::SensedAgents;
+use shared::vocabulary::Move;
+use wire::{StateMsg, monotonic_ns};
+
+use super::answer::{Answer, Turn};
+use super::driver::Driver;
+use super::judge::{judge_move, settle_group};
+use super::outcome::TurnSample;
+use crate::ipc::TurnSplit;
+use crate::monitor::SafetyMonitor;
+
+impl Driver<'_, '_> {
+    /// Take the turns of `group` at `step`, the centre at `centre`, and tell the first
+    /// live agent of `next` that its turn comes next; true if the run was interrupted.
+    pub(super) fn take_group(
+        &mut self,
+        monitor: &SafetyMonitor,
+        step: usize,
+        group: &[usize],
+        next: &[usize],
+        centre: &Pose,
+    ) -> anyhow::Result<bool> {
+        let sensing = self
+            .senses
+            .then(|| SensedAgents::new(self.recorder.bodies()));
+        self.kill_before_turns(step, group);
+        let turns = self.grant_group(step, group, centre, sensing.as_ref())?;
+        self.hand_over
+            .tell_next(self.ipc, self.procs, self.recorder.alive(), group, next);
+        let Some(mut moves) = self.collect_group(monitor, step, turns, centre)? else {
+            self.progress.interrupted = true;
+            return Ok(true);
+        };
+        // A mate frozen after its move was judged does not move.
+        moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
+        settle_group(self.recorder, step, moves);
+        Ok(false)
+    }
+
+    /// Grant each live agent of `group` its turn, `sensing` telling what each senses
+    /// (`None`: everything): whatever its channel holds is taken in
+    /// first (none of it answers this turn), then its world is published and its turn
+    /// rung, unless it polls its world ([`super::hand_over::HandOver::polls_world`]).
+    fn grant_group(
+        &mut self,
+        step: usize,
+        group: &[usize],
+        centre: &Pose,
+        sensing: Option<&SensedAgents>,
+    ) -> anyhow::Result<Vec<Turn>> {
+        let mut turns = Vec::with_capacity(group.len());
+        for &agent in group {
+            self.drain(step, agent)?;
+            if !self.recorder.alive()[agent] {
+                continue;
+            }
+            let spec = &self.scenario.agents[agent];
+            // Without sensing, every agent (no list built).
+            let visible = sensing.map(|s| s.sensed_by(agent, spec));
+            // Stamped before the world exists, so no answer to it can predate the stamp.
+            let granted_at = Instant::now();
+            let granted_ns = monotonic_ns();
+            let grant = self.ipc.publish_world(
+                step,
+                agent,
+                centre,
+                self.recorder.bodies(),
+                self.recorder.alive(),
+                visible.as_deref(),
+            )?;
+            let rung = !self.hand_over.polls_world(agent, self.procs.pid(agent));
+            if rung {
+                self.ipc.notify_turn(agent)?;
+            }
+            if self.options.kills.contains(&(agent, step))
+                && let Some(killed) = self.procs.signal_kill(agent)
+            {
+                self.recorder.note_fault(
+                    step,
+                    agent,
+                    FaultKind::Killed,
+                    format!("fault injection: SIGKILL to process {killed} during its turn"),
+                    None,
+                );
+            }
+            turns.push(Turn {
+                agent,
+                pid: self.procs.pid(agent),
+                grant,
+                granted_at,
+                granted_ns,
+                rung,
+            });
+        }
+        Ok(turns)
+    }
+
+    /// Wait for the answer to each of `turns`, in order, and judge it: the moves that
+    /// passed the monitor on their own, or `None` if the run was interrupted.
+    fn collect_group(
+        &mut self,
+        monitor: &SafetyMonitor,
+        step: usize,
+        turns: Vec<Turn>,
+        centre: &Pose,
+    ) -> anyhow::Result<Option<Vec<(usize, Move)>>> {
+        let mut moves = Vec::with_capacity(turns.len());
+        for turn in turns {
+            let agent = turn.agent;
+            // Handled already while a group mate's answer was awaited (killed for
+            // intruding, say, and maybe replaced): not this turn's agent any more.
+            if !self.recorder.alive()[agent] || self.procs.pid(agent) != turn.pid {
+                continue;
+            }
+            let slot = self.scenario.agents[agent].slot.ideal_position(centre);
+            match self.wait_answer(step, &turn)? {
+                Answer::Move(msg) => {
+                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg) {
+                        moves.push((agent, mv));
+                    }
+                }
+                Answer::Malformed(why) => {
+                    self.missed[agent] = 0;
+                    tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
+                    self.recorder
+                        .refuse(step, agent, slot, FaultKind::Malformed, why);
+                }
+                Answer::Dead(after) => {
+                    self.on_death(step, agent, after, "died during its turn")?;
+                }
+                Answer::Missed => self.on_missed(step, agent, slot)?,
+                Answer::Interrupted => return Ok(None),
+            }
+        }
+        Ok(Some(moves))
+    }
+
+    /// Record the timing of the move `msg` that answered `turn`, and judge it with the
+    /// monitor alone: the move if it passes.
+    fn take_move(
+        &mut self,
+        monitor: &SafetyMonitor,
+        step: usize,
+        turn: &Turn,
+        slot: Point,
+        msg: StateMsg,
+    ) -> Option<Move> {
+        let held_ns = monotonic_ns();
+        let agent = turn.agent;
+        self.missed[agent] = 0;
+        let latency_ns = held_ns.saturating_sub(turn.granted_ns);
+        if msg.compute_ns > latency_ns {
+            self.recorder.note_fault(
+                step,
+                agent,
+                FaultKind::Malformed,
+                format!(
+                    "reports {} ns of compute in a turn of {latency_ns} ns; counted as {latency_ns} ns",
+                    msg.compute_ns
+                ),
+                None,
+            );
+        }
+        let sample = TurnSample {
+            step,
+            agent,
+            latency_us: latency_ns as f64 / 1e3,
+            compute_us: msg.compute_ns.min(latency_ns) as f64 / 1e3,
+            split: TurnSplit::of(turn.granted_ns, &msg, held_ns),
+            polled: !turn.rung,
+        };
+        self.progress.latency_us.push(sample.latency_us);
+        self.progress.compute_us.push(sample.compute_us);
+        self.progress.turn_samples.push(sample);
+        judge_move(monitor, self.recorder, step, agent, slot, msg)
+    }
+}
