@@ -20,7 +20,7 @@ use super::layout::{MapLayout, Margins};
 use super::metrics::StepMetrics;
 use super::palette;
 use super::scene::{
-    self, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, alpha, fill, line, solid,
+    self, MAP_BOTTOM_PX, MAP_RIGHT_PX, Painter, alpha, fill, line, map_layout, solid,
 };
 use super::text::TextSetter;
 
@@ -157,17 +157,12 @@ impl<'a> Animation<'a> {
             subtitle: Some(String::new()),
             legend,
         };
-        let layout = MapLayout::fit(
+        let layout = map_layout(
             0.0..s.field.width_m,
             0.0..s.field.height_m,
             MAX_PLOT_PX,
             super::field::MIN_WIDTH_PX,
-            |w| Margins {
-                top: header.height_px(w),
-                left: MAP_LEFT_PX,
-                bottom: MAP_BOTTOM_PX,
-                right: MAP_RIGHT_PX,
-            },
+            &header,
         );
         // The close-up shows the formation's whole extent around its centre.
         let reach = s

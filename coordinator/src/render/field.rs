@@ -14,11 +14,9 @@ use super::data::RunData;
 use super::font;
 use super::geom::{self, Xy};
 use super::header::{self, Header, LegendItem, Swatch};
-use super::layout::{MapLayout, Margins};
+use super::layout::MapLayout;
 use super::palette;
-use super::scene::{
-    self, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, alpha, fmt_m, line, solid,
-};
+use super::scene::{self, Painter, alpha, fmt_m, line, map_layout, solid};
 
 /// Largest plotting area of the field figure, in pixels.
 pub const MAX_PLOT_PX: (u32, u32) = (1000, 720);
@@ -106,17 +104,12 @@ impl<'a> FieldFigure<'a> {
             )),
             legend,
         };
-        let layout = MapLayout::fit(
+        let layout = map_layout(
             0.0..s.field.width_m,
             0.0..s.field.height_m,
             MAX_PLOT_PX,
             MIN_WIDTH_PX,
-            |w| Margins {
-                top: header.height_px(w),
-                left: MAP_LEFT_PX,
-                bottom: MAP_BOTTOM_PX,
-                right: MAP_RIGHT_PX,
-            },
+            &header,
         );
         Self {
             data,

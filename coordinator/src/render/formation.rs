@@ -11,11 +11,9 @@ use super::data::RunData;
 use super::font;
 use super::geom::{View, Xy};
 use super::header::{self, Header, LegendItem, Swatch};
-use super::layout::{MapLayout, Margins};
+use super::layout::MapLayout;
 use super::palette;
-use super::scene::{
-    self, MAP_BOTTOM_PX, MAP_LEFT_PX, MAP_RIGHT_PX, Painter, alpha, fmt_m, line, solid,
-};
+use super::scene::{self, Painter, alpha, fmt_m, line, map_layout, solid};
 
 /// Largest plotting area of the formation figure, in pixels.
 pub const MAX_PLOT_PX: (u32, u32) = (900, 680);
@@ -121,17 +119,12 @@ impl<'a> FormationFigure<'a> {
             )),
             legend,
         };
-        let layout = MapLayout::fit(
+        let layout = map_layout(
             cx - half_w..cx + half_w,
             cy - half_h..cy + half_h,
             MAX_PLOT_PX,
             super::field::MIN_WIDTH_PX,
-            |w| Margins {
-                top: header.height_px(w),
-                left: MAP_LEFT_PX,
-                bottom: MAP_BOTTOM_PX,
-                right: MAP_RIGHT_PX,
-            },
+            &header,
         );
         Self {
             data,

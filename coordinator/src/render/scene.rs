@@ -2,6 +2,8 @@
 //! with their safety margins, circles, polylines and arrows clipped to the view. The
 //! header above every plot is in `header.rs`.
 
+use std::ops::Range;
+
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
@@ -16,7 +18,8 @@ use super::canvas::Backend;
 use super::data::UnknownRecord;
 use super::font;
 use super::geom::{self, View, Xy};
-use super::layout::MapLayout;
+use super::header::Header;
+use super::layout::{MapLayout, Margins};
 use super::palette;
 
 /// A chart whose both axes are in metres.
@@ -92,6 +95,24 @@ pub fn map_chart_bare<'a, DB: Backend>(
         .y_label_area_size(m.left)
         .x_label_area_size(m.bottom)
         .build_cartesian_2d(layout.x_m.clone(), layout.y_m.clone())?)
+}
+
+/// The layout of a map of `x_m` by `y_m` with `header` above it and the map's margins
+/// (axes on the left and at the bottom): as large as fits `max_plot_px`, at least
+/// `min_width_px` wide.
+pub fn map_layout(
+    x_m: Range<f64>,
+    y_m: Range<f64>,
+    max_plot_px: (u32, u32),
+    min_width_px: u32,
+    header: &Header,
+) -> MapLayout {
+    MapLayout::fit(x_m, y_m, max_plot_px, min_width_px, |w| Margins {
+        top: header.height_px(w),
+        left: MAP_LEFT_PX,
+        bottom: MAP_BOTTOM_PX,
+        right: MAP_RIGHT_PX,
+    })
 }
 
 /// The view rectangle of `layout`.

@@ -11,16 +11,16 @@ use super::{PLANNING_MARGIN_M, TurnPlanner};
 
 /// How many steps ahead along the moving obstacles' routes an agent looks when it weighs
 /// moves ([`TurnPlanner::plan_turn`]).
-pub const LOOKAHEAD_STEPS: usize = 20;
+pub const LOOKAHEAD_TURNS: usize = 20;
 
 /// An agent replaces its planned move by one that stays clear longer only when an
 /// obstacle could reach the planned end within this many of its turns. Measured with
 /// `shared/examples/strike_survey.rs` and `scenarios/moving-field.toml`: replacing every
-/// move not clear for all [`LOOKAHEAD_STEPS`] made agents needlessly wary (the mean
+/// move not clear for all [`LOOKAHEAD_TURNS`] made agents needlessly wary (the mean
 /// deviation in `moving-field` rose from 0.34 m to 2.2 m); with the lattice sweep
 /// ([`SURVIVAL_TURNS`]), 4 turns left fewer fields struck than 3 (300 random fields a
 /// speed band) or 5 (1 000).
-pub const LOOKAHEAD_TRIGGER_STEPS: usize = 4;
+pub const LOOKAHEAD_TRIGGER_TURNS: usize = 4;
 
 /// How many turns ahead an agent that looks ahead sweeps the lattice of points it could
 /// move through ([`SurvivalGrid`]): can it keep out of every obstacle's reach that long,
@@ -33,7 +33,7 @@ pub const SURVIVAL_TURNS: usize = 10;
 pub const SURVIVAL_CELLS_PER_MOVE: usize = 3;
 
 // The sweep looks no farther than the turns the look-ahead lays out.
-const _: () = assert!(SURVIVAL_TURNS <= LOOKAHEAD_STEPS + LOOKAHEAD_RUN_STEPS);
+const _: () = assert!(SURVIVAL_TURNS <= LOOKAHEAD_TURNS + LOOKAHEAD_RUN_TURNS);
 
 /// How many directions, evenly spread, an agent weighs a straight move in when looking
 /// ahead (every 10 degrees).
@@ -41,18 +41,18 @@ pub const LOOKAHEAD_DIRECTIONS: usize = 36;
 
 /// How many turns on along a straight move an agent weighs when looking ahead: a way out
 /// of a gap that is closing may take several turns at the top speed.
-pub const LOOKAHEAD_RUN_STEPS: usize = 8;
+pub const LOOKAHEAD_RUN_TURNS: usize = 8;
 
 impl TurnPlanner {
     /// The move `planned`, or one that keeps the agent clear of the `sensed` moving
     /// obstacles longer.
     ///
     /// An agent knows each obstacle's route, so it can tell for how many of its next
-    /// [`LOOKAHEAD_STEPS`] turns a point would stay outside every obstacle's reach disk
+    /// [`LOOKAHEAD_TURNS`] turns a point would stay outside every obstacle's reach disk
     /// there (each grown by the agent's radius): for so many turns the agent could stand
     /// there and still begin every turn where the obstacles' next motion cannot reach it.
     /// When the planned move ends where that holds for fewer than
-    /// [`LOOKAHEAD_TRIGGER_STEPS`] turns, the agent weighs straight moves in
+    /// [`LOOKAHEAD_TRIGGER_TURNS`] turns, the agent weighs straight moves in
     /// [`LOOKAHEAD_DIRECTIONS`] directions, at its top speed and at half of it, each clear
     /// of every body, the field's edges and the obstacles where they stand and ending
     /// outside every reach disk (as an escape must). The best one is the one from whose
@@ -61,7 +61,7 @@ impl TurnPlanner {
     /// ([`SurvivalGrid`]: a gap the obstacles are closing may take several moves to
     /// leave); then the one whose end stays clear for the most turns standing there (up
     /// to the trigger); then the one with the longest horizon when the agent goes on the
-    /// same way at its top speed for up to [`LOOKAHEAD_RUN_STEPS`] turns before it stands;
+    /// same way at its top speed for up to [`LOOKAHEAD_RUN_TURNS`] turns before it stands;
     /// then the smallest overlap where that horizon ends; then the one ending nearest the
     /// slot. It replaces the planned move when it is better by the same order. So an
     /// agent leaves an obstacle's path, or a gap obstacles are closing, while there is
@@ -83,9 +83,9 @@ impl TurnPlanner {
         let clear_m = self.spec.radius_m + PLANNING_MARGIN_M;
         let slot = planned.slot;
         // Nothing to weigh when the planned end stays outside every reach disk for the
-        // next LOOKAHEAD_TRIGGER_STEPS turns.
+        // next LOOKAHEAD_TRIGGER_TURNS turns.
         let end = planned.end();
-        let safe_for_now = (1..=LOOKAHEAD_TRIGGER_STEPS).all(|j| {
+        let safe_for_now = (1..=LOOKAHEAD_TRIGGER_TURNS).all(|j| {
             sensed.iter().all(|m| {
                 let reach = m.reach_disk_at(step + j);
                 (end - reach.centre).norm() - reach.radius_m - keep_m >= 0.0
@@ -97,7 +97,7 @@ impl TurnPlanner {
         // The reach disk at each turn looked at, grown by the agent's radius (centres by
         // turn, 0 this one; radius), of every sensed obstacle that can come near enough
         // to matter: within the agent's top speed for every turn looked at.
-        let turns = LOOKAHEAD_STEPS + LOOKAHEAD_RUN_STEPS;
+        let turns = LOOKAHEAD_TURNS + LOOKAHEAD_RUN_TURNS;
         let far_m = (turns + 1) as f64 * budget_m;
         let ahead: Vec<(Vec<Point>, f64)> = sensed
             .iter()
@@ -111,10 +111,10 @@ impl TurnPlanner {
             })
             .collect();
         // Standing at `p` from the end of turn `from` (counted from this one) on: for how
-        // many turns (up to LOOKAHEAD_STEPS) it stays outside every reach disk, and the
+        // many turns (up to LOOKAHEAD_TURNS) it stays outside every reach disk, and the
         // gap at the first turn it does not (infinite when it always does).
         let clear_from = |p: &Point, from: usize| -> (usize, f64) {
-            for j in 1..=LOOKAHEAD_STEPS {
+            for j in 1..=LOOKAHEAD_TURNS {
                 let gap_m = ahead
                     .iter()
                     .map(|(centres, big_r)| (p - centres[from + j]).norm() - big_r)
@@ -123,7 +123,7 @@ impl TurnPlanner {
                     return (j - 1, gap_m);
                 }
             }
-            (LOOKAHEAD_STEPS, f64::INFINITY)
+            (LOOKAHEAD_TURNS, f64::INFINITY)
         };
         // Where the agent could end each of its next SURVIVAL_TURNS turns: in the field,
         // clear of the static obstacles and of its mates where they stand (they move
@@ -153,9 +153,9 @@ impl TurnPlanner {
         // A point `q` reached by a straight move along `v`: for how many turns the agent
         // can keep out of every reach disk from there, moving as it likes (up to
         // SURVIVAL_TURNS; at least as long as standing there); for how many standing
-        // there does (up to LOOKAHEAD_TRIGGER_STEPS, the least an agent wants); the
+        // there does (up to LOOKAHEAD_TRIGGER_TURNS, the least an agent wants); the
         // longest clear horizon of standing there or going on along `v` at the top speed
-        // for up to LOOKAHEAD_RUN_STEPS turns (each ending outside that turn's reach
+        // for up to LOOKAHEAD_RUN_TURNS turns (each ending outside that turn's reach
         // disks and in the field) and then standing; the gap where that horizon ends; and
         // the distance from `q` to the slot.
         type Score = (usize, usize, usize, f64, f64);
@@ -164,25 +164,25 @@ impl TurnPlanner {
             let mut horizon = standing;
             // Going on along `v`, as long as each turn ends outside its reach disks and
             // in the field, and the horizon can still grow.
-            for (n, v) in (1..=LOOKAHEAD_RUN_STEPS).flat_map(|n| v.map(|v| (n, v))) {
+            for (n, v) in (1..=LOOKAHEAD_RUN_TURNS).flat_map(|n| v.map(|v| (n, v))) {
                 let p = q + (n as f64 * budget_m) * v;
                 let inside_reach = ahead
                     .iter()
                     .any(|(centres, big_r)| (p - centres[n]).norm() < *big_r);
-                if horizon == LOOKAHEAD_STEPS
+                if horizon == LOOKAHEAD_TURNS
                     || inside_reach
                     || self.field.signed_inset_m(&p) < clear_m
                 {
                     break;
                 }
                 let (c, g) = clear_from(&p, n);
-                if (n + c).min(LOOKAHEAD_STEPS) > horizon {
-                    (horizon, gap_m) = ((n + c).min(LOOKAHEAD_STEPS), g);
+                if (n + c).min(LOOKAHEAD_TURNS) > horizon {
+                    (horizon, gap_m) = ((n + c).min(LOOKAHEAD_TURNS), g);
                 }
             }
             (
                 sweep.turns_clear(q).max(standing.min(SURVIVAL_TURNS)),
-                standing.min(LOOKAHEAD_TRIGGER_STEPS),
+                standing.min(LOOKAHEAD_TRIGGER_TURNS),
                 horizon,
                 gap_m,
                 (q - slot).norm(),
@@ -191,7 +191,7 @@ impl TurnPlanner {
         let better = |a: Score, b: Score| {
             if (a.0, a.1, a.2) != (b.0, b.1, b.2) {
                 (a.0, a.1, a.2) > (b.0, b.1, b.2)
-            } else if a.2 < LOOKAHEAD_STEPS && a.3 != b.3 {
+            } else if a.2 < LOOKAHEAD_TURNS && a.3 != b.3 {
                 a.3 > b.3
             } else {
                 a.4 < b.4

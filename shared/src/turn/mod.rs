@@ -26,7 +26,7 @@ mod look_ahead;
 
 pub use best_point_planner::BestPointPlanner;
 pub use look_ahead::{
-    LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_STEPS, LOOKAHEAD_STEPS, LOOKAHEAD_TRIGGER_STEPS,
+    LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_TURNS, LOOKAHEAD_TRIGGER_TURNS, LOOKAHEAD_TURNS,
     SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
 };
 
@@ -146,7 +146,7 @@ impl TurnPlanner {
     /// Without moving obstacles this is [`Self::plan_move`].
     ///
     /// Then it looks ahead (`look_ahead.rs`): when the move would end where a sensed
-    /// obstacle's reach will be within [`LOOKAHEAD_TRIGGER_STEPS`] steps along its route,
+    /// obstacle's reach will be within [`LOOKAHEAD_TRIGGER_TURNS`] steps along its route,
     /// the straight move from whose end the agent can keep clear longest (up to
     /// [`SURVIVAL_TURNS`], moving on as it likes) is taken instead.
     pub fn plan_turn(&self, step: usize, centre: &Pose, me: &Point, others: &[Body]) -> Move {
