@@ -38,13 +38,20 @@ fn round_trip(s: &Scenario, what: &str) -> String {
         s.obstacles.len(),
         "{what}: every obstacle listed\n{text}"
     );
-    assert_eq!(doc["planner"].as_str(), Some(s.planner.kind.name()), "{what}");
+    assert_eq!(
+        doc["planner"].as_str(),
+        Some(s.planner.kind.name()),
+        "{what}"
+    );
     assert_eq!(
         doc["turns"]["mode"].as_str(),
         Some(s.turns.name()),
         "{what}"
     );
-    assert!(doc["cbf"].as_table().is_some_and(|c| c.len() == 6), "{what}");
+    assert!(
+        doc["cbf"].as_table().is_some_and(|c| c.len() == 6),
+        "{what}"
+    );
     assert!(text.starts_with("# Resolved form"), "{what}");
     // Resolving the resolved scenario gives the same text but for the source named.
     let again = back
@@ -161,6 +168,11 @@ fn slot() -> impl Strategy<Value = (f64, f64, Option<f64>, Option<f64>)> {
     )
 }
 
+/// A moving obstacle: its radius (absent: the default), waypoints, speed, and whether
+/// its route loops.
+type MovingSpec = (Option<f64>, Vec<(f64, f64)>, f64, bool);
+
+/// A random scenario, as the values its file is written from.
 #[derive(Debug, Clone)]
 struct Random {
     name: String,
@@ -178,7 +190,7 @@ struct Random {
     positions: Vec<(f64, f64)>,
     disks: Vec<(f64, f64, Option<f64>)>,
     random: Option<(usize, f64, Option<f64>)>,
-    moving: Vec<(Option<f64>, Vec<(f64, f64)>, f64, bool)>,
+    moving: Vec<MovingSpec>,
     unknown: Vec<(f64, f64, Option<f64>)>,
     agent_radius_m: Option<f64>,
     slot0_r_m: f64,
@@ -285,7 +297,9 @@ fn random_scenario() -> impl Strategy<Value = Random> {
                 random: random.map(|(count, r)| (count, 7.0, r)),
                 moving: moving
                     .into_iter()
-                    .map(|(r, ws, speed, looped)| (r, ws.into_iter().map(at).collect(), speed, looped))
+                    .map(|(r, ws, speed, looped)| {
+                        (r, ws.into_iter().map(at).collect(), speed, looped)
+                    })
                     .collect(),
                 unknown: unknown
                     .into_iter()

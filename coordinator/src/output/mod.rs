@@ -127,4 +127,3 @@ pub(crate) fn file_name_part(text: &str) -> String {
         })
         .collect()
 }
-

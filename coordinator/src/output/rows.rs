@@ -347,12 +347,19 @@ mod tests {
             );
         }
         assert_eq!(String::from_utf8(bytes.clone()).expect("utf-8"), want);
-        assert!(want.contains(",0.0000001,") && want.contains(",-0,"), "{want}");
+        assert!(
+            want.contains(",0.0000001,") && want.contains(",-0,"),
+            "{want}"
+        );
         let back: Vec<PlanRow> = read(&bytes);
         assert_eq!(back.len(), rows.len());
         for (a, b) in rows.iter().zip(&back) {
             assert_eq!((a.plan, a.step, a.reason), (b.plan, b.step, b.reason));
-            for (x, y) in [(a.x_m, b.x_m), (a.y_m, b.y_m), (a.heading_rad, b.heading_rad)] {
+            for (x, y) in [
+                (a.x_m, b.x_m),
+                (a.y_m, b.y_m),
+                (a.heading_rad, b.heading_rad),
+            ] {
                 assert!(same_bits(x, y), "{x:?} read back as {y:?}");
             }
         }
@@ -455,7 +462,8 @@ mod tests {
         assert_eq!(read::<TrajectoryRow>(&bytes), rows);
         // Any non-zero `alive` is alive; an unknown status is refused.
         let header = header::<TrajectoryRow>().join(",");
-        let two: Vec<TrajectoryRow> = read(format!("{header}\n0,0,0,0,0,0,0,0,0,0,dead,2\n").as_bytes());
+        let two: Vec<TrajectoryRow> =
+            read(format!("{header}\n0,0,0,0,0,0,0,0,0,0,dead,2\n").as_bytes());
         assert!(two[0].alive);
         assert_eq!(two[0].status, MoveStatus::Dead);
         let bad = format!("{header}\n0,0,0,0,0,0,0,0,0,0,asleep,1\n");

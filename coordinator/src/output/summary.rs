@@ -110,7 +110,10 @@ mod tests {
         assert_eq!(read.unknown_found_at_step, summary.unknown_found_at_step);
         assert_eq!(read.faults.len(), summary.faults.len());
         for (r, f) in read.faults.iter().zip(&summary.faults) {
-            assert_eq!((r.agent, r.step, r.kind, &r.detail), (f.agent, f.step, f.kind, &f.detail));
+            assert_eq!(
+                (r.agent, r.step, r.kind, &r.detail),
+                (f.agent, f.step, f.kind, &f.detail)
+            );
         }
         let value: serde_json::Value = serde_json::from_str(&json).expect("json");
         assert_eq!(value["last_step"], 17);

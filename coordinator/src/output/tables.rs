@@ -76,20 +76,16 @@ pub fn plans_csv(first_plan: &[Pose], run: &Run) -> anyhow::Result<Vec<u8>> {
         .filter(|r| r.found)
         .map(|r| (r.step, PlanReason::Replan(r.reason), r.path.as_slice()));
     let plans = std::iter::once((0, PlanReason::First, first_plan)).chain(replans);
-    csv_bytes(
-        plans
-            .enumerate()
-            .flat_map(|(plan, (step, reason, poses))| {
-                poses.iter().map(move |p| PlanRow {
-                    plan,
-                    step,
-                    reason,
-                    x_m: p.x_m,
-                    y_m: p.y_m,
-                    heading_rad: p.heading_rad,
-                })
-            }),
-    )
+    csv_bytes(plans.enumerate().flat_map(|(plan, (step, reason, poses))| {
+        poses.iter().map(move |p| PlanRow {
+            plan,
+            step,
+            reason,
+            x_m: p.x_m,
+            y_m: p.y_m,
+            heading_rad: p.heading_rad,
+        })
+    }))
 }
 
 /// The obstacles of a changing world as CSV:

@@ -169,7 +169,11 @@ fn disk_file(d: &Disk) -> DiskFile {
 fn moving_file(m: &MovingObstacle) -> MovingFile {
     MovingFile {
         radius_m: Some(m.radius_m),
-        waypoints_m: m.waypoints_m.iter().map(|p: &Point| vec![p.x, p.y]).collect(),
+        waypoints_m: m
+            .waypoints_m
+            .iter()
+            .map(|p: &Point| vec![p.x, p.y])
+            .collect(),
         speed_m_per_step: m.speed_m_per_step,
         route: m.route,
     }
