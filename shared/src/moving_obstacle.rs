@@ -30,12 +30,12 @@
 //! assert_eq!(patrol.position_at(3), Point::new(1.75, 0.0));
 //! ```
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::geometry::{Disk, Point, polyline_length_m};
 
 /// How a moving obstacle goes round its waypoints.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Route {
     /// First waypoint to last, then back to the first, and so on.

@@ -7,9 +7,16 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
+use serde::de::DeserializeOwned;
 use shared::geometry::{Disk, Point, Pose};
 use shared::scenario::Scenario;
+use shared::vocabulary::MoveStatus;
+
+pub use crate::output::FaultRecord;
+use crate::output::SummaryRead;
+use crate::output::rows::{
+    MoveRow, ObstacleKind, ObstacleRow, PathRow, PlanReason, PlanRow, TrajectoryRow,
+};
 
 /// The files a run directory must hold, in the order they are checked.
 pub const REQUIRED_FILES: [&str; 5] = [
@@ -69,8 +76,8 @@ pub struct AgentRecord {
     pub deviation_m: f64,
     /// Clearance to the nearest other body, as the run recorded it, in metres.
     pub clearance_m: f64,
-    /// Outcome of its turn (`MoveStatus::name()`).
-    pub status: String,
+    /// Outcome of its turn.
+    pub status: MoveStatus,
     /// Whether it is still in the formation.
     pub alive: bool,
     /// The polyline it followed in this step (a single point when it did not move).
@@ -86,20 +93,6 @@ pub struct StepRecord {
     pub agents: Vec<AgentRecord>,
 }
 
-/// A fault from `summary.json`.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-pub struct FaultRecord {
-    /// The agent.
-    pub agent: usize,
-    /// The step it happened in.
-    pub step: usize,
-    /// Short name (`dead`, `missed`, `rejected`, ...).
-    pub kind: String,
-    /// Details for people.
-    #[serde(default)]
-    pub detail: String,
-}
-
 /// One plan of the formation centre (`plans.csv`): the first, or a replan that found a
 /// path.
 #[derive(Clone, Debug, PartialEq)]
@@ -108,8 +101,8 @@ pub struct PlanRecord {
     pub plan: usize,
     /// The step at whose start it was planned (0 for the first).
     pub step: usize,
-    /// Why (`first`, `found-obstacle`, `moving-obstacle`).
-    pub reason: String,
+    /// Why it was planned.
+    pub reason: PlanReason,
     /// Its poses, one per step, from the pose the centre stood at.
     pub poses: Vec<Pose>,
 }
@@ -290,7 +283,7 @@ fn read_scenario(path: &Path) -> Result<Scenario, RunDirError> {
 }
 
 /// Rows of a CSV file deserialized by header name, each with its line number.
-fn csv_rows<T: for<'de> Deserialize<'de>>(
+fn csv_rows<T: DeserializeOwned>(
     path: &Path,
     mut each: impl FnMut(u64, T) -> Result<(), String>,
 ) -> Result<(), RunDirError> {
@@ -323,14 +316,6 @@ fn point(x_name: &str, x: f64, y_name: &str, y: f64) -> Result<Point, String> {
     Ok(Point::new(finite(x_name, x)?, finite(y_name, y)?))
 }
 
-#[derive(Deserialize)]
-struct PathRow {
-    step: usize,
-    x_m: f64,
-    y_m: f64,
-    heading_rad: f64,
-}
-
 fn read_centre(path: &Path) -> Result<Vec<CentrePose>, RunDirError> {
     let mut centre: Vec<CentrePose> = Vec::new();
     csv_rows(path, |_, r: PathRow| {
@@ -353,22 +338,6 @@ fn read_centre(path: &Path) -> Result<Vec<CentrePose>, RunDirError> {
     Ok(centre)
 }
 
-#[derive(Deserialize)]
-struct TrajectoryRow {
-    step: usize,
-    agent: usize,
-    x: f64,
-    y: f64,
-    slot_x: f64,
-    slot_y: f64,
-    best_x: f64,
-    best_y: f64,
-    deviation_m: f64,
-    clearance_m: f64,
-    status: String,
-    alive: u8,
-}
-
 fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDirError> {
     let mut steps: Vec<(usize, Vec<Option<AgentRecord>>)> = Vec::new();
     csv_rows(path, |_, r: TrajectoryRow| {
@@ -385,7 +354,7 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
             deviation_m: r.deviation_m,
             clearance_m: r.clearance_m,
             status: r.status,
-            alive: r.alive != 0,
+            alive: r.alive,
             path: Vec::new(),
         };
         match steps.last_mut() {
@@ -424,15 +393,6 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
         .collect()
 }
 
-#[derive(Deserialize)]
-struct MoveRow {
-    step: usize,
-    agent: usize,
-    index: usize,
-    x: f64,
-    y: f64,
-}
-
 fn read_moves(path: &Path, steps: &mut [StepRecord]) -> Result<(), RunDirError> {
     let at: HashMap<usize, usize> = steps.iter().enumerate().map(|(i, s)| (s.step, i)).collect();
     let mut indexed: HashMap<(usize, usize), Vec<(usize, Point)>> = HashMap::new();
@@ -456,29 +416,9 @@ fn read_moves(path: &Path, steps: &mut [StepRecord]) -> Result<(), RunDirError> 
     Ok(())
 }
 
-#[derive(Deserialize)]
-struct SummaryFile {
-    #[serde(default)]
-    faults: Vec<FaultRecord>,
-    #[serde(default)]
-    completed: Option<bool>,
-    #[serde(default)]
-    unknown_found_at_step: Vec<Option<usize>>,
-}
-
-fn read_summary(path: &Path) -> Result<SummaryFile, RunDirError> {
+fn read_summary(path: &Path) -> Result<SummaryRead, RunDirError> {
     let text = read_text(path)?;
     serde_json::from_str(&text).map_err(|e| invalid(path, e))
-}
-
-#[derive(Deserialize)]
-struct PlanRow {
-    plan: usize,
-    step: usize,
-    reason: String,
-    x_m: f64,
-    y_m: f64,
-    heading_rad: f64,
 }
 
 fn read_plans(path: &Path) -> Result<Vec<PlanRecord>, RunDirError> {
@@ -517,17 +457,6 @@ fn read_plans(path: &Path) -> Result<Vec<PlanRecord>, RunDirError> {
     Ok(plans)
 }
 
-#[derive(Deserialize)]
-struct ObstacleRow {
-    step: Option<usize>,
-    kind: String,
-    index: usize,
-    x_m: f64,
-    y_m: f64,
-    radius_m: f64,
-    known_from_step: Option<usize>,
-}
-
 fn read_obstacles(
     path: &Path,
     scenario: &Scenario,
@@ -538,8 +467,8 @@ fn read_obstacles(
     csv_rows(path, |_, r: ObstacleRow| {
         let at = point("x_m", r.x_m, "y_m", r.y_m)?;
         let radius_m = finite("radius_m", r.radius_m)?;
-        match r.kind.as_str() {
-            "moving" => {
+        match r.kind {
+            ObstacleKind::Moving => {
                 let Some(step) = r.step else {
                     return Err("a moving obstacle's row has no step".into());
                 };
@@ -566,7 +495,7 @@ fn read_obstacles(
                     ));
                 }
             }
-            "unknown" => {
+            ObstacleKind::Unknown => {
                 let Some(slot) = unknown.get_mut(r.index) else {
                     return Err(format!(
                         "unknown obstacle {} does not exist (scenario.toml has {})",
@@ -585,7 +514,6 @@ fn read_obstacles(
                     return Err(format!("unknown obstacle {} appears twice", r.index));
                 }
             }
-            other => return Err(format!("unknown kind `{other}` (moving or unknown)")),
         }
         Ok(())
     })?;

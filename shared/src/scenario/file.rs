@@ -1,10 +1,11 @@
 //! The file side of a scenario: reading the TOML text, the raw serde structures of the
-//! format (units in the names, unknown fields refused), the errors that name the line or
-//! the field, and the embedded paper scenario.
+//! format (units in the names, unknown fields refused; read by [`Scenario::parse`] and
+//! written by the resolved form, `super::resolved`), the errors that name the line or the
+//! field, and the embedded paper scenario.
 
 use std::path::Path;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::check::Checker;
 use super::{Scenario, ScenarioError};
@@ -82,9 +83,10 @@ impl Scenario {
 }
 
 // ---------------------------------------------------------------------------------------
-// The file format (serde side). Units are in the names; unknown fields are errors.
+// The file format (serde side). Units are in the names; unknown fields are errors. A key
+// left out when written (`skip_serializing_if`) is one the reader does not require.
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ScenarioFile {
     pub(super) name: String,
@@ -97,53 +99,61 @@ pub(super) struct ScenarioFile {
     pub(super) path: PathFile,
     #[serde(default)]
     pub(super) planner: PlannerKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) cbf: Option<CbfFile>,
     #[serde(default)]
     pub(super) turns: TurnsFile,
 }
 
-#[derive(Deserialize, Default)]
+#[derive(Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TurnsFile {
     #[serde(default)]
     pub(super) mode: TurnMode,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct CbfFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) gamma_per_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) dt_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) gain_per_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) max_speed_m_per_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) sensing_radius_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) lse_sharpness_per_m: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct FieldFile {
     pub(super) width_m: f64,
     pub(super) height_m: f64,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ObstaclesFile {
     #[serde(default = "default_obstacle_radius_m")]
     pub(super) radius_m: f64,
     /// `[x_m, y_m]` pairs; the length is checked by the [`Checker`] (serde would take the
     /// first two numbers of a longer array without a word).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(super) positions_m: Vec<Vec<f64>>,
     #[serde(default)]
     pub(super) disk: Vec<DiskFile>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) random: Option<RandomFile>,
     /// `[[obstacles.moving]]`: obstacles driven along routes.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(super) moving: Vec<MovingFile>,
     /// `[[obstacles.unknown]]`: obstacles the centre's planner does not know at the start.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(super) unknown: Vec<DiskFile>,
 }
 
@@ -170,17 +180,19 @@ pub(super) fn default_agent_radius_m() -> f64 {
     0.3
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct DiskFile {
     pub(super) x_m: f64,
     pub(super) y_m: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) radius_m: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct MovingFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) radius_m: Option<f64>,
     /// `[x_m, y_m]` pairs, checked by the [`Checker`] as `positions_m` is.
     pub(super) waypoints_m: Vec<Vec<f64>>,
@@ -189,38 +201,43 @@ pub(super) struct MovingFile {
     pub(super) route: Route,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RandomFile {
     pub(super) count: usize,
     #[serde(default)]
     pub(super) keep_clear_m: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) radius_m: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct FormationFile {
     #[serde(default = "default_agent_radius_m")]
     pub(super) agent_radius_m: f64,
     /// Top speed of every agent, metres per step (absent: unbounded).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) max_step_m: Option<f64>,
     /// Sensing radius of every agent, metres (absent: every body is known).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) sensing_radius_m: Option<f64>,
     pub(super) slots: Vec<SlotFile>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct SlotFile {
     pub(super) r_m: f64,
     pub(super) theta_deg: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) radius_m: Option<f64>,
     /// This slot's top speed, overriding the formation's.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) max_step_m: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct PathFile {
     pub(super) start: PoseFile,
@@ -233,10 +250,11 @@ pub(super) struct PathFile {
     #[serde(default)]
     pub(super) allow_reverse: bool,
     /// The centre holds while an agent lags farther than this behind its slot.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) max_lag_m: Option<f64>,
 }
 
-#[derive(Deserialize, Clone, Copy)]
+#[derive(Deserialize, Serialize, Clone, Copy)]
 #[serde(deny_unknown_fields)]
 pub(super) struct PoseFile {
     pub(super) x_m: f64,

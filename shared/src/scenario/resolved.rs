@@ -1,10 +1,16 @@
 //! The resolved form of a scenario: the scenario written back as a self-contained TOML
 //! file that loads to the same scenario, bit for bit (the `scenario.toml` of a run's
-//! output folder).
+//! output folder, and the mission file the agents read). It is the file structures the
+//! parser reads ([`super::file`]), filled from the [`Scenario`] and serialised with
+//! `toml`, so a key has one spelling for reading and writing.
 
 use super::Scenario;
 use super::check::MAX_ANGLE_DEG;
-use super::file::{default_agent_radius_m, default_obstacle_radius_m};
+use super::file::{
+    CbfFile, DiskFile, FieldFile, FormationFile, MovingFile, ObstaclesFile, PathFile, PoseFile,
+    ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m, default_obstacle_radius_m,
+};
+use crate::geometry::{Disk, Point, Pose};
 use crate::moving_obstacle::MovingObstacle;
 
 /// Why a scenario has no resolved TOML form (only a scenario built by hand, not one this
@@ -19,160 +25,170 @@ pub enum ResolveError {
         /// Why it cannot be written.
         reason: String,
     },
+    /// The TOML serialiser refused the file structures.
+    #[error("writing TOML: {0}")]
+    Toml(#[from] toml::ser::Error),
 }
 
 impl Scenario {
     /// The scenario as a self-contained TOML file in the scenario format: every obstacle
-    /// listed in `obstacles.disk`, one `{ x_m, y_m, radius_m }` a line (random ones as drawn,
-    /// no `[obstacles.random]` left), every agent with its own radius, every default
-    /// written out (the planner, the `[cbf]` settings, `allow_reverse`). Numbers are
-    /// written in their shortest round-trip form and angles in the degrees that convert
-    /// back to the same radians, so [`Scenario::parse`] of the text gives this scenario
-    /// bit for bit. `source` (a file name) is named in the comment header.
+    /// listed as an `[[obstacles.disk]]` with its radius (random ones as drawn, no
+    /// `[obstacles.random]` left), every agent with its own radius, every default
+    /// written out (the seed, the default radii, the planner, the `[cbf]` settings,
+    /// `allow_reverse`, the turn mode). Numbers are written in a form that parses back to
+    /// the same bits (`toml` writes Rust's shortest round-trip digits), and angles in the
+    /// degrees that convert back to the same radians, so [`Scenario::parse`] of the text
+    /// gives this scenario bit for bit. `source` (a file name) is named in the comment
+    /// header.
     ///
-    /// Fails only for a scenario that no file could give: a seed beyond TOML's integers
-    /// or an angle no degree value converts to.
+    /// Fails only for a scenario that no file could give: a seed beyond TOML's integers,
+    /// an angle no degree value converts to, or agents with different sensing radii.
     pub fn to_resolved_toml(&self, source: &str) -> Result<String, ResolveError> {
-        use std::fmt::Write as _;
-        let mut t = String::new();
-        let source = comment_safe(source);
-        let name = toml_string(&self.name);
-        // `write!` into a String cannot fail.
-        let _ = writeln!(
-            t,
+        let file = self.to_file()?;
+        let body = toml::to_string(&file)?;
+        // Debug escapes every control character: the name stays on the comment line.
+        let name = comment_safe(&format!("{:?}", self.name));
+        Ok(format!(
             "# Resolved form of scenario {name} as run, from {source}:\n\
-             # every obstacle listed explicitly (those drawn from the seed included), every\n\
-             # default written out, the planner as run. It loads to the same scenario, bit for\n\
-             # bit; numbers are in their shortest round-trip form."
-        );
-        let seed = i64::try_from(self.seed).map_err(|_| ResolveError::NotRepresentable {
-            field: "seed".into(),
-            reason: format!("{} is beyond TOML's integers", self.seed),
-        })?;
-        let _ = writeln!(t, "name = {name}");
-        let _ = writeln!(
-            t,
-            "seed = {seed}  # drew the generated obstacles, now listed below; no longer used"
-        );
-        let _ = writeln!(t, "planner = {}", toml_string(self.planner.kind.name()));
+             # every obstacle listed explicitly ({} obstacles, those drawn from the seed\n\
+             # included; the seed is kept but no longer draws any), every default written\n\
+             # out, the planner as run. It loads to the same scenario, bit for bit.\n\n{body}",
+            self.obstacles.len(),
+            source = comment_safe(source),
+        ))
+    }
 
-        let _ = writeln!(t, "\n[field]");
-        let _ = writeln!(t, "width_m = {}", toml_f64(self.field.width_m));
-        let _ = writeln!(t, "height_m = {}", toml_f64(self.field.height_m));
-
-        let c = &self.planner.cbf;
-        let _ = writeln!(t, "\n[cbf]");
-        for (key, v) in [
-            ("gamma_per_s", c.gamma_per_s),
-            ("dt_s", c.dt_s),
-            ("gain_per_s", c.gain_per_s),
-            ("max_speed_m_per_s", c.max_speed_m_per_s),
-            ("sensing_radius_m", c.sensing_radius_m),
-            ("lse_sharpness_per_m", self.planner.lse_sharpness_per_m),
-        ] {
-            let _ = writeln!(t, "{key} = {}", toml_f64(v));
+    /// The file structures [`Scenario::parse`] reads, filled so that they check back into
+    /// this scenario.
+    fn to_file(&self) -> Result<ScenarioFile, ResolveError> {
+        if i64::try_from(self.seed).is_err() {
+            return Err(ResolveError::NotRepresentable {
+                field: "seed".into(),
+                reason: format!("{} is beyond TOML's integers", self.seed),
+            });
         }
+        let c = &self.planner.cbf;
+        Ok(ScenarioFile {
+            name: self.name.clone(),
+            seed: self.seed,
+            field: FieldFile {
+                width_m: self.field.width_m,
+                height_m: self.field.height_m,
+            },
+            obstacles: self.obstacles_file(),
+            formation: self.formation_file()?,
+            path: PathFile {
+                start: pose_file("path.start", &self.path.start)?,
+                goal: pose_file("path.goal", &self.path.goal)?,
+                turning_radius_m: self.path.turning_radius_m,
+                step_m: self.path.step_m,
+                centre_clearance_m: self.path.centre_clearance_m,
+                allow_reverse: self.path.allow_reverse,
+                max_lag_m: self.path.max_lag_m,
+            },
+            planner: self.planner.kind,
+            cbf: Some(CbfFile {
+                gamma_per_s: Some(c.gamma_per_s),
+                dt_s: Some(c.dt_s),
+                gain_per_s: Some(c.gain_per_s),
+                max_speed_m_per_s: Some(c.max_speed_m_per_s),
+                sensing_radius_m: Some(c.sensing_radius_m),
+                lse_sharpness_per_m: Some(self.planner.lse_sharpness_per_m),
+            }),
+            turns: TurnsFile { mode: self.turns },
+        })
+    }
 
+    fn obstacles_file(&self) -> ObstaclesFile {
         // The default radius is checked even when every obstacle has its own: write one
         // the checks accept (the first obstacle's, or at most the field's side).
         let side_m = self.field.width_m.max(self.field.height_m);
-        let default_obstacle_m = self
+        let radius_m = self
             .obstacles
             .first()
             .map_or(default_obstacle_radius_m().min(side_m), |o| o.radius_m);
-        let _ = writeln!(t, "\n[obstacles]  # {} obstacles", self.obstacles.len());
-        let _ = writeln!(t, "radius_m = {}", toml_f64(default_obstacle_m));
-        let _ = writeln!(t, "disk = [");
-        for o in &self.obstacles {
-            let _ = writeln!(
-                t,
-                "  {{ x_m = {}, y_m = {}, radius_m = {} }},",
-                toml_f64(o.centre.x),
-                toml_f64(o.centre.y),
-                toml_f64(o.radius_m)
-            );
+        ObstaclesFile {
+            radius_m,
+            positions_m: Vec::new(),
+            disk: self.obstacles.iter().map(disk_file).collect(),
+            random: None,
+            moving: self.moving.iter().map(moving_file).collect(),
+            unknown: self.unknown.iter().map(disk_file).collect(),
         }
-        let _ = writeln!(t, "]");
-        for m in &self.moving {
-            t.push('\n');
-            t.push_str(&moving_obstacle_table(m));
-        }
-        for o in &self.unknown {
-            let _ = writeln!(t, "\n[[obstacles.unknown]]");
-            let _ = writeln!(
-                t,
-                "x_m = {}\ny_m = {}\nradius_m = {}",
-                toml_f64(o.centre.x),
-                toml_f64(o.centre.y),
-                toml_f64(o.radius_m)
-            );
-        }
+    }
 
-        let _ = writeln!(t, "\n[formation]");
-        let default_agent_m = self
-            .agents
-            .first()
-            .map_or(default_agent_radius_m(), |a| a.radius_m);
-        let _ = writeln!(t, "agent_radius_m = {}", toml_f64(default_agent_m));
+    fn formation_file(&self) -> Result<FormationFile, ResolveError> {
         // The file has one sensing radius for the formation.
-        let sensing = self.agents.first().and_then(|a| a.sensing_radius_m);
+        let sensing_radius_m = self.agents.first().and_then(|a| a.sensing_radius_m);
         if let Some(i) = self
             .agents
             .iter()
-            .position(|a| a.sensing_radius_m != sensing)
+            .position(|a| a.sensing_radius_m != sensing_radius_m)
         {
             return Err(ResolveError::NotRepresentable {
                 field: format!("formation.slots[{i}]"),
                 reason: "the file format has one sensing radius for every agent".into(),
             });
         }
-        if let Some(v) = sensing {
-            let _ = writeln!(t, "sensing_radius_m = {}", toml_f64(v));
-        }
-        let _ = writeln!(t, "slots = [");
-        for (i, a) in self.agents.iter().enumerate() {
-            let theta_deg = degrees_for(a.slot.theta_rad).ok_or_else(|| {
-                not_in_degrees(format!("formation.slots[{i}].theta_deg"), a.slot.theta_rad)
-            })?;
-            let max_step = a
-                .max_step_m
-                .map_or(String::new(), |v| format!(", max_step_m = {}", toml_f64(v)));
-            let _ = writeln!(
-                t,
-                "  {{ r_m = {}, theta_deg = {}, radius_m = {}{max_step} }},",
-                toml_f64(a.slot.r_m),
-                toml_f64(theta_deg),
-                toml_f64(a.radius_m)
-            );
-        }
-        let _ = writeln!(t, "]");
-
-        let p = &self.path;
-        let _ = writeln!(t, "\n[path]");
-        for (key, pose) in [("start", &p.start), ("goal", &p.goal)] {
-            let heading_deg = degrees_for(pose.heading_rad).ok_or_else(|| {
-                not_in_degrees(format!("path.{key}.heading_deg"), pose.heading_rad)
-            })?;
-            let _ = writeln!(
-                t,
-                "{key} = {{ x_m = {}, y_m = {}, heading_deg = {} }}",
-                toml_f64(pose.x_m),
-                toml_f64(pose.y_m),
-                toml_f64(heading_deg)
-            );
-        }
-        let _ = writeln!(t, "turning_radius_m = {}", toml_f64(p.turning_radius_m));
-        let _ = writeln!(t, "step_m = {}", toml_f64(p.step_m));
-        let _ = writeln!(t, "centre_clearance_m = {}", toml_f64(p.centre_clearance_m));
-        let _ = writeln!(t, "allow_reverse = {}", p.allow_reverse);
-        if let Some(v) = p.max_lag_m {
-            let _ = writeln!(t, "max_lag_m = {}", toml_f64(v));
-        }
-
-        let _ = writeln!(t, "\n[turns]");
-        let _ = writeln!(t, "mode = {}", toml_string(self.turns.name()));
-        Ok(t)
+        let slots = self
+            .agents
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                let field = format!("formation.slots[{i}].theta_deg");
+                Ok(SlotFile {
+                    r_m: a.slot.r_m,
+                    theta_deg: degrees_for(a.slot.theta_rad)
+                        .ok_or_else(|| not_in_degrees(field, a.slot.theta_rad))?,
+                    radius_m: Some(a.radius_m),
+                    max_step_m: a.max_step_m,
+                })
+            })
+            .collect::<Result<_, ResolveError>>()?;
+        Ok(FormationFile {
+            agent_radius_m: self
+                .agents
+                .first()
+                .map_or(default_agent_radius_m(), |a| a.radius_m),
+            // Every slot carries its own top speed.
+            max_step_m: None,
+            sensing_radius_m,
+            slots,
+        })
     }
+}
+
+fn disk_file(d: &Disk) -> DiskFile {
+    DiskFile {
+        x_m: d.centre.x,
+        y_m: d.centre.y,
+        radius_m: Some(d.radius_m),
+    }
+}
+
+fn moving_file(m: &MovingObstacle) -> MovingFile {
+    MovingFile {
+        radius_m: Some(m.radius_m),
+        waypoints_m: m
+            .waypoints_m
+            .iter()
+            .map(|p: &Point| vec![p.x, p.y])
+            .collect(),
+        speed_m_per_step: m.speed_m_per_step,
+        route: m.route,
+    }
+}
+
+/// `pose` as the file writes it (`field` names it in the error when its heading has no
+/// degree value).
+fn pose_file(field: &str, pose: &Pose) -> Result<PoseFile, ResolveError> {
+    let heading_deg = degrees_for(pose.heading_rad)
+        .ok_or_else(|| not_in_degrees(format!("{field}.heading_deg"), pose.heading_rad))?;
+    Ok(PoseFile {
+        x_m: pose.x_m,
+        y_m: pose.y_m,
+        heading_deg,
+    })
 }
 
 fn not_in_degrees(field: String, rad: f64) -> ResolveError {
@@ -184,24 +200,15 @@ fn not_in_degrees(field: String, rad: f64) -> ResolveError {
     }
 }
 
-/// A TOML float that parses back to the same bits: Rust's shortest round-trip form,
-/// always with a fraction or an exponent (`1.0`, not the integer `1`), and TOML's names
-/// for the non-finite values.
-fn toml_f64(v: f64) -> String {
-    if v.is_nan() {
-        "nan".into()
-    } else if v.is_infinite() {
-        if v > 0.0 { "inf" } else { "-inf" }.into()
-    } else {
-        // Debug is the shortest round-trip form with `.0` or an exponent (`1e-7`,
-        // `1.5e16`), both valid TOML floats.
-        format!("{v:?}")
-    }
-}
-
-/// `obstacle` as a `[[obstacles.moving]]` table of a scenario file, numbers in their
-/// shortest round-trip form, ending in a newline: what [`Scenario::to_resolved_toml`]
-/// writes for it, and what a program adding moving obstacles to a scenario text appends.
+/// `obstacle` as a `[[obstacles.moving]]` table of a scenario file, ending in a newline:
+/// what [`Scenario::to_resolved_toml`] writes for it (the same file structure,
+/// serialised alone), and what a program adding moving obstacles to a scenario text
+/// appends.
+///
+/// # Panics
+///
+/// Never: the table holds numbers, arrays of numbers and a name, all of which TOML
+/// writes.
 ///
 /// ```
 /// use shared::geometry::Point;
@@ -220,23 +227,23 @@ fn toml_f64(v: f64) -> String {
 /// );
 /// ```
 pub fn moving_obstacle_table(obstacle: &MovingObstacle) -> String {
-    let waypoints: Vec<String> = obstacle
-        .waypoints_m
-        .iter()
-        .map(|p| format!("[{}, {}]", toml_f64(p.x), toml_f64(p.y)))
-        .collect();
-    format!(
-        "[[obstacles.moving]]\nradius_m = {}\nwaypoints_m = [{}]\nspeed_m_per_step = {}\nroute = {}\n",
-        toml_f64(obstacle.radius_m),
-        waypoints.join(", "),
-        toml_f64(obstacle.speed_m_per_step),
-        toml_string(obstacle.route.name())
-    )
-}
-
-/// A TOML basic string, quoted and escaped.
-fn toml_string(s: &str) -> String {
-    toml::Value::String(s.to_string()).to_string()
+    #[derive(serde::Serialize)]
+    struct Only {
+        obstacles: OnlyMoving,
+    }
+    #[derive(serde::Serialize)]
+    struct OnlyMoving {
+        moving: [MovingFile; 1],
+    }
+    let table = Only {
+        obstacles: OnlyMoving {
+            moving: [moving_file(obstacle)],
+        },
+    };
+    match toml::to_string(&table) {
+        Ok(text) => text,
+        Err(e) => panic!("a moving obstacle's table is always TOML: {e}"),
+    }
 }
 
 /// `s` fit for a TOML comment (no control characters).
@@ -279,12 +286,9 @@ fn degrees_for(rad: f64) -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
-
     use rand::{Rng, SeedableRng};
 
     use super::*;
-    use crate::vocabulary::PlannerKind;
 
     /// `a` and `b` equal and bit for bit the same (Debug prints every float in its
     /// shortest round-trip form, so `-0.0` and `0.0` differ there).
@@ -303,46 +307,6 @@ mod tests {
         assert_same(&back, s, what);
         assert_eq!(back.obstacles.len(), s.obstacles.len(), "{what}");
         text
-    }
-
-    #[test]
-    fn every_shipped_scenario_resolves_to_a_file_that_loads_to_the_same_scenario() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
-        let mut files: Vec<_> = std::fs::read_dir(&dir)
-            .expect("scenarios/")
-            .map(|e| e.expect("entry").path())
-            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-            .collect();
-        files.sort();
-        assert!(files.len() >= 5, "{files:?}");
-        let mut generated = 0;
-        for file in &files {
-            let what = file.display().to_string();
-            let s = Scenario::load(file).unwrap_or_else(|e| panic!("{e}"));
-            let original = Scenario::read(file).expect("read");
-            generated += usize::from(original.contains("[obstacles.random]"));
-            for kind in PlannerKind::ALL {
-                let s = s.with_planner(kind);
-                let text = round_trip(&s, &what);
-                assert!(!text.contains("random"), "{what}: {text}");
-                let doc: toml::Table = toml::from_str(&text).expect("TOML");
-                let obstacles = doc["obstacles"].as_table().expect("[obstacles]");
-                assert!(!obstacles.contains_key("random"), "{what}");
-                assert!(!obstacles.contains_key("positions_m"), "{what}");
-                assert_eq!(
-                    obstacles["disk"].as_array().expect("disk").len(),
-                    s.obstacles.len(),
-                    "{what}: every obstacle listed"
-                );
-                assert_eq!(doc["planner"].as_str(), Some(kind.name()), "{what}");
-                assert!(text.starts_with("# Resolved form"), "{what}");
-                assert!(text.contains(&what), "{what}: the source is named");
-            }
-        }
-        assert!(
-            generated >= 3,
-            "the shipped scenarios draw obstacles from a seed"
-        );
     }
 
     #[test]
@@ -441,6 +405,10 @@ centre_clearance_m = 0.1
         s.seed = u64::MAX;
         let e = s.to_resolved_toml("x").unwrap_err();
         assert!(e.to_string().starts_with("seed: "), "{e}");
+        let mut s = Scenario::paper();
+        s.agents[1].sensing_radius_m = Some(3.0);
+        let e = s.to_resolved_toml("x").unwrap_err();
+        assert!(e.to_string().starts_with("formation.slots[1]: "), "{e}");
         let mut s = Scenario::paper();
         s.agents[2].slot.theta_rad = f64::NAN;
         let e = s.to_resolved_toml("x").unwrap_err();

@@ -1,11 +1,11 @@
 //! Which controller moves the agents, and its settings.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::vocabulary::{AgentSpec, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
 
 /// Which controller moves the agents.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PlannerKind {
     /// The paper's method: exact best point, then a shortest collision-free path to it.

@@ -1,10 +1,10 @@
 //! How the agents of a step take their turns: one at a time, or in groups that cannot
 //! meet.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// How the agents of a step take their turns (`[turns] mode` in a scenario).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TurnMode {
     /// One agent moves at a time, in agent order, while every other stands still (the

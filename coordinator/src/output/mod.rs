@@ -1,0 +1,129 @@
+//! Output files (`docs/outputs.md`): `summary.json`, `trajectory.csv`, `moves.csv`,
+//! `path.csv` (the path followed), `plans.csv` (the first plan and every replan taken) and
+//! `obstacles.csv` (the moving obstacles at every step, the unknown ones and when they
+//! became known).
+//! Every file is written whole or not at all (a temporary file, then a rename), and an
+//! output folder too ([`OutDir`]: a temporary sibling folder, then a rename).
+//!
+//! One concept per file:
+//! - `rows`: one serde struct per CSV file's row, written here and read by
+//!   [`crate::render`], and the number format of the files;
+//! - `tables`: the CSV files made from a run;
+//! - `summary`: `summary.json`, as written and as read back;
+//! - `out_dir`: the output folder, checked, staged and put in place.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use shared::geometry::Pose;
+use shared::record::Run;
+use shared::scenario::Scenario;
+
+mod out_dir;
+pub mod rows;
+mod summary;
+mod tables;
+
+pub use out_dir::{OutDir, Staging};
+pub use summary::{FaultRecord, SummaryFile, SummaryRead, Timing};
+pub use tables::{moves_csv, obstacles_csv, path_csv, plans_csv, trajectory_csv};
+
+/// Write `bytes` to `path` atomically: a temporary file beside it, then a rename.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let name = path
+        .file_name()
+        .with_context(|| format!("{}: not a file name", path.display()))?;
+    let tmp = path.with_file_name(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))?;
+    Ok(())
+}
+
+/// Create `dir` and write every output file of `run` into it, with the scenario as run in
+/// its resolved form (`scenario.toml`: every obstacle listed, every default and the
+/// planner written out; see [`Scenario::to_resolved_toml`]), so the run can be rendered
+/// again, or reproduced elsewhere, without this program's random obstacle generator.
+/// `source` names the scenario file in the header comment; `first_plan` is the centre path
+/// planned before the run (the one the run started along), written as plan 0 of
+/// `plans.csv`.
+pub fn write_run(
+    dir: &Path,
+    scenario: &Scenario,
+    source: &str,
+    run: &Run,
+    first_plan: &[Pose],
+    timing: &Timing,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let scenario_text = scenario
+        .to_resolved_toml(source)
+        .with_context(|| format!("writing the resolved form of {source}"))?;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let summary = run.summary();
+    let file = SummaryFile {
+        summary: &summary,
+        timing,
+        last_step: run.steps.last().map_or(0, |s| s.step),
+    };
+    let mut json = serde_json::to_vec_pretty(&file).context("formatting summary.json")?;
+    json.push(b'\n');
+    let files = [
+        ("scenario.toml", scenario_text.as_bytes().to_vec()),
+        ("trajectory.csv", trajectory_csv(run)?),
+        ("moves.csv", moves_csv(run)?),
+        ("path.csv", path_csv(&run.centre_path)?),
+        ("plans.csv", plans_csv(first_plan, run)?),
+        ("obstacles.csv", obstacles_csv(scenario, run)?),
+        // Last: a summary.json present means the other files are complete.
+        ("summary.json", json),
+    ];
+    let mut written = Vec::new();
+    for (name, bytes) in files {
+        let path = dir.join(name);
+        write_atomically(&path, &bytes)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// `runs/<name>-<UTC timestamp>` below the current directory, with `-2`, `-3`, ... added
+/// when a folder of that name exists already (two runs in the same second).
+pub fn default_run_dir(scenario_name: &str) -> PathBuf {
+    let base = timestamped_run_dir(scenario_name);
+    let taken = |p: &Path| std::fs::symlink_metadata(p).is_ok();
+    if !taken(&base) {
+        return base;
+    }
+    let name = base
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    (2..)
+        .map(|k| base.with_file_name(format!("{name}-{k}")))
+        .find(|p| !taken(p))
+        .unwrap_or(base)
+}
+
+fn timestamped_run_dir(scenario_name: &str) -> PathBuf {
+    let stamp = humantime::format_rfc3339_seconds(std::time::SystemTime::now())
+        .to_string()
+        .replace(':', "-");
+    let name = file_name_part(scenario_name);
+    PathBuf::from("runs").join(format!("{name}-{stamp}"))
+}
+
+/// `text` as a part of a file name: ASCII letters, digits, `-` and `_` kept, anything
+/// else `_`.
+pub(crate) fn file_name_part(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,513 @@
+//! The rows of the CSV files of a run folder (`docs/outputs.md`): one serde struct per
+//! file, written by [`super::tables`] and read back by [`crate::render`]. A column's name
+//! is its field's name, so the writer and the reader cannot disagree on it.
+//!
+//! Numbers are written as Rust's `Display` gives them (`0.0000001`, `-0`, `NaN`, `inf`:
+//! the shortest digits that read back to the same bits, never an exponent), not as the
+//! csv crate's own float form; the move status by its name and `alive` as `1` or `0`.
+
+use serde::de::{self, DeserializeOwned, Deserializer, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
+use shared::course::ReplanReason;
+use shared::vocabulary::MoveStatus;
+
+/// A row of `path.csv`: the formation centre at one step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PathRow {
+    /// The step.
+    pub step: usize,
+    /// Where the centre is, in metres.
+    #[serde(with = "display_f64")]
+    pub x_m: f64,
+    /// Where the centre is, in metres.
+    #[serde(with = "display_f64")]
+    pub y_m: f64,
+    /// Its heading, in radians.
+    #[serde(with = "display_f64")]
+    pub heading_rad: f64,
+}
+
+/// A row of `trajectory.csv`: one agent at the end of one step (positions in metres).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrajectoryRow {
+    /// The step.
+    pub step: usize,
+    /// The agent.
+    pub agent: usize,
+    /// Where it is.
+    #[serde(with = "display_f64")]
+    pub x: f64,
+    /// Where it is.
+    #[serde(with = "display_f64")]
+    pub y: f64,
+    /// Its ideal slot.
+    #[serde(with = "display_f64")]
+    pub slot_x: f64,
+    /// Its ideal slot.
+    #[serde(with = "display_f64")]
+    pub slot_y: f64,
+    /// The best point it aimed for.
+    #[serde(with = "display_f64")]
+    pub best_x: f64,
+    /// The best point it aimed for.
+    #[serde(with = "display_f64")]
+    pub best_y: f64,
+    /// Distance from its slot.
+    #[serde(with = "display_f64")]
+    pub deviation_m: f64,
+    /// Clearance to the nearest other body.
+    #[serde(with = "display_f64")]
+    pub clearance_m: f64,
+    /// Outcome of its turn, by [`MoveStatus::name`].
+    #[serde(with = "status_name")]
+    pub status: MoveStatus,
+    /// Whether it is still in the formation: `1` or `0` (read: anything but `0` is alive).
+    #[serde(with = "zero_one")]
+    pub alive: bool,
+}
+
+/// A row of `moves.csv`: one waypoint of the polyline an agent followed in one step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MoveRow {
+    /// The step.
+    pub step: usize,
+    /// The agent.
+    pub agent: usize,
+    /// The waypoint's place in the polyline, from 0.
+    pub index: usize,
+    /// The waypoint, in metres.
+    #[serde(with = "display_f64")]
+    pub x: f64,
+    /// The waypoint, in metres.
+    #[serde(with = "display_f64")]
+    pub y: f64,
+}
+
+/// A row of `plans.csv`: one pose of one plan of the formation centre.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanRow {
+    /// The plan: 0 for the first, then 1, 2, ... for the replans that found a path.
+    pub plan: usize,
+    /// The step at whose start it was planned (0 for the first).
+    pub step: usize,
+    /// Why it was planned.
+    pub reason: PlanReason,
+    /// The pose, in metres.
+    #[serde(with = "display_f64")]
+    pub x_m: f64,
+    /// The pose, in metres.
+    #[serde(with = "display_f64")]
+    pub y_m: f64,
+    /// The pose's heading, in radians.
+    #[serde(with = "display_f64")]
+    pub heading_rad: f64,
+}
+
+/// A row of `obstacles.csv`: a moving obstacle during one step, or an obstacle unknown at
+/// the start.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ObstacleRow {
+    /// The step (a moving obstacle's row; empty for an unknown obstacle).
+    pub step: Option<usize>,
+    /// Which list the obstacle is in.
+    pub kind: ObstacleKind,
+    /// Its place in `[[obstacles.moving]]` or `[[obstacles.unknown]]`.
+    pub index: usize,
+    /// Its centre (a moving obstacle's during the step), in metres.
+    #[serde(with = "display_f64")]
+    pub x_m: f64,
+    /// Its centre, in metres.
+    #[serde(with = "display_f64")]
+    pub y_m: f64,
+    /// Its radius, in metres.
+    #[serde(with = "display_f64")]
+    pub radius_m: f64,
+    /// The step an unknown obstacle joined the known map (empty: never, or a moving
+    /// obstacle, whose route the centre's planner knows).
+    pub known_from_step: Option<usize>,
+}
+
+/// The kind of an `obstacles.csv` row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObstacleKind {
+    /// A moving obstacle, where it stands during the row's step.
+    Moving,
+    /// An obstacle the centre's planner did not know at the start.
+    Unknown,
+}
+
+/// Why a plan of `plans.csv` was made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlanReason {
+    /// Plan 0: the path planned before the run.
+    First,
+    /// A replan during the run.
+    Replan(ReplanReason),
+}
+
+impl PlanReason {
+    /// Every reason.
+    pub const ALL: [PlanReason; 3] = [
+        Self::First,
+        Self::Replan(ReplanReason::FoundObstacle),
+        Self::Replan(ReplanReason::MovingObstacle),
+    ];
+
+    /// The name `plans.csv` gives it: `first`, or the replan's
+    /// ([`ReplanReason::name`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::First => "first",
+            Self::Replan(r) => r.name(),
+        }
+    }
+}
+
+/// A new [`ReplanReason`] fails to compile here: add it to [`PlanReason::ALL`] too.
+const _: fn(ReplanReason) = |r| match r {
+    ReplanReason::FoundObstacle | ReplanReason::MovingObstacle => {}
+};
+
+impl Serialize for PlanReason {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for PlanReason {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        Self::ALL
+            .into_iter()
+            .find(|r| r.name() == name)
+            .ok_or_else(|| de::Error::custom(format!("unknown plan reason `{name}`")))
+    }
+}
+
+/// An `f64` column: written with `Display`, read with `str::parse` (the csv reader's).
+mod display_f64 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(v: &f64, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(v)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
+        f64::deserialize(deserializer)
+    }
+}
+
+/// A [`MoveStatus`] column, by [`MoveStatus::name`].
+mod status_name {
+    use serde::{Deserialize, Deserializer, Serializer, de};
+    use shared::vocabulary::MoveStatus;
+
+    pub(super) fn serialize<S: Serializer>(
+        status: &MoveStatus,
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(status.name())
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<MoveStatus, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        MoveStatus::ALL
+            .into_iter()
+            .find(|s| s.name() == name)
+            .ok_or_else(|| de::Error::custom(format!("unknown move status `{name}`")))
+    }
+}
+
+/// A `bool` column written `1` or `0`; any number but 0 reads as true.
+mod zero_one {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(v: &bool, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_u8(u8::from(*v))
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<bool, D::Error> {
+        Ok(u8::deserialize(deserializer)? != 0)
+    }
+}
+
+/// The column names of row type `R`, in order: the field names its `Deserialize` asks
+/// the reader for, which are the names its `Serialize` writes.
+pub fn header<R: DeserializeOwned>() -> &'static [&'static str] {
+    /// A deserializer that only notes the fields of the struct asked of it.
+    struct Probe<'a>(&'a mut &'static [&'static str]);
+
+    impl<'de> Deserializer<'de> for Probe<'_> {
+        type Error = de::value::Error;
+
+        fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
+            Err(de::Error::custom("a row is a struct"))
+        }
+
+        fn deserialize_struct<V: Visitor<'de>>(
+            self,
+            _name: &'static str,
+            fields: &'static [&'static str],
+            _: V,
+        ) -> Result<V::Value, Self::Error> {
+            *self.0 = fields;
+            Err(de::Error::custom("fields noted"))
+        }
+
+        serde::forward_to_deserialize_any! {
+            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes
+            byte_buf option unit unit_struct newtype_struct seq tuple tuple_struct map enum
+            identifier ignored_any
+        }
+    }
+
+    let mut fields: &'static [&'static str] = &[];
+    // The probe always ends the deserialisation with an error, after noting the fields.
+    let _ = R::deserialize(Probe(&mut fields));
+    fields
+}
+
+/// A whole CSV file: the header of `R`, then `rows` (the header alone when there are
+/// none).
+pub fn csv_bytes<R: Serialize + DeserializeOwned>(
+    rows: impl IntoIterator<Item = R>,
+) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(Vec::new());
+    w.write_record(header::<R>())?;
+    for row in rows {
+        w.serialize(row)?;
+    }
+    Ok(w.into_inner()?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Values whose text differs between `Display` and other float forms.
+    const AWKWARD: [f64; 12] = [
+        -0.0,
+        0.0,
+        1e-7,
+        0.30000000000000004,
+        1.0,
+        1e16,
+        1e300,
+        5e-324,
+        -1.7976931348623157e308,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+
+    fn read<R: DeserializeOwned>(bytes: &[u8]) -> Vec<R> {
+        csv::Reader::from_reader(bytes)
+            .deserialize()
+            .collect::<Result<_, _>>()
+            .expect("rows read back")
+    }
+
+    fn same_bits(a: f64, b: f64) -> bool {
+        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+    }
+
+    #[test]
+    fn numbers_are_written_as_display_gives_them_and_read_back_to_the_same_bits() {
+        let rows: Vec<PlanRow> = AWKWARD
+            .iter()
+            .zip(AWKWARD.iter().rev())
+            .enumerate()
+            .map(|(i, (&a, &b))| PlanRow {
+                plan: i,
+                step: 7 * i,
+                reason: PlanReason::ALL[i % 3],
+                x_m: a,
+                y_m: b,
+                heading_rad: -a,
+            })
+            .collect();
+        let bytes = csv_bytes(rows.iter().copied()).expect("csv");
+        let mut want = String::from("plan,step,reason,x_m,y_m,heading_rad\n");
+        for r in &rows {
+            want += &format!(
+                "{},{},{},{},{},{}\n",
+                r.plan,
+                r.step,
+                r.reason.name(),
+                r.x_m,
+                r.y_m,
+                r.heading_rad
+            );
+        }
+        assert_eq!(String::from_utf8(bytes.clone()).expect("utf-8"), want);
+        assert!(
+            want.contains(",0.0000001,") && want.contains(",-0,"),
+            "{want}"
+        );
+        let back: Vec<PlanRow> = read(&bytes);
+        assert_eq!(back.len(), rows.len());
+        for (a, b) in rows.iter().zip(&back) {
+            assert_eq!((a.plan, a.step, a.reason), (b.plan, b.step, b.reason));
+            for (x, y) in [
+                (a.x_m, b.x_m),
+                (a.y_m, b.y_m),
+                (a.heading_rad, b.heading_rad),
+            ] {
+                assert!(same_bits(x, y), "{x:?} read back as {y:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn every_float_column_of_every_file_is_written_with_display() {
+        // 1e-7 is `0.0000001` with Display and `1e-7` in the csv crate's own form.
+        let v = 1e-7;
+        let files = [
+            csv_bytes([PathRow {
+                step: 0,
+                x_m: v,
+                y_m: v,
+                heading_rad: v,
+            }]),
+            csv_bytes([TrajectoryRow {
+                step: 0,
+                agent: 0,
+                x: v,
+                y: v,
+                slot_x: v,
+                slot_y: v,
+                best_x: v,
+                best_y: v,
+                deviation_m: v,
+                clearance_m: v,
+                status: MoveStatus::AtSlot,
+                alive: true,
+            }]),
+            csv_bytes([MoveRow {
+                step: 0,
+                agent: 0,
+                index: 0,
+                x: v,
+                y: v,
+            }]),
+            csv_bytes([ObstacleRow {
+                step: None,
+                kind: ObstacleKind::Unknown,
+                index: 0,
+                x_m: v,
+                y_m: v,
+                radius_m: v,
+                known_from_step: None,
+            }]),
+        ];
+        for bytes in files {
+            let text = String::from_utf8(bytes.expect("csv")).expect("utf-8");
+            assert!(!text.contains("1e-7"), "{text}");
+            let header_columns = text.lines().next().expect("header").split(',').count();
+            let row = text.lines().nth(1).expect("row");
+            let cells: Vec<&str> = row.split(',').collect();
+            assert_eq!(cells.len(), header_columns, "{text}");
+            let floats = cells.iter().filter(|c| **c == "0.0000001").count();
+            let other = cells.iter().filter(|c| c.contains('.')).count();
+            assert_eq!(floats, other, "{text}");
+            assert!(floats >= 2, "{text}");
+        }
+    }
+
+    #[test]
+    fn status_and_alive_keep_their_encodings() {
+        let rows: Vec<TrajectoryRow> = MoveStatus::ALL
+            .iter()
+            .enumerate()
+            .map(|(i, &status)| TrajectoryRow {
+                step: 1,
+                agent: i,
+                x: 0.5,
+                y: 1.0,
+                slot_x: 2.0,
+                slot_y: 3.0,
+                best_x: 4.0,
+                best_y: 5.0,
+                deviation_m: 0.25,
+                clearance_m: -0.125,
+                status,
+                alive: i % 2 == 0,
+            })
+            .collect();
+        let bytes = csv_bytes(rows.iter().copied()).expect("csv");
+        let text = String::from_utf8(bytes.clone()).expect("utf-8");
+        let mut lines = text.lines();
+        assert_eq!(
+            lines.next(),
+            Some("step,agent,x,y,slot_x,slot_y,best_x,best_y,deviation_m,clearance_m,status,alive")
+        );
+        for (line, r) in lines.zip(&rows) {
+            let alive = if r.alive { "1" } else { "0" };
+            assert_eq!(
+                line,
+                format!(
+                    "1,{},0.5,1,2,3,4,5,0.25,-0.125,{},{alive}",
+                    r.agent,
+                    r.status.name()
+                )
+            );
+        }
+        assert_eq!(read::<TrajectoryRow>(&bytes), rows);
+        // Any non-zero `alive` is alive; an unknown status is refused.
+        let header = header::<TrajectoryRow>().join(",");
+        let two: Vec<TrajectoryRow> =
+            read(format!("{header}\n0,0,0,0,0,0,0,0,0,0,dead,2\n").as_bytes());
+        assert!(two[0].alive);
+        assert_eq!(two[0].status, MoveStatus::Dead);
+        let bad = format!("{header}\n0,0,0,0,0,0,0,0,0,0,asleep,1\n");
+        let e = csv::Reader::from_reader(bad.as_bytes())
+            .deserialize::<TrajectoryRow>()
+            .next()
+            .expect("a row")
+            .expect_err("unknown status");
+        assert!(e.to_string().contains("asleep"), "{e}");
+    }
+
+    #[test]
+    fn an_obstacle_row_writes_its_missing_steps_as_empty_fields() {
+        let rows = [
+            ObstacleRow {
+                step: Some(3),
+                kind: ObstacleKind::Moving,
+                index: 1,
+                x_m: 1.5,
+                y_m: 2.0,
+                radius_m: 0.5,
+                known_from_step: None,
+            },
+            ObstacleRow {
+                step: None,
+                kind: ObstacleKind::Unknown,
+                index: 0,
+                x_m: 4.0,
+                y_m: 5.0,
+                radius_m: 1.0,
+                known_from_step: Some(12),
+            },
+        ];
+        let bytes = csv_bytes(rows).expect("csv");
+        assert_eq!(
+            String::from_utf8(bytes.clone()).expect("utf-8"),
+            "step,kind,index,x_m,y_m,radius_m,known_from_step\n\
+             3,moving,1,1.5,2,0.5,\n\
+             ,unknown,0,4,5,1,12\n"
+        );
+        assert_eq!(read::<ObstacleRow>(&bytes), rows);
+        assert_eq!(
+            csv_bytes(Vec::<ObstacleRow>::new()).expect("csv"),
+            b"step,kind,index,x_m,y_m,radius_m,known_from_step\n"
+        );
+    }
+}

@@ -1,0 +1,128 @@
+//! The CSV files of a run folder, made from a run: its rows ([`super::rows`]) in order,
+//! each file with its header.
+
+use shared::geometry::Pose;
+use shared::record::Run;
+use shared::scenario::Scenario;
+
+use super::rows::{
+    MoveRow, ObstacleKind, ObstacleRow, PathRow, PlanReason, PlanRow, TrajectoryRow, csv_bytes,
+};
+
+/// The centre path as CSV: `step,x_m,y_m,heading_rad` ([`PathRow`]), full precision
+/// (the shortest decimal form that reads back to the same bits). In a run folder this is
+/// the path the centre actually followed ([`Run::centre_path`]: one pose per step, a wait
+/// repeats the pose); `coordinator plan` writes the planned path in this form.
+pub fn path_csv(path: &[Pose]) -> anyhow::Result<Vec<u8>> {
+    csv_bytes(path.iter().enumerate().map(|(step, p)| PathRow {
+        step,
+        x_m: p.x_m,
+        y_m: p.y_m,
+        heading_rad: p.heading_rad,
+    }))
+}
+
+/// The trajectory as CSV, one row per agent per step ([`TrajectoryRow`],
+/// `docs/outputs.md`), full precision.
+pub fn trajectory_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
+    csv_bytes(run.steps.iter().flat_map(|s| {
+        s.agents.iter().enumerate().map(|(agent, a)| TrajectoryRow {
+            step: s.step,
+            agent,
+            x: a.position.x,
+            y: a.position.y,
+            slot_x: a.slot.x,
+            slot_y: a.slot.y,
+            best_x: a.best.x,
+            best_y: a.best.y,
+            deviation_m: a.deviation_m,
+            clearance_m: a.clearance_m,
+            status: a.status,
+            alive: a.alive,
+        })
+    }))
+}
+
+/// Every move's polyline as CSV: `step,agent,index,x,y` ([`MoveRow`], one row per
+/// waypoint).
+pub fn moves_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
+    csv_bytes(run.steps.iter().flat_map(|s| {
+        s.agents.iter().enumerate().flat_map(move |(agent, a)| {
+            a.waypoints
+                .iter()
+                .enumerate()
+                .map(move |(index, p)| MoveRow {
+                    step: s.step,
+                    agent,
+                    index,
+                    x: p.x,
+                    y: p.y,
+                })
+        })
+    }))
+}
+
+/// The centre's plans as CSV, one row per pose: `plan,step,reason,x_m,y_m,heading_rad`
+/// ([`PlanRow`]). Plan 0 is `first_plan` (step 0, reason [`PlanReason::First`]); plans
+/// 1, 2, ... are the replans that found a path, in order, each from the pose the centre
+/// stood at when it was planned at the start of `step` (reasons `found-obstacle`,
+/// `moving-obstacle`). Replans that found no path (the centre waited) have no rows:
+/// `summary.json` `replans` lists them all.
+pub fn plans_csv(first_plan: &[Pose], run: &Run) -> anyhow::Result<Vec<u8>> {
+    let replans = run
+        .course
+        .replans
+        .iter()
+        .filter(|r| r.found)
+        .map(|r| (r.step, PlanReason::Replan(r.reason), r.path.as_slice()));
+    let plans = std::iter::once((0, PlanReason::First, first_plan)).chain(replans);
+    csv_bytes(plans.enumerate().flat_map(|(plan, (step, reason, poses))| {
+        poses.iter().map(move |p| PlanRow {
+            plan,
+            step,
+            reason,
+            x_m: p.x_m,
+            y_m: p.y_m,
+            heading_rad: p.heading_rad,
+        })
+    }))
+}
+
+/// The obstacles of a changing world as CSV:
+/// `step,kind,index,x_m,y_m,radius_m,known_from_step` ([`ObstacleRow`]). First one row
+/// per moving obstacle per recorded step (kind `moving`, `index` its place in
+/// `[[obstacles.moving]]`, where it stands during the step, `known_from_step` empty: the
+/// centre's planner knows their routes); then one row per `[[obstacles.unknown]]`
+/// obstacle (kind `unknown`, `step` empty, `known_from_step` the step it joined the known
+/// map, empty when never). A static world gives the header alone.
+pub fn obstacles_csv(scenario: &Scenario, run: &Run) -> anyhow::Result<Vec<u8>> {
+    let moving = run.steps.iter().flat_map(|s| {
+        s.moving
+            .iter()
+            .zip(&scenario.moving)
+            .enumerate()
+            .map(|(index, (p, m))| ObstacleRow {
+                step: Some(s.step),
+                kind: ObstacleKind::Moving,
+                index,
+                x_m: p.x,
+                y_m: p.y,
+                radius_m: m.radius_m,
+                known_from_step: None,
+            })
+    });
+    let unknown = scenario
+        .unknown
+        .iter()
+        .enumerate()
+        .map(|(index, o)| ObstacleRow {
+            step: None,
+            kind: ObstacleKind::Unknown,
+            index,
+            x_m: o.centre.x,
+            y_m: o.centre.y,
+            radius_m: o.radius_m,
+            known_from_step: run.course.found_at.get(index).copied().flatten(),
+        });
+    csv_bytes(moving.chain(unknown))
+}
