@@ -275,7 +275,7 @@ pub struct RenderArgs {
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Formation sizes to measure (repeatable or comma-separated; default 6,200, or none
-    /// with --turns-scenario).
+    /// with --turns-scenario or --loop-scenario).
     #[arg(long, value_name = "N", value_delimiter = ',')]
     pub agents: Vec<usize>,
     /// Steps of the straight path (default: about 3000 turns, at least 40 steps).
