@@ -66,8 +66,9 @@ pub fn locate_agent_binary(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
 /// services of a channel (world, state, turn) keeps its static config, dynamic config and
 /// port tag open (9); the world publisher's data segment, the state connection and their
 /// counterparts (4); the turn notifier's socket and event segment (2). The mission is a
-/// file and the done event one shared service, not services per agent: with them it
-/// was 25 per agent, and 1 000 agents did not fit a hard limit of 20 000.
+/// file and the done event one shared service, not services per agent: services per
+/// agent for them would cost 25 files per agent, and 1 000 agents would not fit a hard
+/// limit of 20 000.
 const FDS_PER_AGENT: u64 = 15;
 /// Open files the coordinator holds whatever the number of agents (about 10 measured),
 /// with room for the files it opens while it runs (/proc, outputs).
@@ -103,10 +104,11 @@ pub fn raise_fd_limit(agents: usize) -> anyhow::Result<()> {
 /// coordinator's iceoryx2 files (iceoryx2 opens them without `O_CLOEXEC`).
 ///
 /// One `close_range(3, ~0, CLOSE_RANGE_CLOEXEC)` call (Linux 5.11): the coordinator holds
-/// 25 descriptors per agent and marks them before every spawn, so one `fcntl` per
-/// descriptor made starting N agents quadratic (measured on 2 vCPUs: 1 000 agents took
-/// 32 s to spawn that way; with the one call, 780 agents are spawned and ready in 7 s).
-/// Older kernels fall back to one `fcntl` per descriptor listed in `/proc/self/fd`.
+/// [`FDS_PER_AGENT`] descriptors per agent and marks them before every spawn, so one
+/// `fcntl` per descriptor would make starting N agents quadratic (measured on 2 vCPUs:
+/// 1 000 agents took 32 s to spawn with one `fcntl` per descriptor; with the one call,
+/// 780 agents are spawned and ready in 7 s). Older kernels fall back to one `fcntl` per
+/// descriptor listed in `/proc/self/fd`.
 fn set_cloexec_on_all_fds() {
     // SAFETY: a plain system call on descriptor numbers; it changes only their flags.
     let marked = unsafe {

@@ -62,7 +62,7 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 250)]
     pub turn_deadline_ms: u64,
     /// The controller, overriding the scenario's `planner` (best-point, cbf,
-    /// zcbf-logsumexp).
+    /// zcbf-logsumexp, orca).
     #[arg(long, value_parser = parse_planner)]
     pub planner: Option<PlannerKind>,
     /// Start a replacement process for every agent that dies; it re-joins from where the
@@ -98,6 +98,7 @@ pub struct RunArgs {
     /// cores or more, block on one).
     #[arg(long, value_enum, default_value_t = WaitMode::Auto)]
     pub wait: WaitMode,
+    /// How agents reach the coordinator: `--transport` and the Zenoh options.
     #[command(flatten)]
     pub network: NetworkArgs,
 }
@@ -274,7 +275,7 @@ pub struct RenderArgs {
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Formation sizes to measure (repeatable or comma-separated; default 6,200, or none
-    /// with --turns-scenario).
+    /// with --turns-scenario or --loop-scenario).
     #[arg(long, value_name = "N", value_delimiter = ',')]
     pub agents: Vec<usize>,
     /// Steps of the straight path (default: about 3000 turns, at least 40 steps).

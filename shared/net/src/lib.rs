@@ -7,8 +7,8 @@
 //! and its move back over Zenoh. The coordinator's protocol, checks and deadlines are
 //! the same for both; the relay adds one hop on the coordinator's host.
 //!
-//! The coordinator runs a Zenoh router on an explicit endpoint ([`open_router`]); relays
-//! and agents are its clients ([`open_client`]). Per agent I:
+//! The coordinator runs a Zenoh router on an explicit endpoint (`open_router`); relays
+//! and agents are its clients (`open_client`; both with the feature `zenoh`). Per agent I:
 //! - `formation/agent/I/down`: relay to agent ([`Down`]: probe, mission, turn, quit);
 //! - `formation/agent/I/up`: agent to relay ([`Up`]: hello, ready, move);
 //! - `formation/agent/I/alive`: the agent's liveliness token, gone with its session;
@@ -17,7 +17,7 @@
 //! One concept per module:
 //! - `endpoint`: `tcp/HOST:PORT` and `tls/HOST:PORT` ([`Endpoint`]);
 //! - `message`: the messages and their bounded decoding ([`decode`]);
-//! - `port`: sending and receiving them on Zenoh ports ([`send`], [`receive`]);
+//! - `port`: sending and receiving them on Zenoh ports (`send`, `receive`; feature `zenoh`);
 //! - `keys`: the key expressions;
 //! - `security`: plain or TLS, the files and names of each side ([`Security`], [`Role`]);
 //! - `session`: opening the router and the clients (feature `zenoh`).

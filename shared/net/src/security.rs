@@ -17,7 +17,7 @@ pub enum Security {
 }
 
 /// Who a TLS certificate names (its common name, `formation ROLE`): the router lets each
-/// do only its part ([`open_router`]).
+/// do only its part (`open_router`, with the feature `zenoh`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Role {
     /// The coordinator's router.

@@ -11,8 +11,8 @@ use crate::endpoint::Endpoint;
 use crate::security::{Role, Security, SessionError};
 
 /// A link's lease: a peer silent this long (its process gone, its link down) is dropped
-/// and its liveliness tokens with it. Zenoh's default is 10 s; 1 s dropped healthy agents
-/// on a loaded 2-core machine (keep-alives are sent every quarter lease). A silent agent
+/// and its liveliness tokens with it. Zenoh's default is 10 s; a lease of 1 s drops healthy
+/// agents on a loaded 2-core machine (keep-alives are sent every quarter lease). A silent agent
 /// is caught sooner anyway, by the turn deadline.
 pub const LINK_LEASE: Duration = Duration::from_millis(3000);
 

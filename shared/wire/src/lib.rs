@@ -6,8 +6,9 @@
 //! capacity and without pointers: a sample is written in place in shared memory
 //! ([`loan_default`]) and read in place by the other process, with no serialization.
 //!
-//! Every agent has a channel of its own: five services below the run's prefix, named by
-//! [`AgentServiceNames`] after the agent and the generation of its process. One channel
+//! Every agent has a channel of its own: three services below the run's prefix (`world`,
+//! `turn`, `state`), named by [`AgentServiceNames`] after the agent and the generation of
+//! its process; one more service, [`DONE_SERVICE`], is shared by the run. One channel
 //! per agent, not services shared by all: every service then has exactly one port on
 //! each side, so an agent that opens extra ports can starve no one but itself, a turn
 //! reads one connection instead of N, and a replacement process never shares a service
@@ -18,7 +19,9 @@
 //! every field before anything uses it.
 //!
 //! One concept per module:
-//! - `message`: the messages ([`Mission`], [`World`], [`AgentState`]) and their checks;
+//! - `message`: the messages ([`World`], [`AgentState`]) and their checks;
+//! - `mission_file`: the mission (the scenario as run) as a file in the run's private
+//!   folder ([`write_mission`], [`read_mission`]);
 //! - `services`: the names of an agent's channel and the events rung on it;
 //! - `config`: the iceoryx2 configuration of a run ([`ipc_config`]);
 //! - `prefix`: the run prefix ([`RunPrefix`]);

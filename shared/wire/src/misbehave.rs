@@ -55,7 +55,7 @@ pub enum Misbehave {
     /// Open its services, then exit before the ready handshake.
     ExitBeforeReady,
     /// Ignore the notice that its turn comes next (`--wait spin`) and sleep until its turn
-    /// is rung, as an agent built before the notice existed would; its moves are honest.
+    /// is rung, as an agent that does not know the notice would; its moves are honest.
     DeafToPrepare,
 }
 

@@ -10,8 +10,8 @@
 //! - `state`: publish-subscribe, agent to coordinator: its handshake and its moves.
 //!
 //! One service is shared by the run, [`DONE_SERVICE`]: event, agents to coordinator,
-//! "my state is published", rung with the agent's index as the event id. A service per
-//! agent would cost the coordinator five open files per agent for the whole run, and its
+//! "my state is published", rung with the agent's index as the event id. A done service
+//! per agent would cost the coordinator five open files per agent for the whole run, and its
 //! open-file limit is what bounds the number of agents. An agent ringing another's id
 //! only wakes the coordinator early: it then looks at that agent's own state channel,
 //! which holds nothing of the ringer's.
@@ -21,7 +21,8 @@
 pub struct AgentServiceNames {
     /// Coordinator to agent: the [`World`](crate::World) of each turn.
     pub world: String,
-    /// Event, coordinator to agent: [`EVENT_TURN`], [`EVENT_QUIT`], [`EVENT_ECHO`].
+    /// Event, coordinator to agent: [`EVENT_TURN`], [`EVENT_QUIT`], [`EVENT_ECHO`],
+    /// [`EVENT_PREPARE`].
     pub turn: String,
     /// Agent to coordinator: its [`AgentState`](crate::AgentState) (handshake, moves, echoes).
     pub state: String,
