@@ -1,4 +1,15 @@
-//! The agent's side of the iceoryx2 protocol (see [`wire`]).
+//! The agent's side of the iceoryx2 protocol (see [`wire`]), in two layers:
+//!
+//! - [`Channel`]: the agent's ports on its own channel ([`AgentServiceNames`]), as
+//!   primitives: wait for the events rung on it, read the newest world, send a state
+//!   sample. [`IpcPorts`] is the channel over iceoryx2.
+//! - [`IpcTransport`]: the protocol on top of a channel (the ready handshake, the echo,
+//!   the prepare notice's look at the world, turns and moves), the [`Transport`] that
+//!   [`serve`](crate::serve) talks to.
+//!
+//! The split lets a test build wrap the ports in a decorator that tampers with what goes
+//! out and ignores what comes in (the `misbehave` feature); an agent built without it
+//! runs [`IpcTransport`] over [`IpcPorts`] and nothing else.
 
 use std::time::{Duration, Instant};
 
@@ -20,65 +31,139 @@ use wire::{
 
 use crate::transport::{Command, MissionView, Transport, TurnInput};
 
-/// What a hostile agent writes into its own samples (test modes only; an honest agent
-/// uses [`Tamper::default`], which changes nothing).
+/// The events one wait on the turn listener heard, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Tamper {
-    /// Write the waypoint count of every move raw, beyond the capacity.
-    pub raw_count_on_moves: bool,
-    /// Write the waypoint count of the ready handshake raw, beyond the capacity.
-    pub raw_count_on_ready: bool,
-    /// Name this agent in the handshake instead of the agent itself.
-    pub ready_as: Option<u32>,
-    /// Ignore the notice that the turn comes next ([`EVENT_PREPARE`]).
-    pub deaf_to_prepare: bool,
+pub struct Events {
+    /// [`EVENT_TURN`]: this agent's world is published.
+    pub turn: bool,
+    /// [`EVENT_ECHO`]: answer an empty turn (the bench's echo).
+    pub echo: bool,
+    /// [`EVENT_QUIT`]: leave.
+    pub quit: bool,
+    /// [`EVENT_PREPARE`]: this agent's turn comes next.
+    pub prepare: bool,
 }
 
-/// The raw waypoint counts a tampering agent writes, in turn.
-const RAW_COUNTS: [u64; 3] = [wire_capacity_plus_one(), 1 << 40, u64::MAX];
-
-const fn wire_capacity_plus_one() -> u64 {
-    shared::vocabulary::MAX_WAYPOINTS as u64 + 1
-}
-
-/// Write `state`'s waypoint count field raw, as a hostile process can (test modes).
-fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
-    let vec = std::ptr::addr_of_mut!(state.waypoints).cast::<u8>();
-    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::vocabulary::MAX_WAYPOINTS]>();
-    // SAFETY: `StaticVec` is `repr(C)` { data: [_; CAPACITY], len: u64 }: the count lies
-    // right after the array, inside the sample.
-    unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };
+/// An agent's ports on its own channel, as primitives.
+pub trait Channel {
+    /// Block until an event is rung or `timeout` passes (it may also return early with
+    /// nothing): the events heard, by kind, and how the wait ended (an error, e.g. a
+    /// signal, may come with events heard before it).
+    fn wait(&mut self, timeout: Duration) -> (Events, Result<(), ListenerWaitError>);
+    /// The newest world sample as a turn, if it is this agent's turn.
+    fn read_world(&mut self) -> anyhow::Result<Option<TurnInput>>;
+    /// Loan a state sample with this agent's index and process id, let `fill` write the
+    /// rest in place, stamp it, send it and ring the run's done event.
+    fn send_state(
+        &mut self,
+        fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()>;
+    /// Whether a signal noted while waiting asks this process to terminate.
+    fn termination_requested(&self) -> bool;
 }
 
 /// The agent's iceoryx2 ports: its own channel ([`AgentServiceNames`]).
-pub struct IpcTransport {
+pub struct IpcPorts {
     agent: usize,
-    liveness: Duration,
-    parent: Pid,
     node: Node<ipc::Service>,
     world_sub: Subscriber<ipc::Service, World, ()>,
     state_pub: Publisher<ipc::Service, AgentState, ()>,
     turn_listener: Listener<ipc::Service>,
     done_notifier: Notifier<ipc::Service>,
+}
+
+impl Channel for IpcPorts {
+    fn wait(&mut self, timeout: Duration) -> (Events, Result<(), ListenerWaitError>) {
+        let mut events = Events::default();
+        let woke = self.turn_listener.timed_wait(
+            |event| match event.id.as_value() {
+                EVENT_TURN => events.turn = true,
+                EVENT_ECHO => events.echo = true,
+                EVENT_QUIT => events.quit = true,
+                EVENT_PREPARE => events.prepare = true,
+                _ => {}
+            },
+            timeout,
+        );
+        (events, woke.map(|_| ()))
+    }
+
+    fn read_world(&mut self) -> anyhow::Result<Option<TurnInput>> {
+        let mut turn = None;
+        while let Some(w) = self.world_sub.receive().context("receiving the world")? {
+            if w.turn_agent as usize != self.agent {
+                continue;
+            }
+            // Only the coordinator publishes here, but a count beyond the capacity would
+            // make the slice below panic: refuse it instead.
+            if w.bodies.len() > shared::vocabulary::MAX_AGENTS {
+                bail!(
+                    "a world with {} bodies, beyond the capacity",
+                    w.bodies.len()
+                );
+            }
+            turn = Some(TurnInput {
+                seq: w.seq,
+                step: w.step,
+                token: w.token,
+                centre: w.centre.into(),
+                bodies: w
+                    .bodies
+                    .iter()
+                    .map(|b| (b.agent as usize, Point::from(b.position)))
+                    .collect(),
+            });
+        }
+        Ok(turn)
+    }
+
+    fn send_state(
+        &mut self,
+        fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>,
+    ) -> anyhow::Result<()> {
+        // The ~8 kB state is initialised in place in shared memory (the waypoint array
+        // stays uninitialised behind its length), not on the stack and then copied.
+        let mut sample = wire::loan_default(&self.state_pub).context("loaning a state sample")?;
+        let state = sample.payload_mut();
+        state.agent = self.agent as u32;
+        state.pid = std::process::id();
+        fill(state)?;
+        state.sent_ns = wire::monotonic_ns();
+        sample.send().context("sending the state")?;
+        self.done_notifier.notify().context("notifying done")?;
+        Ok(())
+    }
+
+    fn termination_requested(&self) -> bool {
+        matches!(
+            self.node.wait(Duration::ZERO),
+            Err(NodeWaitFailure::TerminationRequest)
+        )
+    }
+}
+
+/// The agent's side of the iceoryx2 protocol over the channel `C` (normally
+/// [`IpcPorts`]).
+pub struct IpcTransport<C = IpcPorts> {
+    agent: usize,
+    liveness: Duration,
+    parent: Pid,
+    channel: C,
     /// The scenario as run, read from the run's mission file when the channel opens.
     mission: MissionView,
     /// When the current turn's event woke the agent ([`wire::monotonic_ns`]).
     woke_ns: u64,
-    tamper: Tamper,
-    /// States sent so far (picks the tampering agent's raw count).
-    sent: usize,
 }
 
 impl IpcTransport {
     /// Open the channel of agent `agent`, process generation `generation`, in run
     /// `prefix`. `liveness` is how often the agent checks, while it waits, that its
-    /// coordinator is still there; `tamper` is a test mode (default: none).
+    /// coordinator is still there.
     pub fn open(
         prefix: &str,
         agent: usize,
         generation: u32,
         liveness: Duration,
-        tamper: Tamper,
     ) -> anyhow::Result<Self> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
@@ -127,10 +212,8 @@ impl IpcTransport {
             .open()
             .with_context(|| format!("opening {}", wire::DONE_SERVICE))?;
 
-        Ok(Self {
+        let channel = IpcPorts {
             agent,
-            liveness,
-            parent,
             world_sub: world
                 .subscriber_builder()
                 .create()
@@ -151,36 +234,29 @@ impl IpcTransport {
                 .create()
                 .context("done notifier")?,
             node,
+        };
+        Ok(Self {
+            agent,
+            liveness,
+            parent,
+            channel,
             mission,
             woke_ns: 0,
-            tamper,
-            sent: 0,
         })
     }
+}
 
-    /// Loan a state sample, let `fill` write it in place, send it and ring `done`.
-    fn send_state(
-        &mut self,
-        fill: impl FnOnce(&mut AgentState) -> anyhow::Result<()>,
-    ) -> anyhow::Result<()> {
-        // The ~8 kB state is initialised in place in shared memory (the waypoint array
-        // stays uninitialised behind its length), not on the stack and then copied.
-        let mut sample = wire::loan_default(&self.state_pub).context("loaning a state sample")?;
-        let state = sample.payload_mut();
-        state.agent = self.agent as u32;
-        state.pid = std::process::id();
-        fill(state)?;
-        state.sent_ns = wire::monotonic_ns();
-        let kind = state.kind;
-        let tampered = (self.tamper.raw_count_on_moves && kind == StateKind::Move as u32)
-            || (self.tamper.raw_count_on_ready && kind == StateKind::Ready as u32);
-        if tampered {
-            write_raw_waypoint_count(state, RAW_COUNTS[self.sent % RAW_COUNTS.len()]);
+impl<C: Channel> IpcTransport<C> {
+    /// The same transport over `wrap(channel)`: a decorator of the ports.
+    pub fn map_channel<D: Channel>(self, wrap: impl FnOnce(C) -> D) -> IpcTransport<D> {
+        IpcTransport {
+            agent: self.agent,
+            liveness: self.liveness,
+            parent: self.parent,
+            channel: wrap(self.channel),
+            mission: self.mission,
+            woke_ns: self.woke_ns,
         }
-        sample.send().context("sending the state")?;
-        self.sent += 1;
-        self.done_notifier.notify().context("notifying done")?;
-        Ok(())
     }
 
     fn coordinator_gone(&self) -> bool {
@@ -193,46 +269,12 @@ impl IpcTransport {
     pub fn should_leave(&self) -> bool {
         SignalHandler::termination_requested() || self.coordinator_gone()
     }
-
-    /// The newest world sample as a turn, if it is this agent's turn.
-    fn read_world(&mut self) -> anyhow::Result<Option<TurnInput>> {
-        let mut turn = None;
-        while let Some(w) = self.world_sub.receive().context("receiving the world")? {
-            if w.turn_agent as usize != self.agent {
-                continue;
-            }
-            // Only the coordinator publishes here, but a count beyond the capacity would
-            // make the slice below panic: refuse it instead.
-            if w.bodies.len() > shared::vocabulary::MAX_AGENTS {
-                bail!(
-                    "a world with {} bodies, beyond the capacity",
-                    w.bodies.len()
-                );
-            }
-            turn = Some(TurnInput {
-                seq: w.seq,
-                step: w.step,
-                token: w.token,
-                centre: w.centre.into(),
-                bodies: w
-                    .bodies
-                    .iter()
-                    .map(|b| (b.agent as usize, Point::from(b.position)))
-                    .collect(),
-            });
-        }
-        Ok(turn)
-    }
 }
 
-impl Transport for IpcTransport {
+impl<C: Channel> Transport for IpcTransport<C> {
     fn announce_ready(&mut self) -> anyhow::Result<()> {
-        let ready_as = self.tamper.ready_as;
-        self.send_state(|s| {
+        self.channel.send_state(|s| {
             s.kind = StateKind::Ready as u32;
-            if let Some(other) = ready_as {
-                s.agent = other;
-            }
             Ok(())
         })
     }
@@ -245,34 +287,24 @@ impl Transport for IpcTransport {
                 return Ok(Command::Quit);
             }
             let waited = Instant::now();
-            let (mut turn, mut echo, mut quit, mut prepare) = (false, false, false, false);
-            let woke = self.turn_listener.timed_wait(
-                |event| match event.id.as_value() {
-                    EVENT_TURN => turn = true,
-                    EVENT_ECHO => echo = true,
-                    EVENT_QUIT => quit = true,
-                    EVENT_PREPARE => prepare = !self.tamper.deaf_to_prepare,
-                    _ => {}
-                },
-                self.liveness,
-            );
-            if echo {
+            let (events, woke) = self.channel.wait(self.liveness);
+            if events.echo {
                 self.woke_ns = wire::monotonic_ns();
                 let woke_ns = self.woke_ns;
-                self.send_state(|s| {
+                self.channel.send_state(|s| {
                     s.kind = StateKind::Echo as u32;
                     s.woke_ns = woke_ns;
                     Ok(())
                 })?;
             }
-            if prepare && !quit {
+            if events.prepare && !events.quit {
                 // Next in line: look at the world without sleeping for a while, so the
                 // grant costs no wake-up (the coordinator then publishes the world without
                 // ringing the turn); then back to the blocking wait. A turn rung with it
                 // (late, its world maybe taken already) is served by the same look.
                 let until = Instant::now() + PREPARE_SPIN;
                 while Instant::now() < until {
-                    if let Some(t) = self.read_world()? {
+                    if let Some(t) = self.channel.read_world()? {
                         self.woke_ns = wire::monotonic_ns();
                         return Ok(Command::Turn(t));
                     }
@@ -281,15 +313,15 @@ impl Transport for IpcTransport {
                 continue;
             }
             match woke {
-                Ok(_) if quit => return Ok(Command::Quit),
-                Ok(_) if turn => {
+                Ok(()) if events.quit => return Ok(Command::Quit),
+                Ok(()) if events.turn => {
                     self.woke_ns = wire::monotonic_ns();
-                    if let Some(t) = self.read_world()? {
+                    if let Some(t) = self.channel.read_world()? {
                         return Ok(Command::Turn(t));
                     }
                     // A turn event without a world for us: a stale wake-up; wait again.
                 }
-                Ok(_) => {
+                Ok(()) => {
                     // Timed out (or woke early with nothing, which iceoryx2 may do):
                     // check the coordinator on the clock, not on the return value.
                     if waited.elapsed() >= self.liveness && self.coordinator_gone() {
@@ -298,8 +330,7 @@ impl Transport for IpcTransport {
                     }
                 }
                 Err(ListenerWaitError::InterruptSignal) => {
-                    if let Err(NodeWaitFailure::TerminationRequest) = self.node.wait(Duration::ZERO)
-                    {
+                    if self.channel.termination_requested() {
                         return Ok(Command::Quit);
                     }
                 }
@@ -320,7 +351,7 @@ impl Transport for IpcTransport {
         compute: Duration,
     ) -> anyhow::Result<()> {
         let woke_ns = self.woke_ns;
-        self.send_state(|s| {
+        self.channel.send_state(|s| {
             s.kind = StateKind::Move as u32;
             s.seq = turn.seq;
             s.step = turn.step;

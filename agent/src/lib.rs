@@ -3,15 +3,17 @@
 //!
 //! The turn loop, [`serve`], talks to the world only through the [`Transport`] trait, so
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.
+//!
+//! Features: `zenoh`, agents on other machines; `misbehave`, the test modes
+//! (`--misbehave MODE`, [`misbehave`]), which a shipping agent is built without.
 
 pub mod ipc;
+#[cfg(feature = "misbehave")]
 pub mod misbehave;
 #[cfg(feature = "zenoh")]
 pub mod net_transport;
-pub mod pingpong;
 #[cfg(feature = "zenoh")]
 pub mod relay;
-pub mod rogue;
 pub mod transport;
 
 use std::time::{Duration, Instant};
@@ -20,9 +22,8 @@ use anyhow::{Context, bail};
 use clap::Parser;
 use shared::geometry::Point;
 use shared::turn::TurnPlanner;
-use shared::vocabulary::{Body, Move};
+use shared::vocabulary::Body;
 
-use crate::ipc::Tamper;
 use wire::misbehave::Misbehave;
 
 pub use transport::{Command, Transport, TurnInput};
@@ -69,19 +70,13 @@ pub struct Args {
     /// an idle agent sleeps without waking (zero CPU).
     #[arg(long, default_value_t = 10_000)]
     pub liveness_ms: u64,
-    /// Test mode: misbehave or attack on purpose (the coordinator must survive it):
-    /// nan, teleport, through-obstacle, silent, garbage, overspeed, raw-length,
-    /// raw-length-ready, replay, early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard,
-    /// fork, exit-before-ready, deaf-to-prepare.
+    /// Test mode, only in an agent built with `--features misbehave`: misbehave or
+    /// attack on purpose (the coordinator must survive it): nan, teleport,
+    /// through-obstacle, silent, garbage, overspeed, raw-length, raw-length-ready, replay,
+    /// early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork, exit-before-ready,
+    /// deaf-to-prepare.
     #[arg(long)]
     pub misbehave: Option<Misbehave>,
-    /// Benchmark mode (`coordinator bench`): answer the latency floor's iceoryx2
-    /// ping-pong, then the Unix-socket one on `--uds`, instead of taking turns.
-    #[arg(long)]
-    pub pingpong: bool,
-    /// Benchmark mode: the coordinator's Unix socket for the socket ping-pong.
-    #[arg(long, requires = "pingpong")]
-    pub uds: Option<std::path::PathBuf>,
 }
 
 /// Install the stderr logger (`RUST_LOG`, default `warn`) and route iceoryx2's own log
@@ -102,8 +97,38 @@ pub fn init_logging() {
 #[cfg(not(feature = "zenoh"))]
 const NO_ZENOH: &str = "this agent was built without Zenoh: build it with `cargo build --release --features zenoh -p agent -p coordinator`";
 
+/// What an agent built without its test modes says when asked for one.
+#[cfg(not(feature = "misbehave"))]
+pub const NO_MISBEHAVE: &str = "this agent was built without its test modes: build it with `cargo build --release --features misbehave -p agent`";
+
+/// The test mode asked for; an agent built without the test modes refuses any.
+fn test_mode(args: &Args) -> anyhow::Result<Option<Misbehave>> {
+    #[cfg(not(feature = "misbehave"))]
+    if let Some(mode) = args.misbehave {
+        bail!("--misbehave {mode}: {NO_MISBEHAVE}");
+    }
+    Ok(args.misbehave)
+}
+
+/// Serve turns over `transport`, as test mode `mode` has it if one is given.
+fn serve_as<T: Transport>(
+    transport: T,
+    agent: usize,
+    mode: Option<Misbehave>,
+) -> anyhow::Result<()> {
+    #[cfg(feature = "misbehave")]
+    if let Some(mode) = mode {
+        return serve(&mut misbehave::Misbehaving::new(transport, agent, mode), agent);
+    }
+    #[cfg(not(feature = "misbehave"))]
+    let _ = mode;
+    let mut transport = transport;
+    serve(&mut transport, agent)
+}
+
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    let mode = test_mode(args)?;
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.die_with_parent {
         #[cfg(target_os = "linux")]
@@ -123,9 +148,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         net::check_security(connect, &security, args.allow_plain_tcp)?;
         #[cfg(feature = "zenoh")]
         {
-            let mut transport =
+            let transport =
                 net_transport::NetTransport::connect(connect, &security, args.agent, liveness)?;
-            return serve(&mut transport, args.agent, args.misbehave);
+            return serve_as(transport, args.agent, mode);
         }
         #[cfg(not(feature = "zenoh"))]
         bail!("{NO_ZENOH}");
@@ -145,31 +170,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         #[cfg(not(feature = "zenoh"))]
         bail!("{NO_ZENOH}");
     }
-    if args.misbehave == Some(Misbehave::Fork) {
-        misbehave::start_strays(prefix)?;
-    }
-    if args.pingpong {
-        return pingpong::run(prefix, args.uds.as_deref(), liveness);
-    }
-    // Attacks on other agents' channels come first, to race their owners.
-    let _held = rogue::before_opening(prefix, args.agent, args.misbehave);
-    let tamper = Tamper {
-        raw_count_on_moves: args.misbehave == Some(Misbehave::RawLength),
-        raw_count_on_ready: args.misbehave == Some(Misbehave::RawLengthReady),
-        deaf_to_prepare: args.misbehave == Some(Misbehave::DeafToPrepare),
-        ready_as: match args.misbehave {
-            Some(Misbehave::SpoofReady { victim }) => u32::try_from(victim).ok(),
-            _ => None,
-        },
+    // A test mode's attacks on other agents' channels come first, to race their owners.
+    #[cfg(feature = "misbehave")]
+    let _held = match mode {
+        Some(mode) => misbehave::before_opening(prefix, args.agent, mode)?,
+        None => Vec::new(),
     };
-    let mut transport =
-        ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, tamper)
-            .with_context(|| format!("opening run {prefix}"))?;
-    if args.misbehave == Some(Misbehave::ExitBeforeReady) {
-        // Leave at once, without closing anything: the coordinator must cope.
-        std::process::exit(3);
+    let transport = ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness)
+        .with_context(|| format!("opening run {prefix}"))?;
+    #[cfg(feature = "misbehave")]
+    if let Some(mode) = mode {
+        return misbehave::serve_ipc(transport, args.agent, mode);
     }
-    serve(&mut transport, args.agent, args.misbehave)
+    serve_as(transport, args.agent, mode)
 }
 
 /// Serve as the relay of agent `args.agent` ([`relay::run`]); with `--spawn-agent`, the
@@ -241,22 +254,14 @@ fn read_bodies(
 }
 
 /// The agent's turn loop: announce readiness, then for every turn plan and publish a
-/// move, until [`Command::Quit`]. `misbehave` is a test mode that publishes bad moves
-/// (modes that act outside the turn loop change nothing here).
-pub fn serve<T: Transport>(
-    transport: &mut T,
-    agent: usize,
-    misbehave: Option<Misbehave>,
-) -> anyhow::Result<()> {
+/// move, until [`Command::Quit`].
+pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()> {
     transport.announce_ready()?;
     let mut planner: Option<TurnPlanner> = None;
-    let mut obstacles = Vec::new();
     // Every agent's radius, from the mission (the world carries positions only).
     let mut radii_m: Vec<f64> = Vec::new();
     // The other agents as bodies; the buffer is kept from turn to turn.
     let mut others: Vec<Body> = Vec::new();
-    // The last move published (the replay mode sends it again).
-    let mut previous: Option<(TurnInput, Move)> = None;
     loop {
         let turn = match transport.next_command()? {
             Command::Quit => return Ok(()),
@@ -271,11 +276,11 @@ pub fn serve<T: Transport>(
                 )
             })?;
             // Every real obstacle it may sense, known to the centre or not.
-            obstacles = mission.obstacles.clone();
+            let obstacles = &mission.obstacles;
             planner = Some(
-                TurnPlanner::new(&mission.planner, mission.field, &obstacles, spec)
+                TurnPlanner::new(&mission.planner, mission.field, obstacles, spec)
                     .context("the mission's planner settings")?
-                    .with_moving(&mission.moving, &obstacles),
+                    .with_moving(&mission.moving, obstacles),
             );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
         }
@@ -286,41 +291,7 @@ pub fn serve<T: Transport>(
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let mv = planner.plan_turn(turn_step(&turn), &turn.centre, &me, &others);
         let compute = started.elapsed();
-        let Some(mode) = misbehave else {
-            transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
-            continue;
-        };
-        match mode {
-            Misbehave::Replay => {
-                if let Some((old_turn, old_move)) = &previous {
-                    transport.publish_move(old_turn, old_move, old_move.status as u32, compute)?;
-                }
-                transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
-            }
-            Misbehave::Early => {
-                transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
-                let guess = TurnInput {
-                    seq: turn.seq + 1,
-                    step: turn.step + 1,
-                    token: turn.token.wrapping_add(1),
-                    ..turn.clone()
-                };
-                transport.publish_move(&guess, &mv, mv.status as u32, compute)?;
-            }
-            Misbehave::Flood => {
-                for _ in 0..4 {
-                    transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
-                }
-            }
-            _ => {
-                if let Some((bad, status)) =
-                    misbehave::corrupt(mode, mv.clone(), &me, &obstacles, turn.step)
-                {
-                    transport.publish_move(&turn, &bad, status, compute)?;
-                }
-            }
-        }
-        previous = Some((turn, mv));
+        transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
     }
 }
 
@@ -405,7 +376,7 @@ mod tests {
         let agent = 2;
         let turns = first_turns(&scenario, agent);
         let mut t = scripted(&scenario, turns.clone());
-        serve(&mut t, agent, None).expect("serve");
+        serve(&mut t, agent).expect("serve");
         assert!(t.ready);
         assert_eq!(t.published.len(), turns.len());
         let planner = &agent_planners(&scenario).expect("planners")[agent];
@@ -431,16 +402,75 @@ mod tests {
         }
     }
 
+    /// What agent `agent` publishes over [`Scripted`] in mode `mode`.
+    #[cfg(feature = "misbehave")]
+    fn published_in_mode(
+        scenario: &Scenario,
+        turns: &[TurnInput],
+        agent: usize,
+        mode: Misbehave,
+    ) -> Vec<(u64, Move, u32)> {
+        let mut t = misbehave::Misbehaving::new(scripted(scenario, turns.to_vec()), agent, mode);
+        serve(&mut t, agent).expect("serve");
+        let inner = t.into_inner();
+        assert!(inner.ready);
+        inner.published
+    }
+
+    #[cfg(feature = "misbehave")]
     #[test]
     fn a_silent_agent_publishes_nothing_and_a_nan_agent_publishes_nan() {
         let scenario = Scenario::paper();
         let turns = first_turns(&scenario, 0);
-        let mut silent = scripted(&scenario, turns.clone());
-        serve(&mut silent, 0, Some(Misbehave::Silent)).expect("serve");
-        assert!(silent.published.is_empty());
-        let mut nan = scripted(&scenario, turns);
-        serve(&mut nan, 0, Some(Misbehave::Nan)).expect("serve");
-        assert!(nan.published.iter().all(|(_, mv, _)| mv.best.x.is_nan()));
+        assert!(published_in_mode(&scenario, &turns, 0, Misbehave::Silent).is_empty());
+        let nan = published_in_mode(&scenario, &turns, 0, Misbehave::Nan);
+        assert_eq!(nan.len(), turns.len());
+        assert!(nan.iter().all(|(_, mv, _)| mv.best.x.is_nan()));
+    }
+
+    #[cfg(feature = "misbehave")]
+    #[test]
+    fn replay_early_and_flood_send_the_honest_moves_out_of_turn() {
+        let scenario = Scenario::paper();
+        let agent = 1;
+        let turns = first_turns(&scenario, agent);
+        let mut plain = scripted(&scenario, turns.clone());
+        serve(&mut plain, agent).expect("serve");
+        let honest = plain.published;
+        assert_eq!(honest.len(), turns.len());
+
+        let replay = published_in_mode(&scenario, &turns, agent, Misbehave::Replay);
+        // The first turn's move alone, then every later turn's after the one before.
+        let mut want = vec![honest[0].clone()];
+        for w in honest.windows(2) {
+            want.extend([w[0].clone(), w[1].clone()]);
+        }
+        assert_eq!(replay, want);
+
+        let early = published_in_mode(&scenario, &turns, agent, Misbehave::Early);
+        let want: Vec<_> = honest
+            .iter()
+            .flat_map(|(seq, mv, status)| {
+                [(*seq, mv.clone(), *status), (seq + 1, mv.clone(), *status)]
+            })
+            .collect();
+        assert_eq!(early, want);
+
+        let flood = published_in_mode(&scenario, &turns, agent, Misbehave::Flood);
+        let want: Vec<_> = honest
+            .iter()
+            .flat_map(|m| std::iter::repeat_n(m.clone(), 4))
+            .collect();
+        assert_eq!(flood, want);
+
+        // Modes that act outside the moves publish the honest moves.
+        for mode in [Misbehave::Fork, Misbehave::RawLength, Misbehave::DeafToPrepare] {
+            assert_eq!(
+                published_in_mode(&scenario, &turns, agent, mode),
+                honest,
+                "{mode}"
+            );
+        }
     }
 
     #[test]
@@ -449,7 +479,7 @@ mod tests {
         let mut turns = first_turns(&scenario, 0);
         turns[0].bodies.push((6, Point::new(1.0, 1.0)));
         let mut t = scripted(&scenario, turns.clone());
-        let err = serve(&mut t, 0, None).expect_err("a world with a seventh agent");
+        let err = serve(&mut t, 0).expect_err("a world with a seventh agent");
         assert!(
             format!("{err:#}").contains("the world lists agent 6 but the mission has 6 agents"),
             "{err:#}"
@@ -458,7 +488,7 @@ mod tests {
         turns[0].bodies.pop();
         turns[0].bodies.swap(1, 2);
         let mut t = scripted(&scenario, turns.clone());
-        let err = serve(&mut t, 0, None).expect_err("out of order");
+        let err = serve(&mut t, 0).expect_err("out of order");
         assert!(
             format!("{err:#}").contains("not in increasing order"),
             "{err:#}"
@@ -466,7 +496,7 @@ mod tests {
         turns[0].bodies.remove(0);
         turns[0].bodies.sort_by_key(|b| b.0);
         let mut t = scripted(&scenario, turns);
-        let err = serve(&mut t, 0, None).expect_err("without itself");
+        let err = serve(&mut t, 0).expect_err("without itself");
         assert!(
             format!("{err:#}").contains("does not list agent 0 itself"),
             "{err:#}"
@@ -477,6 +507,6 @@ mod tests {
     fn an_agent_missing_from_the_mission_is_an_error_not_a_panic() {
         let scenario = Scenario::paper();
         let mut t = scripted(&scenario, first_turns(&scenario, 0));
-        assert!(serve(&mut t, 99, None).is_err());
+        assert!(serve(&mut t, 99).is_err());
     }
 }

@@ -21,7 +21,7 @@ use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
 use shared::geometry::Point;
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 
-use crate::ipc::{IpcTransport, Tamper};
+use crate::ipc::IpcTransport;
 use crate::transport::{Command, Transport, TurnInput};
 
 /// How often the relay probes for its agent until it answers.
@@ -191,7 +191,6 @@ pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
         agent,
         settings.generation,
         settings.liveness,
-        Tamper::default(),
     )?;
     let toml = wire::read_mission(settings.prefix)
         .context("the mission file")?

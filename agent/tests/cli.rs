@@ -16,6 +16,52 @@ fn the_help_names_every_option() {
     for option in ["--run", "--agent", "--liveness-ms", "--misbehave"] {
         assert!(help.contains(option), "{option} missing from:\n{help}");
     }
+    // The bench's ping-pong is a program of the bench's own.
+    for gone in ["--pingpong", "--uds"] {
+        assert!(!help.contains(gone), "{gone} in:\n{help}");
+    }
+}
+
+/// An agent built without its test modes refuses one in a single line that says how to
+/// build one with them, before it looks for the run.
+#[cfg(not(feature = "misbehave"))]
+#[test]
+fn a_shipping_agent_refuses_a_test_mode_and_says_how_to_build_one() {
+    let prefix = format!("refusedmode{}_", std::process::id());
+    for mode in ["nan", "raw-length", "impersonate=1", "deaf-to-prepare"] {
+        let out = agent()
+            .args(["--run", &prefix, "--agent", "0", "--misbehave", mode])
+            .env("RUST_LOG", "error")
+            .output()
+            .expect("agent");
+        assert_eq!(out.status.code(), Some(1), "{mode}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(&format!("--misbehave {mode}")), "{err}");
+        assert!(
+            err.contains("cargo build --release --features misbehave -p agent"),
+            "{err}"
+        );
+        assert!(!err.contains("opening run"), "{err}");
+    }
+    assert_eq!(remove_files_of(&prefix), 0, "nothing of the prefix was made");
+}
+
+/// An agent built with its test modes takes one and goes on to join the run.
+#[cfg(feature = "misbehave")]
+#[test]
+fn an_agent_built_with_its_test_modes_takes_one() {
+    let prefix = format!("takenmode{}_", std::process::id());
+    let out = agent()
+        .args(["--run", &prefix, "--agent", "0", "--misbehave", "nan"])
+        .env("RUST_LOG", "error")
+        .output()
+        .expect("agent");
+    remove_files_of(&prefix);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("opening run {prefix}")), "{err}");
+    assert!(!err.contains("--features misbehave"), "{err}");
 }
 
 /// Remove the files iceoryx2 made for `prefix` (a node that found no run leaves its

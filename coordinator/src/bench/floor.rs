@@ -1,6 +1,7 @@
 //! The latency floor and the socket comparison, measured between the coordinator and one
-//! `agent --pingpong` process (see `agent/src/pingpong.rs`), in blocks that alternate
-//! between the two mechanisms and can be spread over the run:
+//! process of the bench's own ping-pong program, [`PEER_BIN`] (see
+//! `coordinator/src/bin/bench-peer.rs`), in blocks that alternate between the mechanisms
+//! and can be spread over the run:
 //!
 //! - iceoryx2 floor: a small sample published, the ping event rung, then the same wait a
 //!   turn uses (take what arrived, else block in `Listener::timed_wait`) until the pong
@@ -30,6 +31,23 @@ use wire::{
 };
 
 use crate::agents::{AgentProcesses, Exit};
+
+/// The bench's ping-pong program, beside the coordinator's executable.
+pub const PEER_BIN: &str = "bench-peer";
+
+/// The bench's ping-pong program: [`PEER_BIN`] beside the running coordinator.
+pub fn locate_peer_binary() -> anyhow::Result<PathBuf> {
+    let path = std::env::current_exe()
+        .context("locating the coordinator executable")?
+        .with_file_name(PEER_BIN);
+    if !path.is_file() {
+        bail!(
+            "the bench's ping-pong program {} not found (build it with `cargo build --release -p coordinator`)",
+            path.display()
+        );
+    }
+    Ok(path)
+}
 
 /// Longest a single round trip may take before the measurement is abandoned.
 const ROUND_TRIP_DEADLINE: Duration = Duration::from_secs(2);
@@ -129,7 +147,7 @@ impl Ports {
     }
 }
 
-/// One `agent --pingpong` process and the coordinator's end of both ping-pongs. Blocks
+/// One [`PEER_BIN`] process and the coordinator's end of the ping-pongs. Blocks
 /// of either kind can be run at any time, e.g. before and after the turns, so the floor
 /// sees the same machine as the turns. Dropping the session (or [`Self::finish`]) stops
 /// and reaps the process and removes the socket file and every iceoryx2 file it made.
@@ -148,8 +166,10 @@ pub struct PingPongSession {
 }
 
 impl PingPongSession {
-    /// Start the ping-pong process from `bin` and shake hands over both channels.
-    pub fn start(bin: &Path) -> anyhow::Result<Self> {
+    /// Start the ping-pong process ([`locate_peer_binary`]) and shake hands over both
+    /// channels.
+    pub fn start() -> anyhow::Result<Self> {
+        let bin = locate_peer_binary()?;
         let prefix = wire::RunPrefix::new_random()?.to_string();
         let config = wire::ipc_config(&prefix, Role::Coordinator)?;
         let root = wire::RunRoot::create(&prefix)?;
@@ -159,7 +179,7 @@ impl PingPongSession {
             None => std::env::temp_dir().join(format!("{prefix}pingpong.sock")),
         };
         let mut session = Self {
-            procs: AgentProcesses::new(bin.to_path_buf(), &prefix, 1),
+            procs: AgentProcesses::new(bin, &prefix, 1),
             prefix,
             config,
             socket_path,
@@ -195,8 +215,7 @@ impl PingPongSession {
         let listener = UnixListener::bind(&self.socket_path)
             .with_context(|| format!("binding {}", self.socket_path.display()))?;
         let uds = self.socket_path.display().to_string();
-        self.procs
-            .spawn(0, &["--pingpong".into(), "--uds".into(), uds])?;
+        self.procs.spawn(0, &["--uds".into(), uds])?;
         let deadline = Instant::now() + STARTUP_DEADLINE;
         let stream = accept(&listener, &mut self.procs, deadline)?;
         stream.set_read_timeout(Some(ROUND_TRIP_DEADLINE))?;

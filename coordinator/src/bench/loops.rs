@@ -121,7 +121,7 @@ pub fn run(
     };
     let mut simulate_s = Vec::with_capacity(rounds);
     let (mut block, mut spin) = (Vec::new(), Vec::new());
-    let mut session = super::floor::PingPongSession::start(bin).map_err(CliError::Other)?;
+    let mut session = super::floor::PingPongSession::start().map_err(CliError::Other)?;
     let (mut floor_spin, mut floor_block) = (Vec::new(), Vec::new());
     for round in 0..rounds {
         floor_spin.extend(

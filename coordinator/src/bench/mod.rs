@@ -11,7 +11,8 @@
 //!    ran N turns ago, with no world, planning or move. The two-process floor below
 //!    wakes the same warm process every time; the echo shows what waking N processes in
 //!    turn costs by itself, so the turn's overhead can be read against both.
-//! 3. one `agent --pingpong` process answers an iceoryx2 event + publish-subscribe
+//! 3. one process of the bench's own ping-pong program ([`floor::PEER_BIN`], beside the
+//!    coordinator) answers an iceoryx2 event + publish-subscribe
 //!    ping-pong (the floor: the same wake-up as a turn) and a Unix socket ping-pong with
 //!    turn-sized payloads ([`floor`]), in short alternating blocks spread between the
 //!    steps of that same run, so the floor sees the same (shared, noisy) machine as the
@@ -325,7 +326,7 @@ fn bench_one(
         idle_probe: Some(Duration::from_millis(args.idle_ms)),
         ..RunOptions::default()
     };
-    let mut session = floor::PingPongSession::start(bin).context("starting the ping-pong")?;
+    let mut session = floor::PingPongSession::start().context("starting the ping-pong")?;
     let floor_prefix = session.prefix().to_string();
     let blocks = BLOCKS.min(args.round_trips).min(steps).max(1);
     let stride = (steps / blocks).max(1);

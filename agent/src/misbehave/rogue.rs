@@ -1,5 +1,5 @@
-//! Test modes that attack other agents' channels, as a compromised agent process could:
-//! [`Misbehave::Impersonate`] publishes in another agent's name on its channel,
+//! The test modes that attack other agents' channels, as a compromised agent process
+//! could: [`Misbehave::Impersonate`] publishes in another agent's name on its channel,
 //! [`Misbehave::Hoard`] grabs every port it can on every other agent's services. Both act
 //! before the agent opens its own channel, to race their victims; whatever they manage to
 //! open is held for the life of the process.
@@ -17,15 +17,15 @@ const HOARD_PER_SERVICE: usize = 4;
 
 /// Carry out the attacks of `mode` that come before this agent opens its own channel;
 /// returns what must stay open (ports, services, the node) for the life of the process.
-pub fn before_opening(prefix: &str, me: usize, mode: Option<Misbehave>) -> Vec<Box<dyn Any>> {
+pub fn before_opening(prefix: &str, me: usize, mode: Misbehave) -> Vec<Box<dyn Any>> {
     let mut held: Vec<Box<dyn Any>> = Vec::new();
     let result = match mode {
-        Some(Misbehave::Impersonate { victim }) => impersonate(prefix, victim, &mut held),
-        Some(Misbehave::Hoard) => hoard(prefix, me, &mut held),
+        Misbehave::Impersonate { victim } => impersonate(prefix, victim, &mut held),
+        Misbehave::Hoard => hoard(prefix, me, &mut held),
         _ => Ok(()),
     };
     if let Err(e) = result {
-        tracing::warn!("agent {me}: attack ({mode:?}) stopped: {e:#}");
+        tracing::warn!("agent {me}: attack ({mode}) stopped: {e:#}");
     }
     held
 }

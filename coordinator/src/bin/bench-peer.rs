@@ -1,5 +1,7 @@
-//! `agent --pingpong --run PREFIX --agent 0 [--uds PATH]`: the other end of the latency
-//! floor that `coordinator bench` measures in the same run as the turns.
+//! `bench-peer --run PREFIX --agent 0 [--uds PATH]`: the other end of the latency floor
+//! that `coordinator bench` measures in the same run as the turns (see the bench's
+//! `floor` module). A program of the bench's own, started by `coordinator bench` from
+//! beside its executable; the shipping agent knows nothing of it.
 //!
 //! - iceoryx2: the same wake-up as a turn. The process blocks in
 //!   `Listener::timed_wait` on [`BENCH_PING_EVENT`]; on a ping it takes the small
@@ -10,20 +12,21 @@
 //!   reads framed requests (`u32` request length, `u32` reply length, request bytes)
 //!   with blocking reads and writes a reply of the asked length, until the header
 //!   [`BENCH_SOCKET_DONE`] sends it back to the iceoryx2 ping-pong.
-//!
 //! - iceoryx2 busy-polled (on [`BENCH_EVENT_SPIN`]): the process spins on the ping
 //!   subscriber and publishes each pong at once, no event either way, until the ping
 //!   [`BENCH_SPIN_DONE`]: the floor of publish-subscribe without any wake-up.
 //!
-//! The coordinator alternates the two in blocks, so both see the same machine.
+//! The coordinator alternates them in blocks, so all see the same machine.
 //! [`EVENT_QUIT`], a closed socket, SIGTERM or the coordinator's death end the process.
 
 use std::io::{ErrorKind, Read, Write};
 use std::os::unix::net::UnixStream;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
+use clap::Parser;
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::listener::ListenerWaitError;
 use iceoryx2::prelude::*;
@@ -35,12 +38,53 @@ use wire::{
     Role,
 };
 
+/// Command line of the ping-pong process (started by `coordinator bench` as it starts an
+/// agent: `--run PREFIX --agent 0` first).
+#[derive(Debug, Parser)]
+#[command(
+    name = "bench-peer",
+    version,
+    about = "The other end of `coordinator bench`'s latency floor"
+)]
+struct Args {
+    /// The bench session's iceoryx2 prefix.
+    #[arg(long)]
+    run: String,
+    /// The index the session starts it as (always 0; unused).
+    #[arg(long, default_value_t = 0)]
+    agent: usize,
+    /// The coordinator's Unix socket for the socket ping-pong.
+    #[arg(long)]
+    uds: Option<PathBuf>,
+    /// How often to check that the coordinator is still there while waiting, in ms.
+    #[arg(long, default_value_t = 10_000)]
+    liveness_ms: u64,
+}
+
+fn main() -> ExitCode {
+    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Warn);
+    coordinator::logging::init();
+    let args = Args::parse();
+    let liveness = Duration::from_millis(args.liveness_ms.max(1));
+    match run(&args.run, args.uds.as_deref(), liveness) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            tracing::error!("bench-peer: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
 /// Serve the ping-pong of run `prefix` (and the socket at `uds`, if given).
 /// `liveness` is how often the process checks that the coordinator is still there.
-pub fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result<()> {
+fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result<()> {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGTERM);
     let parent = getppid();
+    // Join only a session that exists, through a folder no other user can reach.
+    if let Some(root) = wire::run_root(prefix) {
+        wire::check_run_root(&root).with_context(|| format!("opening run {prefix}"))?;
+    }
     // Connect first: the coordinator accepts while it waits for the handshake below.
     let mut stream = uds
         .map(|p| UnixStream::connect(p).with_context(|| format!("connecting to {}", p.display())))

@@ -1,52 +1,113 @@
-//! Test modes in which an agent publishes bad results on purpose, so users can check that
-//! the coordinator's safety monitor refuses every one of them.
+//! The test modes that change what moves an agent publishes: bad moves the coordinator's
+//! safety monitor must refuse (`nan`, `teleport`, ...) and honest moves sent out of turn
+//! (`replay`, `early`, `flood`). [`Misbehaving`] is the [`Transport`] decorator that
+//! publishes them in place of the honest move the turn loop hands it.
 
+use std::time::Duration;
+
+use anyhow::Context;
 use shared::geometry::{Disk, Point, Vector};
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 use wire::misbehave::Misbehave;
 
-/// `argv[0]` of the children [`Misbehave::Fork`] starts for run `prefix`, so that tests
-/// can find them: `formation-stray-<prefix>`.
-pub fn stray_marker(prefix: &str) -> String {
-    format!("formation-stray-{prefix}")
+use crate::transport::{Command, MissionView, Transport, TurnInput};
+
+/// A [`Transport`] decorator: agent `agent`'s moves go out as mode `mode` has them, the
+/// rest passes through `T` untouched.
+pub struct Misbehaving<T> {
+    inner: T,
+    agent: usize,
+    mode: Misbehave,
+    /// The mission's static obstacles (`through-obstacle` crosses the nearest), taken
+    /// from the first [`Transport::mission`] that passes through.
+    obstacles: Option<Vec<Disk>>,
+    /// The last honest move handed over, with its turn (`replay` sends it again).
+    previous: Option<(TurnInput, Move)>,
 }
 
-/// [`Misbehave::Fork`]: start two `sleep` processes named [`stray_marker`] that ignore
-/// SIGTERM and SIGHUP, the second in a new session (out of the agent's process group);
-/// returns their pids. They are never waited for.
-pub fn start_strays(prefix: &str) -> anyhow::Result<[u32; 2]> {
-    use std::os::unix::process::CommandExt;
-
-    use anyhow::Context;
-    use nix::sys::signal::{SigHandler, Signal, signal};
-
-    let start = |escape: bool| -> anyhow::Result<u32> {
-        let mut command = std::process::Command::new("sleep");
-        command
-            .arg0(stray_marker(prefix))
-            .arg("2147483647")
-            .stdin(std::process::Stdio::null())
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null());
-        // SAFETY: between fork and exec the closure only calls async-signal-safe
-        // functions (sigaction, setsid) and allocates nothing.
-        unsafe {
-            command.pre_exec(move || {
-                // Ignored dispositions survive exec.
-                signal(Signal::SIGTERM, SigHandler::SigIgn)?;
-                signal(Signal::SIGHUP, SigHandler::SigIgn)?;
-                if escape {
-                    nix::unistd::setsid()?;
-                }
-                Ok(())
-            });
+impl<T: Transport> Misbehaving<T> {
+    /// Agent `agent` over `inner`, misbehaving as `mode` says.
+    pub fn new(inner: T, agent: usize, mode: Misbehave) -> Self {
+        Self {
+            inner,
+            agent,
+            mode,
+            obstacles: None,
+            previous: None,
         }
-        let child = command
-            .spawn()
-            .with_context(|| format!("starting a stray process (escape: {escape})"))?;
-        Ok(child.id())
-    };
-    Ok([start(false)?, start(true)?])
+    }
+
+    /// The transport inside.
+    pub fn into_inner(self) -> T {
+        self.inner
+    }
+}
+
+impl<T: Transport> Transport for Misbehaving<T> {
+    fn announce_ready(&mut self) -> anyhow::Result<()> {
+        self.inner.announce_ready()
+    }
+
+    fn next_command(&mut self) -> anyhow::Result<Command> {
+        self.inner.next_command()
+    }
+
+    fn mission(&mut self) -> anyhow::Result<MissionView> {
+        let mission = self.inner.mission()?;
+        self.obstacles = Some(mission.obstacles.clone());
+        Ok(mission)
+    }
+
+    fn publish_move(
+        &mut self,
+        turn: &TurnInput,
+        mv: &Move,
+        status: u32,
+        compute: Duration,
+    ) -> anyhow::Result<()> {
+        match self.mode {
+            Misbehave::Replay => {
+                if let Some((old_turn, old_move)) = &self.previous {
+                    self.inner
+                        .publish_move(old_turn, old_move, old_move.status as u32, compute)?;
+                }
+                self.inner.publish_move(turn, mv, status, compute)?;
+            }
+            Misbehave::Early => {
+                self.inner.publish_move(turn, mv, status, compute)?;
+                let guess = TurnInput {
+                    seq: turn.seq + 1,
+                    step: turn.step + 1,
+                    token: turn.token.wrapping_add(1),
+                    ..turn.clone()
+                };
+                self.inner.publish_move(&guess, mv, status, compute)?;
+            }
+            Misbehave::Flood => {
+                for _ in 0..4 {
+                    self.inner.publish_move(turn, mv, status, compute)?;
+                }
+            }
+            mode => {
+                let me = turn
+                    .bodies
+                    .iter()
+                    .find(|(j, _)| *j == self.agent)
+                    .map(|&(_, p)| p)
+                    .with_context(|| format!("the world does not list agent {}", self.agent))?;
+                if self.obstacles.is_none() {
+                    self.obstacles = Some(self.inner.mission()?.obstacles);
+                }
+                let obstacles = self.obstacles.as_deref().unwrap_or_default();
+                if let Some((bad, status)) = corrupt(mode, mv.clone(), &me, obstacles, turn.step)
+                {
+                    self.inner.publish_move(turn, &bad, status, compute)?;
+                }
+            }
+        }
+        self.previous = Some((turn.clone(), mv.clone()));
+        Ok(())
+    }
 }
 
 /// Turn an honest move into this mode's bad one (`None`: publish nothing). Modes that do
