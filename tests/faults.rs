@@ -1,18 +1,19 @@
 //! Faults with real processes and real signals: agents killed (by the built-in injection
-//! and from outside, at random moments), respawned, misbehaving; the coordinator killed
-//! or interrupted. Each test checks the exit code, `summary.json`, the processes left
+//! and from outside, at random steps), respawned, misbehaving; the coordinator killed
+//! or interrupted, at a step of the run it reported. Each test checks the exit code, `summary.json`, the processes left
 //! (none) and the shared-memory files left (none).
 
 mod support;
 
+use std::os::unix::process::ExitStatusExt;
 use std::path::PathBuf;
-use std::process::Child;
 use std::time::{Duration, Instant};
 
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use support::progress::{self, Watched};
 use support::{
     agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, prefix_stem, run_to_end,
     summary,
@@ -176,8 +177,8 @@ fn wait_for_agents(pid: u32, count: usize) {
 }
 
 /// The 64-agent block of `scenarios/large.toml` with four times as many steps, written
-/// into `dir`: long enough (several seconds even when start-up is quick) that a kill
-/// or a signal sent a second or two after the agents start lands in the middle of the run.
+/// into `dir`: long enough that a kill or a signal timed by the run's progress
+/// ([`progress::latest_hold_step`]) has hundreds of steps to land in.
 fn large_scenario_in(dir: &std::path::Path) -> PathBuf {
     let text = std::fs::read_to_string(support::repo_root().join("scenarios/large.toml"))
         .expect("large.toml");
@@ -189,21 +190,28 @@ fn large_scenario_in(dir: &std::path::Path) -> PathBuf {
 
 #[test]
 fn agents_killed_from_outside_at_random_moments_are_survived() {
+    let planned = tempfile::tempdir().expect("tempdir");
+    let latest = progress::latest_hold_step(progress::centre_path_steps(&large_scenario_in(
+        planned.path(),
+    )));
     for seed in 0..3u64 {
         let mut rng = ChaCha8Rng::seed_from_u64(100 + seed);
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
         let scenario = large_scenario_in(dir.path());
-        let child = coordinator(&[scenario.to_str().expect("utf-8 path")], &out)
-            .spawn()
-            .expect("start");
-        let pid = child.id();
+        let step = rng.random_range(1..=latest);
+        let mut run = Watched::spawn(
+            coordinator(&[scenario.to_str().expect("utf-8 path")], &out),
+            &[step],
+        );
+        let pid = run.id();
         wait_for_agents(pid, 64);
-        std::thread::sleep(Duration::from_millis(rng.random_range(200..1700)));
+        let held = run.hold();
         let victims = support::processes_mentioning(&format!("--run {}", prefix_stem(pid)));
         let victim = victims[rng.random_range(0..victims.len())];
         kill(Pid::from_raw(victim as i32), Signal::SIGKILL).expect("kill agent");
-        let output = child.wait_with_output().expect("wait");
+        drop(held);
+        let output = run.wait_with_output();
         assert!(
             output.status.success(),
             "{}",
@@ -211,7 +219,11 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
         );
         let s = summary(&out);
         assert_safe(&s);
-        assert_eq!(faults_of(&s, "dead").len(), 1, "{s:#}");
+        assert_eq!(
+            faults_of(&s, "dead").len(),
+            1,
+            "seed {seed}, step {step}: {s:#}"
+        );
         assert_nothing_left(pid);
     }
 }
@@ -220,18 +232,22 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
 fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_cleans_up() {
     let dir = tempfile::tempdir().expect("tempdir");
     let scenario = large_scenario_in(dir.path());
-    let mut child: Child = coordinator(
-        &[scenario.to_str().expect("utf-8 path")],
-        &dir.path().join("a"),
-    )
-    .spawn()
-    .expect("start");
-    let pid = child.id();
+    // Mid-run: halfway to the latest step a kill surely lands before the run's end.
+    let step = progress::latest_hold_step(progress::centre_path_steps(&scenario)) / 2 + 1;
+    let mut run = Watched::spawn(
+        coordinator(
+            &[scenario.to_str().expect("utf-8 path")],
+            &dir.path().join("a"),
+        ),
+        &[step],
+    );
+    let pid = run.id();
     wait_for_agents(pid, 64);
-    std::thread::sleep(Duration::from_millis(300));
+    let held = run.hold();
     kill(Pid::from_raw(pid as i32), Signal::SIGKILL).expect("kill coordinator");
     let killed = Instant::now();
-    let _ = child.wait();
+    drop(held);
+    assert_eq!(run.wait().signal(), Some(Signal::SIGKILL as i32));
     let needle = format!("--run {}", prefix_stem(pid));
     while !support::processes_mentioning(&needle).is_empty() {
         assert!(
@@ -244,6 +260,8 @@ fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_
         "agents gone {:.0} ms after the coordinator was killed",
         killed.elapsed().as_secs_f64() * 1e3
     );
+    // Every agent gone, the coordinator's stderr is closed.
+    run.wait_with_output();
     assert!(
         !dir.path().join("a").exists(),
         "a killed run writes nothing half-way"
@@ -266,16 +284,20 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
         let scenario = large_scenario_in(dir.path());
+        let steps = progress::centre_path_steps(&scenario);
+        // Mid-run: halfway to the latest step a signal surely lands before the run's end.
+        let step = progress::latest_hold_step(steps) / 2 + 1;
         let mut command = coordinator(&[scenario.to_str().expect("utf-8 path")], &out);
         // Like a terminal: the coordinator leads its own process group, and the signal
         // goes to the whole group (agents run in groups of their own).
         std::os::unix::process::CommandExt::process_group(&mut command, 0);
-        let child = command.spawn().expect("start");
-        let pid = child.id();
+        let mut run = Watched::spawn(command, &[step]);
+        let pid = run.id();
         wait_for_agents(pid, 64);
-        std::thread::sleep(Duration::from_millis(800));
+        let held = run.hold();
         kill(Pid::from_raw(-(pid as i32)), signal).expect("signal the group");
-        let output = child.wait_with_output().expect("wait");
+        drop(held);
+        let output = run.wait_with_output();
         assert_eq!(
             output.status.code(),
             Some(1),
@@ -286,12 +308,9 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
         assert_eq!(s["completed"], false, "{signal}");
         let last = s["last_step"].as_u64().expect("last_step") as usize;
         // Stopped partway: after the first step, before the centre path's last.
-        let scenario = shared::scenario::Scenario::load(&scenario).expect("the scenario");
-        let path = shared::simulate::plan_centre_path(&scenario).expect("centre path");
         assert!(
-            last > 0 && last + 1 < path.len(),
-            "{signal}: last step {last} of {}",
-            path.len() - 1
+            last > 0 && last < steps,
+            "{signal}: last step {last} of {steps}"
         );
         assert_eq!(s["steps"].as_u64(), Some(last as u64));
         let mut rows = 0;

@@ -3,7 +3,7 @@
 //! radius (`tests/data/redteam16-parallel-sensing.toml`: 16 agents, groups of several
 //! agents granted at once, each agent sent only the agents it senses) through the real
 //! `coordinator run` process, as `tests/rogue.rs` does for sequential runs; agents are
-//! killed from outside at random moments, as `tests/faults.rs` does. Every run must end
+//! killed from outside at random steps of the run, as `tests/faults.rs` does. Every run must end
 //! with exit code 0, `completed`, no collision, the faults recorded against the attacker
 //! (or the killed), and nothing left behind (processes, /dev/shm).
 
@@ -22,6 +22,7 @@ use shared::geometry::Point;
 use shared::groups::turn_groups;
 use shared::scenario::Scenario;
 use shared::vocabulary::{Body, TurnMode};
+use support::progress::{self, Watched};
 use support::{
     agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, prefix_stem, run_to_end,
     summary,
@@ -432,13 +433,15 @@ fn wait_for_agents(pid: u32, count: usize) -> Vec<u32> {
 }
 
 /// Agents SIGKILLed from outside at random moments of a parallel run with sensing (one to
-/// three a run, each at its own moment, so they may die in one group, mid-turn or between
-/// turns): the run completes, nobody collides, every death is recorded against the agent
-/// killed, each dead agent stays frozen where it stood (or is replaced, with
-/// `--respawn`), and nothing is left behind.
+/// three a run, each once the run reports a step drawn at random, so they may die in one
+/// group, mid-turn or between turns): the run completes, nobody collides, every death is
+/// recorded against the agent killed, each dead agent stays frozen where it stood (or is
+/// replaced, with `--respawn`), and nothing is left behind.
 #[test]
 fn agents_killed_from_outside_at_random_moments_of_a_parallel_run_are_survived() {
     let file = scenario_file();
+    // Every kill lands while a step is still to come, however fast the run goes.
+    let latest = progress::latest_hold_step(progress::centre_path_steps(&file));
     for seed in 0..8u64 {
         let mut rng = ChaCha8Rng::seed_from_u64(700 + seed);
         let respawn = seed % 2 == 1;
@@ -448,30 +451,26 @@ fn agents_killed_from_outside_at_random_moments_of_a_parallel_run_are_survived()
         if respawn {
             args.push("--respawn");
         }
-        let child = coordinator(&args, &out).spawn().expect("start");
-        let pid = child.id();
-        let agents = wait_for_agents(pid, AGENTS);
         let count = rng.random_range(1..=3usize);
-        // Within 150 ms of the agents' start: the run takes about 0.4 s on an idle machine
-        // (longer on a loaded one), so every kill lands before the last step.
-        let mut moments: Vec<u64> = (0..count).map(|_| rng.random_range(0..150)).collect();
-        moments.sort_unstable();
+        let mut at: Vec<usize> = (0..count).map(|_| rng.random_range(1..=latest)).collect();
+        at.sort_unstable();
+        let mut run = Watched::spawn(coordinator(&args, &out), &at);
+        let pid = run.id();
+        let agents = wait_for_agents(pid, AGENTS);
         let mut killed: Vec<usize> = Vec::new();
-        let started = Instant::now();
-        for at in moments {
+        for _ in &at {
             let victims: Vec<(u32, usize)> = agents
                 .iter()
                 .filter_map(|&p| Some((p, agent_of(p)?)))
                 .filter(|(_, a)| !killed.contains(a))
                 .collect();
             let (victim, agent) = victims[rng.random_range(0..victims.len())];
-            let wait = Duration::from_millis(at).saturating_sub(started.elapsed());
-            std::thread::sleep(wait);
+            let _held = run.hold();
             kill(Pid::from_raw(victim as i32), Signal::SIGKILL).expect("kill an agent");
             killed.push(agent);
         }
-        let output = child.wait_with_output().expect("wait");
-        let context = format!("seed {seed}: killed {killed:?}, respawn {respawn}");
+        let output = run.wait_with_output();
+        let context = format!("seed {seed}: killed {killed:?} at steps {at:?}, respawn {respawn}");
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert!(output.status.success(), "{context}: {stderr}");
         assert!(!stderr.contains("panicked"), "{context}: {stderr}");

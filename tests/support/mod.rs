@@ -8,6 +8,8 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+pub mod progress;
+
 /// `target/<profile>/` of this test build.
 pub fn target_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("test executable path");
