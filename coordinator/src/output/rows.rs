@@ -1,5 +1,5 @@
 //! The rows of the CSV files of a run folder (`docs/outputs.md`): one serde struct per
-//! file, written by [`super::tables`] and read back by [`crate::render`]. A column's name
+//! file, written by `output::tables` and read back by [`crate::render`]. A column's name
 //! is its field's name, so the writer and the reader cannot disagree on it.
 //!
 //! Numbers are written as Rust's `Display` gives them (`0.0000001`, `-0`, `NaN`, `inf`:

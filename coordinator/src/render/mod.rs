@@ -20,8 +20,8 @@
 //! Titles name what the run's model adds to the paper's: the top speed, the sensing
 //! radius and parallel turns, when the scenario has them (`scene::model_note`).
 //!
-//! Colours come from the Okabe-Ito palette ([`palette`]); text uses an embedded font
-//! ([`font`]), so no system font library is needed.
+//! Colours come from the Okabe-Ito palette (`palette.rs`); text uses an embedded font
+//! (`font.rs`), so no system font library is needed.
 
 pub mod animation;
 pub mod canvas;

@@ -3,7 +3,7 @@
 //! every move checked by the safety monitor, faults survived, the run recorded.
 //!
 //! Liveness: while it waits for a move, the coordinator wakes every
-//! [`LIVENESS_SLICE`] to ask the kernel whether the agent's process still exists, so a
+//! 10 ms (`LIVENESS_SLICE`) to ask the kernel whether the agent's process still exists, so a
 //! killed agent is noticed within a slice, not at the end of the turn deadline. A dead
 //! agent is frozen as an obstacle where it last stood and leaves the formation; with
 //! `respawn`, a replacement process takes its place from there.

@@ -17,7 +17,7 @@ pub enum WaitMode {
     /// Sleep in a blocking event wait on both sides: no CPU spent waiting, two wake-ups
     /// per turn (the agent's and the coordinator's).
     Block,
-    /// The coordinator spins (yielding) on the agent's state for up to [`SPIN_BUDGET`]
+    /// The coordinator spins (yielding) on the agent's state for up to a millisecond
     /// before sleeping, and the agent whose turn comes next is told so and polls its
     /// world meanwhile; its turn is then granted by publishing the world alone, without a
     /// ring: no wake-up and no event on the turn's path, at the price of up to two busy
@@ -41,7 +41,7 @@ impl WaitMode {
 }
 
 /// How long the coordinator spins on an agent's state before it sleeps (`--wait spin`):
-/// a turn computes in tens of microseconds; a longer one pays a wake-up as before.
+/// a turn computes in tens of microseconds; a longer one then sleeps on the `done` event like `--wait block`.
 pub const SPIN_BUDGET: Duration = Duration::from_millis(1);
 
 /// How a run is carried out.
@@ -75,7 +75,7 @@ pub struct RunOptions {
     /// How turns are handed over: sleeping, spinning, or chosen by the core count.
     pub wait: WaitMode,
     /// Benchmark hook: after the ready handshake, hold every agent idle this long (no
-    /// turn) and measure the CPU time they used meanwhile ([`RunOutcome::idle_cpu`]).
+    /// turn) and measure the CPU time they used meanwhile (the outcome's idle CPU, for `bench`).
     pub idle_probe: Option<Duration>,
     /// Agents over Zenoh: each agent's process is a relay to the agent itself, which runs
     /// here or on another machine ([`NetworkOptions`]); `None`: every agent on iceoryx2.
