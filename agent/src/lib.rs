@@ -118,7 +118,10 @@ fn serve_as<T: Transport>(
 ) -> anyhow::Result<()> {
     #[cfg(feature = "misbehave")]
     if let Some(mode) = mode {
-        return serve(&mut misbehave::Misbehaving::new(transport, agent, mode), agent);
+        return serve(
+            &mut misbehave::Misbehaving::new(transport, agent, mode),
+            agent,
+        );
     }
     #[cfg(not(feature = "misbehave"))]
     let _ = mode;
@@ -464,7 +467,11 @@ mod tests {
         assert_eq!(flood, want);
 
         // Modes that act outside the moves publish the honest moves.
-        for mode in [Misbehave::Fork, Misbehave::RawLength, Misbehave::DeafToPrepare] {
+        for mode in [
+            Misbehave::Fork,
+            Misbehave::RawLength,
+            Misbehave::DeafToPrepare,
+        ] {
             assert_eq!(
                 published_in_mode(&scenario, &turns, agent, mode),
                 honest,

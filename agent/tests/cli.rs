@@ -44,7 +44,11 @@ fn a_shipping_agent_refuses_a_test_mode_and_says_how_to_build_one() {
         );
         assert!(!err.contains("opening run"), "{err}");
     }
-    assert_eq!(remove_files_of(&prefix), 0, "nothing of the prefix was made");
+    assert_eq!(
+        remove_files_of(&prefix),
+        0,
+        "nothing of the prefix was made"
+    );
 }
 
 /// An agent built with its test modes takes one and goes on to join the run.

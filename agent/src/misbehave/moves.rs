@@ -99,8 +99,7 @@ impl<T: Transport> Transport for Misbehaving<T> {
                     self.obstacles = Some(self.inner.mission()?.obstacles);
                 }
                 let obstacles = self.obstacles.as_deref().unwrap_or_default();
-                if let Some((bad, status)) = corrupt(mode, mv.clone(), &me, obstacles, turn.step)
-                {
+                if let Some((bad, status)) = corrupt(mode, mv.clone(), &me, obstacles, turn.step) {
                     self.inner.publish_move(turn, &bad, status, compute)?;
                 }
             }
