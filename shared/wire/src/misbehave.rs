@@ -1,6 +1,8 @@
 //! The test modes in which an agent process misbehaves or attacks on purpose
 //! (`agent --misbehave MODE`, `coordinator run --misbehave AGENT=MODE`), so users and the
-//! integration tests can check that the coordinator survives every one of them.
+//! integration tests can check that the coordinator survives every one of them. Only an
+//! agent built with its `misbehave` feature carries them out; the shipping agent refuses
+//! them.
 //!
 //! The first six publish unsafe or nonsensical moves through the normal protocol (the
 //! safety monitor must refuse them); the others attack the protocol itself, as a
