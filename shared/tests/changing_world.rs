@@ -335,7 +335,7 @@ fn overlaps(p: Point, centre: Point, reach_m: f64) -> bool {
 proptest! {
     // Few cases: most fields take a few hundredths of a second, but the odd one where the
     // centre replans again and again takes seconds.
-    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 10, ..ProptestConfig::default() })]
 
     /// In every field (random moving obstacles slower than the agents, large ones nearly
     /// as fast on the formation's line, random static obstacles known or found on the
@@ -358,9 +358,9 @@ proptest! {
     /// Strikes themselves may happen (see the regression test above).
     #[test]
     fn every_random_field_keeps_the_invariants_and_books_every_strike(
-        movers in prop::collection::vec(mover(), 0..=5),
-        hunters in prop::collection::vec(hunter(), 0..=2),
-        statics in prop::collection::vec(static_obstacle(), 0..=3),
+        movers in prop::collection::vec(mover(), 0..=4),
+        hunters in prop::collection::vec(hunter(), 0..=1),
+        statics in prop::collection::vec(static_obstacle(), 0..=2),
         parallel in any::<bool>(),
         short_sighted in any::<bool>(),
     ) {
