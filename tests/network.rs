@@ -13,6 +13,9 @@ use std::time::{Duration, Instant};
 use coordinator::netns::NetnsHost;
 use coordinator::turns::{NetworkOptions, RunOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
+use net::zenoh::handlers::FifoChannelHandler;
+use net::zenoh::pubsub::Subscriber;
+use net::zenoh::sample::{Sample, SampleKind};
 use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
@@ -499,6 +502,86 @@ fn bad_network_flags_are_refused_before_anything_runs() {
     }
 }
 
+/// A client of a run's router that sees what the tests wait for: one agent's answers to
+/// its relay, and which agents are connected (their liveliness tokens).
+struct Watcher {
+    /// Keeps the session open.
+    _session: net::zenoh::Session,
+    up: Subscriber<FifoChannelHandler<Sample>>,
+    tokens: Subscriber<FifoChannelHandler<Sample>>,
+    agent: usize,
+}
+
+/// How long a watcher waits for what it waits for before it fails the test (only so that
+/// a broken run cannot hang the suite).
+const WATCH_DEADLINE: Duration = Duration::from_secs(60);
+
+impl Watcher {
+    /// Connect to the router at `endpoint` (as soon as it listens) and listen to `agent`'s
+    /// answers and to every agent's token (those already there included).
+    fn open(endpoint: &Endpoint, agent: usize) -> Self {
+        use net::zenoh::Wait;
+        let deadline = Instant::now() + WATCH_DEADLINE;
+        let session = loop {
+            // Each attempt tries for `net::CONNECT_TIMEOUT`.
+            match net::open_client(endpoint, &net::Security::Plain) {
+                Ok(session) => break session,
+                Err(e) => assert!(Instant::now() < deadline, "no router at {endpoint}: {e}"),
+            }
+        };
+        let up = session
+            .declare_subscriber(net::agent_up_key(agent))
+            .wait()
+            .expect("a subscriber to the agent's answers");
+        let tokens = session
+            .liveliness()
+            .declare_subscriber("formation/agent/*/alive")
+            .history(true)
+            .wait()
+            .expect("a subscriber to the agents' tokens");
+        Self {
+            _session: session,
+            up,
+            tokens,
+            agent,
+        }
+    }
+
+    /// Wait until the agent watched answers a mission ([`net::Up::Ready`]: its handshake
+    /// is done) and every agent of `connected` has its token on the router.
+    fn wait_until_ready_and_connected(&self, connected: &[usize]) {
+        let deadline = Instant::now() + WATCH_DEADLINE;
+        let left = || deadline.saturating_duration_since(Instant::now());
+        loop {
+            match net::receive::<net::Up>(&self.up, left()).expect("the watcher's session") {
+                Some(Ok(net::Up::Ready { agent, .. })) if agent as usize == self.agent => break,
+                Some(_) => {}
+                None => panic!("agent {} never took its mission", self.agent),
+            }
+        }
+        let mut present = std::collections::BTreeSet::new();
+        while !connected.iter().all(|a| present.contains(a)) {
+            let sample = self
+                .tokens
+                .recv_timeout(left())
+                .expect("the watcher's session")
+                .unwrap_or_else(|| panic!("agents {connected:?} not all connected: {present:?}"));
+            let agent: Option<usize> = sample
+                .key_expr()
+                .as_str()
+                .strip_prefix("formation/agent/")
+                .and_then(|k| k.strip_suffix("/alive"))
+                .and_then(|i| i.parse().ok());
+            if let Some(agent) = agent {
+                match sample.kind() {
+                    SampleKind::Put => present.insert(agent),
+                    SampleKind::Delete => present.remove(&agent),
+                };
+            }
+        }
+    }
+}
+
 /// When the coordinator is killed (SIGKILL) mid-run, an agent on another machine sees
 /// its liveliness token go and leaves, and the relays and the agents they started go
 /// with the coordinator.
@@ -519,13 +602,19 @@ fn agents_leave_when_the_coordinator_is_killed() {
     let mut coordinator = support::coordinator(&args, &out)
         .spawn()
         .expect("start the coordinator");
+    // A watcher on the coordinator's router (plain TCP on the loopback: no access
+    // control), listening before agent 5 starts.
+    let endpoint = Endpoint::parse(&listen).expect("endpoint");
+    let watcher = Watcher::open(&endpoint, 5);
     let mut agent = std::process::Command::new(support::agent_bin())
         .args(["--connect", &listen, "--agent", "5", "--liveness-ms", "100"])
         .stdin(std::process::Stdio::null())
         .spawn()
         .expect("start agent 5");
-    // Until agent 5 has shaken hands with its relay and the others are up.
-    std::thread::sleep(Duration::from_secs(2));
+    // Until agent 5 has shaken hands with its relay (its answer to the mission crosses
+    // the router) and the agents the relays start here are connected.
+    watcher.wait_until_ready_and_connected(&[0, 1, 2, 3]);
+    drop(watcher);
     assert!(
         matches!(agent.try_wait(), Ok(None)),
         "agent 5 left before the coordinator was killed"
