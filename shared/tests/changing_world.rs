@@ -270,7 +270,7 @@ proptest! {
     ///
     /// Strikes are not ruled out in every field (an agent caught between obstacles
     /// closing in from several sides, or boxed in by its mates, can find no way out; the
-    /// README measures how often, about 1 field in 5 000): these 48 have none, and
+    /// docs/measurements.md says how often, about 1 field in 5 000): these 48 have none, and
     /// [`every_random_field_keeps_the_invariants_and_books_every_strike`] states what
     /// holds in every field. Without the sweep of where an agent can go on to
     /// ([`shared::survival_grid`]) this fails (one of them: three obstacles closing on
