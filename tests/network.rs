@@ -1,96 +1,30 @@
 //! Agents over Zenoh: on the loopback, and on a second test host (a network namespace
 //! with a mount namespace of its own, joined by a veth pair). The run equals the
-//! reference to the bit; a killed remote agent and a link taken down are survived.
-//! Built with the feature `zenoh` (the README's test command turns it on).
+//! reference to the bit; a killed remote agent and a link taken down are survived; the
+//! agents leave when the coordinator dies. Who may join a run is in
+//! `tests/network_security.rs`. Built with the feature `zenoh` (the README's test command
+//! turns it on).
 #![cfg(feature = "zenoh")]
 
+#[path = "support/network.rs"]
+mod network_support;
 mod support;
 
-use std::net::{Ipv4Addr, TcpListener};
+use std::net::Ipv4Addr;
 use std::process::Child;
 use std::time::{Duration, Instant};
 
 use coordinator::netns::NetnsHost;
-use coordinator::turns::{NetworkOptions, RunOptions, run_scenario, run_scenario_with};
+use coordinator::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
 use net::zenoh::handlers::FifoChannelHandler;
 use net::zenoh::pubsub::Subscriber;
 use net::zenoh::sample::{Sample, SampleKind};
-use shared::record::{FaultKind, Run};
+use shared::record::FaultKind;
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
 
-/// A port free on `ip` now.
-fn free_port(ip: Ipv4Addr) -> u16 {
-    TcpListener::bind((ip, 0))
-        .and_then(|l| l.local_addr())
-        .expect("a free port")
-        .port()
-}
-
-fn loopback() -> NetworkOptions {
-    let port = free_port(Ipv4Addr::LOCALHOST);
-    NetworkOptions::plain(Endpoint::parse(&format!("tcp/127.0.0.1:{port}")).expect("endpoint"))
-}
-
-fn options(network: NetworkOptions) -> RunOptions {
-    RunOptions {
-        agent_bin: Some(support::agent_bin()),
-        turn_deadline: Duration::from_secs(10),
-        progress: false,
-        network: Some(network),
-        ..RunOptions::default()
-    }
-}
-
-/// The faults as both sides must agree on them: agent, step and kind (the detail and
-/// the detection time are the coordinator's own).
-fn fault_keys(run: &Run) -> Vec<(usize, usize, FaultKind)> {
-    run.faults
-        .iter()
-        .map(|f| (f.agent, f.step, f.kind))
-        .collect()
-}
-
-/// Step by step and field by field (f64 equality is bit equality here: no NaN in a
-/// record).
-fn assert_equal_runs(got: &Run, want: &Run, name: &str) {
-    assert_eq!(got.steps.len(), want.steps.len(), "{name}");
-    for (g, w) in got.steps.iter().zip(&want.steps) {
-        assert_eq!(g, w, "{name}: step {} differs from the reference", w.step);
-    }
-    assert_eq!(fault_keys(got), fault_keys(want), "{name}");
-}
-
-/// Nothing of the run is left: no file, no relay, and no agent the relays started (they
-/// name the run's endpoint).
-fn assert_clean(prefix: &str, listen: &Endpoint) {
-    assert!(support::leftovers(prefix).is_empty(), "files left");
-    assert!(
-        support::processes_mentioning(prefix).is_empty(),
-        "relays left running"
-    );
-    let endpoint = listen.local_connect().to_string();
-    let until = Instant::now() + Duration::from_secs(2);
-    while !support::processes_mentioning(&endpoint).is_empty() {
-        assert!(Instant::now() < until, "agents of {endpoint} left running");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
-
-/// Wait for a process the test started, killing it if it has not left in `timeout`.
-fn reap(child: &mut Child, timeout: Duration) -> bool {
-    let until = Instant::now() + timeout;
-    while Instant::now() < until {
-        if let Ok(Some(_)) = child.try_wait() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    false
-}
+use network_support::*;
 
 /// In sequential and in parallel turns, every agent over Zenoh on the loopback: the run
 /// equals the reference to the bit.
@@ -307,154 +241,6 @@ fn a_remote_agent_restarted_by_its_user_is_readmitted_with_respawn() {
     survive(Trouble::KillAndRestart);
 }
 
-/// `scripts/make-tls-dir --agents 6 DIR 127.0.0.1`: the TLS folder a user makes.
-fn tls_dir(parent: &std::path::Path, name: &str) -> std::path::PathBuf {
-    let dir = parent.join(name);
-    let out = std::process::Command::new(support::repo_root().join("scripts/make-tls-dir"))
-        .args(["--agents", "6"])
-        .arg(&dir)
-        .arg("127.0.0.1")
-        .output()
-        .expect("scripts/make-tls-dir (needs openssl)");
-    assert!(
-        out.status.success(),
-        "make-tls-dir: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    dir
-}
-
-/// Over TLS with client certificates: agents with a certificate of the run's authority
-/// take their turns; one with no certificate and one with a certificate of another
-/// authority are refused, recorded as failed to start, and the run goes on safely.
-#[test]
-fn no_stranger_joins_a_run_over_tls() {
-    let temp = tempfile::tempdir().expect("tempdir");
-    let ours = tls_dir(temp.path(), "ours");
-    let theirs = tls_dir(temp.path(), "theirs");
-    let port = free_port(Ipv4Addr::LOCALHOST);
-    let listen = Endpoint::parse(&format!("tls/127.0.0.1:{port}")).expect("endpoint");
-    let stranger = |agent: usize, extra: &[String]| {
-        let mut args = vec!["--agent".to_string(), agent.to_string()];
-        args.extend_from_slice(extra);
-        std::process::Command::new(support::agent_bin())
-            .args(&args)
-            .stdin(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .expect("start a stranger")
-    };
-    // No certificate at all: plain TCP to the TLS port.
-    let mut plain = stranger(4, &["--connect".into(), format!("tcp/127.0.0.1:{port}")]);
-    // A certificate of another authority.
-    let mut forged = stranger(
-        5,
-        &[
-            "--connect".into(),
-            listen.to_string(),
-            "--tls-dir".into(),
-            theirs.display().to_string(),
-        ],
-    );
-    let network = NetworkOptions {
-        remote: vec![4, 5],
-        tls_dir: Some(ours),
-        ..NetworkOptions::plain(listen.clone())
-    };
-    let scenario = Scenario::paper();
-    let path = plan_centre_path(&scenario).expect("centre path");
-    let mut opts = options(network);
-    opts.startup_timeout = Duration::from_secs(4);
-    let outcome = run_scenario(&scenario, &path, &opts);
-    let (plain_left, forged_left) = (
-        reap(&mut plain, Duration::from_secs(15)),
-        reap(&mut forged, Duration::from_secs(15)),
-    );
-    let outcome = outcome.unwrap_or_else(|f| panic!("{:#}", f.error));
-    let run = &outcome.run;
-    assert!(run.completed);
-    assert_eq!(run.summary().collisions, 0);
-    for agent in [4, 5] {
-        let fault = run
-            .faults
-            .iter()
-            .find(|f| f.agent == agent)
-            .unwrap_or_else(|| panic!("agent {agent} not recorded: {:?}", run.faults));
-        assert_eq!((fault.step, fault.kind), (0, FaultKind::FailedToStart));
-        assert!(fault.detail.contains("refused"), "{fault:?}");
-        // Frozen where it stood from the first move on.
-        assert!(run.steps.iter().skip(1).all(|s| !s.agents[agent].alive));
-        let start = run.steps[0].agents[agent].position;
-        assert!(run.steps.iter().all(|s| s.agents[agent].position == start));
-    }
-    // The certified agents took every turn.
-    let last = run.steps.last().expect("steps");
-    assert!((0..4).all(|i| last.agents[i].alive));
-    assert!(!run.faults.iter().any(|f| f.agent < 4), "{:?}", run.faults);
-    // The strangers never got a session: each gave up and exited with an error.
-    assert!(plain_left && forged_left, "a stranger was still running");
-    assert_clean(&outcome.prefix, &listen);
-}
-
-/// A misbehaving agent over Zenoh, as a user runs it (`coordinator run --transport
-/// zenoh --misbehave 3=MODE`): what it sends crosses the network and its relay, and is
-/// refused like a local agent's; extra and stale moves never reach the coordinator.
-#[test]
-fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
-    for (mode, kind) in [
-        ("nan", Some("rejected")),
-        ("teleport", Some("rejected")),
-        ("through-obstacle", Some("rejected")),
-        ("garbage", Some("rejected")),
-        ("silent", Some("hung")),
-        ("replay", None),
-        ("early", None),
-        ("flood", None),
-    ] {
-        let dir = tempfile::tempdir().expect("tempdir");
-        let out = dir.path().join("out");
-        let listen = format!("tcp/127.0.0.1:{}", free_port(Ipv4Addr::LOCALHOST));
-        let misbehave = format!("3={mode}");
-        let args = [
-            "--transport",
-            "zenoh",
-            "--listen",
-            &listen,
-            "--misbehave",
-            &misbehave,
-        ];
-        let (output, pid) = support::run_to_end(&args, &out);
-        assert!(
-            output.status.success(),
-            "{mode}: {}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        let s = support::summary(&out);
-        support::assert_safe(&s);
-        assert_eq!(s["completed"], true, "{mode}");
-        match kind {
-            Some(kind) => {
-                let found = support::faults_of(&s, kind);
-                assert!(!found.is_empty(), "{mode}: no {kind} fault: {s:#}");
-                assert!(found.iter().all(|f| f["agent"] == 3), "{mode}");
-            }
-            // The relay passes on only the move that answers the turn.
-            None => assert_eq!(
-                s["faults"].as_array().map(Vec::len),
-                Some(0),
-                "{mode}: {s:#}"
-            ),
-        }
-        support::assert_nothing_left(pid);
-        let endpoint = Endpoint::parse(&listen).expect("endpoint");
-        let until = Instant::now() + Duration::from_secs(2);
-        while !support::processes_mentioning(&endpoint.to_string()).is_empty() {
-            assert!(Instant::now() < until, "{mode}: agents left running");
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-}
-
 /// Bad network flags are refused with exit code 2 and one line naming the flag, before
 /// anything runs: no output folder, no process.
 #[test]
@@ -639,94 +425,4 @@ fn agents_leave_when_the_coordinator_is_killed() {
     assert!(output.status.success());
     support::assert_nothing_left(coordinator.id());
     support::assert_nothing_left(next);
-}
-
-/// A spy joins the run at step 1 with agent 5's identity (over TLS, agent 5's
-/// certificate), listens on every agent's keys and sends a forged move for agent 2 every
-/// step. Returns how many samples of other agents it heard, and checks that the run still
-/// equals the reference to the bit (a forged move never carries the turn's token).
-fn spy_on_a_run(tls: bool) -> usize {
-    use net::zenoh::Wait;
-    let temp = tempfile::tempdir().expect("tempdir");
-    let port = free_port(Ipv4Addr::LOCALHOST);
-    let (listen, network, spy_security) = if tls {
-        let ours = tls_dir(temp.path(), "ours");
-        let listen = Endpoint::parse(&format!("tls/127.0.0.1:{port}")).expect("endpoint");
-        let network = NetworkOptions {
-            tls_dir: Some(ours.clone()),
-            ..NetworkOptions::plain(listen.clone())
-        };
-        let files = net::TlsFiles::in_dir(&ours, net::Role::Agent(5));
-        (listen, network, net::Security::Tls(files))
-    } else {
-        let network = loopback();
-        (network.listen.clone(), network, net::Security::Plain)
-    };
-    let scenario = Scenario::paper();
-    let path = plan_centre_path(&scenario).expect("centre path");
-    let reference = simulate_along(&scenario, &path).expect("reference");
-    let heard = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
-    let mut spy: Option<(net::zenoh::Session, _, _)> = None;
-    let outcome = run_scenario_with(&scenario, &path, &options(network), &mut |between| {
-        if between.step == 1 {
-            // The router is up: the spy joins.
-            let session = net::open_client(&listen, &spy_security)?;
-            let counter = heard.clone();
-            let z = |e: net::zenoh::Error| anyhow::anyhow!("zenoh: {e}");
-            let all = session
-                .declare_subscriber("formation/agent/**")
-                // What crosses the router, not the spy's own forgeries.
-                .allowed_origin(net::zenoh::sample::Locality::Remote)
-                .callback(move |sample| {
-                    if !sample.key_expr().as_str().starts_with("formation/agent/5/") {
-                        counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    }
-                })
-                .wait()
-                .map_err(z)?;
-            let forger = session
-                .declare_publisher(net::agent_up_key(2))
-                .wait()
-                .map_err(z)?;
-            spy = Some((session, all, forger));
-        }
-        if let Some((_, _, forger)) = &spy {
-            let step = between.step as u64;
-            let forged = net::Up::Move(net::NetMove {
-                agent: 2,
-                seq: step,
-                step,
-                token: step,
-                status: 0,
-                compute_ns: 0,
-                slot: [0.0, 0.0],
-                best: [0.0, 0.0],
-                waypoints: vec![[0.0, 0.0]],
-            });
-            net::send(forger, &forged)?;
-        }
-        Ok(())
-    });
-    let outcome = outcome.unwrap_or_else(|f| panic!("{:#}", f.error));
-    assert!(spy.is_some(), "the spy never joined");
-    assert_equal_runs(&outcome.run, &reference, "paper with a spy");
-    assert_clean(&outcome.prefix, &listen);
-    heard.load(std::sync::atomic::Ordering::Relaxed)
-}
-
-/// Over TLS each agent may use only its own keys: a certified agent that listens on every
-/// key of the run hears nothing of the others, and its forged moves for another agent
-/// change nothing. Over plain TCP (loopback only, for this reason) the same spy hears
-/// the others' turns: the check can fail.
-#[test]
-fn a_certified_agent_can_neither_read_nor_answer_another_agents_turns() {
-    assert_eq!(
-        spy_on_a_run(true),
-        0,
-        "over TLS the spy heard others' traffic"
-    );
-    assert!(
-        spy_on_a_run(false) > 0,
-        "over plain TCP the spy heard nothing"
-    );
 }

@@ -23,13 +23,12 @@ use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::{Pid, getppid};
 use shared::geometry::Point;
-use shared::vocabulary::Move;
 use wire::{
     AgentServiceNames, AgentState, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN, PREPARE_SPIN,
     Role, StateKind, World,
 };
 
-use crate::transport::{Command, MissionView, Transport, TurnInput};
+use crate::transport::{Command, MissionView, Reply, Transport, TurnInput};
 
 /// The events one wait on the turn listener heard, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -343,13 +342,13 @@ impl<C: Channel> Transport for IpcTransport<C> {
         Ok(self.mission.clone())
     }
 
-    fn publish_move(
-        &mut self,
-        turn: &TurnInput,
-        mv: &Move,
-        status: u32,
-        compute: Duration,
-    ) -> anyhow::Result<()> {
+    fn publish_move(&mut self, reply: Reply<'_>) -> anyhow::Result<()> {
+        let Reply {
+            turn,
+            mv,
+            status,
+            compute,
+        } = reply;
         let woke_ns = self.woke_ns;
         self.channel.send_state(|s| {
             s.kind = StateKind::Move as u32;

@@ -26,7 +26,7 @@ use shared::vocabulary::Body;
 
 use wire::misbehave::Misbehave;
 
-pub use transport::{Command, Transport, TurnInput};
+pub use transport::{Command, Reply, Transport, TurnInput};
 
 /// Command line of the agent process (normally started by the coordinator).
 #[derive(Debug, Parser)]
@@ -294,7 +294,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let mv = planner.plan_turn(turn_step(&turn), &turn.centre, &me, &others);
         let compute = started.elapsed();
-        transport.publish_move(&turn, &mv, mv.status as u32, compute)?;
+        transport.publish_move(Reply::new(&turn, &mv, compute))?;
     }
 }
 
@@ -328,14 +328,9 @@ mod tests {
         fn mission(&mut self) -> anyhow::Result<MissionView> {
             Ok(self.mission.clone())
         }
-        fn publish_move(
-            &mut self,
-            turn: &TurnInput,
-            mv: &Move,
-            status: u32,
-            _compute: Duration,
-        ) -> anyhow::Result<()> {
-            self.published.push((turn.seq, mv.clone(), status));
+        fn publish_move(&mut self, reply: Reply<'_>) -> anyhow::Result<()> {
+            self.published
+                .push((reply.turn.seq, reply.mv.clone(), reply.status));
             Ok(())
         }
     }

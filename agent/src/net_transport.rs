@@ -14,10 +14,10 @@ use net::zenoh::sample::Sample;
 use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
 use shared::geometry::{Point, Pose};
 use shared::scenario::Scenario;
-use shared::vocabulary::{MAX_AGENTS, Move};
+use shared::vocabulary::MAX_AGENTS;
 
 use crate::relay::Token;
-use crate::transport::{Command, MissionView, Transport, TurnInput};
+use crate::transport::{Command, MissionView, Reply, Transport, TurnInput};
 
 /// The agent's Zenoh session and ports.
 pub struct NetTransport {
@@ -212,13 +212,13 @@ impl Transport for NetTransport {
             .context("no mission yet: the handshake is not done")
     }
 
-    fn publish_move(
-        &mut self,
-        turn: &TurnInput,
-        mv: &Move,
-        status: u32,
-        compute: Duration,
-    ) -> anyhow::Result<()> {
+    fn publish_move(&mut self, reply: Reply<'_>) -> anyhow::Result<()> {
+        let Reply {
+            turn,
+            mv,
+            status,
+            compute,
+        } = reply;
         let xy = |p: &Point| [p.x, p.y];
         self.send(&Up::Move(NetMove {
             agent: u32::try_from(self.agent).context("the agent's index")?,

@@ -22,7 +22,7 @@ use shared::geometry::Point;
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 
 use crate::ipc::IpcTransport;
-use crate::transport::{Command, Transport, TurnInput};
+use crate::transport::{Command, Reply, Transport, TurnInput};
 
 /// How often the relay probes for its agent until it answers.
 const PROBE_PERIOD: Duration = Duration::from_millis(50);
@@ -270,7 +270,12 @@ pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
                 continue;
             }
             if let Some((mv, status, compute)) = move_of(agent, m) {
-                ipc.publish_move(&turn, &mv, status, compute)?;
+                ipc.publish_move(Reply {
+                    turn: &turn,
+                    mv: &mv,
+                    status,
+                    compute,
+                })?;
             }
             break;
         }

@@ -48,6 +48,31 @@ pub enum Command {
     Quit,
 }
 
+/// An agent's answer to one turn, as it goes to the coordinator.
+#[derive(Clone, Copy, Debug)]
+pub struct Reply<'a> {
+    /// The turn answered (its sequence number and token are echoed).
+    pub turn: &'a TurnInput,
+    /// The move.
+    pub mv: &'a Move,
+    /// The status code sent: normally `mv.status as u32`; a test mode may send another.
+    pub status: u32,
+    /// The time spent computing the move.
+    pub compute: Duration,
+}
+
+impl<'a> Reply<'a> {
+    /// The reply carrying `mv` with its own status.
+    pub fn new(turn: &'a TurnInput, mv: &'a Move, compute: Duration) -> Self {
+        Self {
+            turn,
+            mv,
+            status: mv.status as u32,
+            compute,
+        }
+    }
+}
+
 /// The agent's link to the coordinator.
 pub trait Transport {
     /// Tell the coordinator this agent is ready for turns.
@@ -56,13 +81,6 @@ pub trait Transport {
     fn next_command(&mut self) -> anyhow::Result<Command>;
     /// The static scenario (available from the first turn on).
     fn mission(&mut self) -> anyhow::Result<MissionView>;
-    /// Publish this turn's move with its status code (normally `mv.status as u32`; a
-    /// test mode may send another) and the time spent computing it.
-    fn publish_move(
-        &mut self,
-        turn: &TurnInput,
-        mv: &Move,
-        status: u32,
-        compute: Duration,
-    ) -> anyhow::Result<()>;
+    /// Publish this turn's move.
+    fn publish_move(&mut self, reply: Reply<'_>) -> anyhow::Result<()>;
 }

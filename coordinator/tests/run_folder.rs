@@ -114,8 +114,8 @@ fn check_round_trip(file: &str) -> (usize, usize, usize) {
                 assert_bits(x, y, what);
             }
             assert_eq!((r.status, r.alive), (a.status, a.alive), "{file}");
-            assert_eq!(r.path.len(), a.waypoints.len(), "{file}");
-            for (p, q) in r.path.iter().zip(&a.waypoints) {
+            assert_eq!(r.waypoints.len(), a.waypoints.len(), "{file}");
+            for (p, q) in r.waypoints.iter().zip(&a.waypoints) {
                 assert_bits(p.x, q.x, "moves.csv x");
                 assert_bits(p.y, q.y, "moves.csv y");
             }

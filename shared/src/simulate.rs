@@ -11,7 +11,7 @@ use crate::course::Course;
 use crate::geometry::Pose;
 use crate::groups::turn_groups;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
-use crate::record::{FaultKind, Recorder, Run};
+use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
 use crate::turn::TurnPlanner;
 use crate::vocabulary::CbfSettingsError;
@@ -138,13 +138,13 @@ pub fn simulate_along_with_deaths(
                         "fault injection: killed before its group's turns".to_string(),
                         None,
                     );
-                    recorder.freeze(
-                        step,
+                    recorder.freeze(Fault {
                         agent,
-                        FaultKind::Dead,
-                        "the agent process died during its turn".to_string(),
-                        None,
-                    );
+                        step,
+                        kind: FaultKind::Dead,
+                        detail: "the agent process died during its turn".to_string(),
+                        detection_ms: None,
+                    });
                 }
             }
             // Every agent of the group plans against the same snapshot.

@@ -3,14 +3,12 @@
 //! (`replay`, `early`, `flood`). [`Misbehaving`] is the [`Transport`] decorator that
 //! publishes them in place of the honest move the turn loop hands it.
 
-use std::time::Duration;
-
 use anyhow::Context;
 use shared::geometry::{Disk, Point, Vector};
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 use wire::misbehave::Misbehave;
 
-use crate::transport::{Command, MissionView, Transport, TurnInput};
+use crate::transport::{Command, MissionView, Reply, Transport, TurnInput};
 
 /// A [`Transport`] decorator: agent `agent`'s moves go out as mode `mode` has them, the
 /// rest passes through `T` untouched.
@@ -58,34 +56,32 @@ impl<T: Transport> Transport for Misbehaving<T> {
         Ok(mission)
     }
 
-    fn publish_move(
-        &mut self,
-        turn: &TurnInput,
-        mv: &Move,
-        status: u32,
-        compute: Duration,
-    ) -> anyhow::Result<()> {
+    fn publish_move(&mut self, reply: Reply<'_>) -> anyhow::Result<()> {
+        let Reply { turn, mv, .. } = reply;
         match self.mode {
             Misbehave::Replay => {
                 if let Some((old_turn, old_move)) = &self.previous {
                     self.inner
-                        .publish_move(old_turn, old_move, old_move.status as u32, compute)?;
+                        .publish_move(Reply::new(old_turn, old_move, reply.compute))?;
                 }
-                self.inner.publish_move(turn, mv, status, compute)?;
+                self.inner.publish_move(reply)?;
             }
             Misbehave::Early => {
-                self.inner.publish_move(turn, mv, status, compute)?;
+                self.inner.publish_move(reply)?;
                 let guess = TurnInput {
                     seq: turn.seq + 1,
                     step: turn.step + 1,
                     token: turn.token.wrapping_add(1),
                     ..turn.clone()
                 };
-                self.inner.publish_move(&guess, mv, status, compute)?;
+                self.inner.publish_move(Reply {
+                    turn: &guess,
+                    ..reply
+                })?;
             }
             Misbehave::Flood => {
                 for _ in 0..4 {
-                    self.inner.publish_move(turn, mv, status, compute)?;
+                    self.inner.publish_move(reply)?;
                 }
             }
             mode => {
@@ -100,7 +96,11 @@ impl<T: Transport> Transport for Misbehaving<T> {
                 }
                 let obstacles = self.obstacles.as_deref().unwrap_or_default();
                 if let Some((bad, status)) = corrupt(mode, mv.clone(), &me, obstacles, turn.step) {
-                    self.inner.publish_move(turn, &bad, status, compute)?;
+                    self.inner.publish_move(Reply {
+                        mv: &bad,
+                        status,
+                        ..reply
+                    })?;
                 }
             }
         }

@@ -232,33 +232,35 @@ impl Samples {
                 "{} agents: turn latency vs. IPC overhead vs. iceoryx2 floor vs. Unix socket",
                 r.agents
             ),
-            series: vec![
-                plot::Series {
-                    label: format!("turn latency (p50 {:.1} us)", r.turn_us.p50),
-                    values_us: &self.turn_us,
-                    color: plot::GREY,
-                },
-                plot::Series {
-                    label: format!("turn IPC overhead (p50 {:.1} us)", r.ipc_overhead_us.p50),
-                    values_us: &self.overhead_us,
-                    color: plot::BLUE,
-                },
-                plot::Series {
-                    label: format!("echo, same agents in turn (p50 {:.1} us)", r.echo_us.p50),
-                    values_us: &self.echo_us,
-                    color: plot::ORANGE,
-                },
-                plot::Series {
-                    label: format!("iceoryx2 floor (p50 {:.1} us)", r.floor_us.p50),
-                    values_us: &self.floor_us,
-                    color: plot::GREEN,
-                },
-                plot::Series {
-                    label: format!("Unix socket (p50 {:.1} us)", r.uds_us.p50),
-                    values_us: &self.uds_us,
-                    color: plot::VERMILLION,
-                },
-            ],
+            series: [
+                ("turn latency", r.turn_us.p50, &self.turn_us, plot::GREY),
+                (
+                    "turn IPC overhead",
+                    r.ipc_overhead_us.p50,
+                    &self.overhead_us,
+                    plot::BLUE,
+                ),
+                (
+                    "echo, same agents in turn",
+                    r.echo_us.p50,
+                    &self.echo_us,
+                    plot::ORANGE,
+                ),
+                (
+                    "iceoryx2 floor",
+                    r.floor_us.p50,
+                    &self.floor_us,
+                    plot::GREEN,
+                ),
+                ("Unix socket", r.uds_us.p50, &self.uds_us, plot::VERMILLION),
+            ]
+            .into_iter()
+            .map(|(what, p50_us, values_us, color)| plot::Series {
+                label: format!("{what} (p50 {p50_us:.1} us)"),
+                values_us,
+                color,
+            })
+            .collect(),
         }
     }
 }

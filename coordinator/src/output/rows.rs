@@ -9,7 +9,7 @@
 use serde::de::{self, DeserializeOwned, Deserializer, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 use shared::course::ReplanReason;
-use shared::vocabulary::MoveStatus;
+use shared::vocabulary::{MoveStatus, Named, named};
 
 /// A row of `path.csv`: the formation centre at one step.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,7 +59,7 @@ pub struct TrajectoryRow {
     #[serde(with = "display_f64")]
     pub clearance_m: f64,
     /// Outcome of its turn, by [`MoveStatus::name`].
-    #[serde(with = "status_name")]
+    #[serde(with = "named")]
     pub status: MoveStatus,
     /// Whether it is still in the formation: `1` or `0` (read: anything but `0` is alive).
     #[serde(with = "zero_one")]
@@ -169,19 +169,24 @@ const _: fn(ReplanReason) = |r| match r {
     ReplanReason::FoundObstacle | ReplanReason::MovingObstacle => {}
 };
 
+impl Named for PlanReason {
+    const ALL: &'static [Self] = &Self::ALL;
+    const WHAT: &'static str = "plan reason";
+
+    fn name(&self) -> &'static str {
+        PlanReason::name(*self)
+    }
+}
+
 impl Serialize for PlanReason {
     fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(self.name())
+        named::serialize(self, serializer)
     }
 }
 
 impl<'de> Deserialize<'de> for PlanReason {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        let name = String::deserialize(deserializer)?;
-        Self::ALL
-            .into_iter()
-            .find(|r| r.name() == name)
-            .ok_or_else(|| de::Error::custom(format!("unknown plan reason `{name}`")))
+        named::deserialize(deserializer)
     }
 }
 
@@ -195,29 +200,6 @@ mod display_f64 {
 
     pub(super) fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f64, D::Error> {
         f64::deserialize(deserializer)
-    }
-}
-
-/// A [`MoveStatus`] column, by [`MoveStatus::name`].
-mod status_name {
-    use serde::{Deserialize, Deserializer, Serializer, de};
-    use shared::vocabulary::MoveStatus;
-
-    pub(super) fn serialize<S: Serializer>(
-        status: &MoveStatus,
-        serializer: S,
-    ) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(status.name())
-    }
-
-    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
-        deserializer: D,
-    ) -> Result<MoveStatus, D::Error> {
-        let name = String::deserialize(deserializer)?;
-        MoveStatus::ALL
-            .into_iter()
-            .find(|s| s.name() == name)
-            .ok_or_else(|| de::Error::custom(format!("unknown move status `{name}`")))
     }
 }
 

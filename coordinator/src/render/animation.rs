@@ -301,13 +301,7 @@ impl<'a> Animation<'a> {
         let chart = scene::map_chart(&panel, &close_up)?;
         let p = Painter::new(&chart, &close_up);
         p.obstacles(&self.data.scenario.obstacles, self.margin_m)?;
-        let path: Vec<Xy> = self
-            .data
-            .centre
-            .iter()
-            .map(|c| (c.pose.x_m, c.pose.y_m))
-            .collect();
-        p.polyline(&path, line(alpha(palette::CENTRE_PATH, 0.3), 2))?;
+        p.faint_centre_path(&self.data.centre)?;
         self.draw_world(&p, at, true)?;
         right.draw(&Text::new(
             "close-up around the formation centre",
@@ -390,8 +384,8 @@ impl<'a> Animation<'a> {
         let small = radii.iter().fold(f64::INFINITY, |m, &r| m.min(r)) < p.m(3.0);
         let move_width = if small { 1 } else { 2 };
         for a in &step.agents {
-            if a.path.len() > 1 {
-                let pts: Vec<Xy> = a.path.iter().map(|q| (q.x, q.y)).collect();
+            if a.waypoints.len() > 1 {
+                let pts: Vec<Xy> = a.waypoints.iter().map(|q| (q.x, q.y)).collect();
                 p.polyline(&pts, line(solid(palette::MOVE), move_width))?;
             }
         }
@@ -434,13 +428,7 @@ impl<'a> Animation<'a> {
             }
         }
         if let Some(pose) = self.data.centre_at(step.step) {
-            p.arrow(
-                (pose.x_m, pose.y_m),
-                pose.heading_rad,
-                22.0,
-                solid(palette::CENTRE_PATH),
-                2,
-            )?;
+            p.centre_arrow(pose, 22.0)?;
         }
         Ok(())
     }
@@ -467,13 +455,7 @@ impl Figure for Background<'_, '_> {
         for m in &s.moving {
             p.route(m)?;
         }
-        let path: Vec<Xy> = a
-            .data
-            .centre
-            .iter()
-            .map(|c| (c.pose.x_m, c.pose.y_m))
-            .collect();
-        p.polyline(&path, line(alpha(palette::CENTRE_PATH, 0.3), 2))?;
+        p.faint_centre_path(&a.data.centre)?;
         for (pose, color) in [(s.path.start, palette::START), (s.path.goal, palette::GOAL)] {
             p.marker((pose.x_m, pose.y_m), 6.0, fill(solid(color)))?;
         }

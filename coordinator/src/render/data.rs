@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 use shared::geometry::{Disk, Point, Pose};
+use shared::record::AgentStep;
 use shared::scenario::Scenario;
-use shared::vocabulary::MoveStatus;
 
 pub use crate::output::FaultRecord;
 use crate::output::SummaryRead;
@@ -63,34 +63,13 @@ pub struct CentrePose {
     pub pose: Pose,
 }
 
-/// One agent at the end of one step (`trajectory.csv` with its `moves.csv` polyline).
-#[derive(Clone, Debug, PartialEq)]
-pub struct AgentRecord {
-    /// Where the agent is.
-    pub position: Point,
-    /// Its ideal slot.
-    pub slot: Point,
-    /// The best point it aimed for.
-    pub best: Point,
-    /// Distance from its slot, in metres.
-    pub deviation_m: f64,
-    /// Clearance to the nearest other body, as the run recorded it, in metres.
-    pub clearance_m: f64,
-    /// Outcome of its turn.
-    pub status: MoveStatus,
-    /// Whether it is still in the formation.
-    pub alive: bool,
-    /// The polyline it followed in this step (a single point when it did not move).
-    pub path: Vec<Point>,
-}
-
 /// Every agent at the end of one step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepRecord {
     /// The step.
     pub step: usize,
     /// The agents, indexed by agent id.
-    pub agents: Vec<AgentRecord>,
+    pub agents: Vec<AgentStep>,
 }
 
 /// One plan of the formation centre (`plans.csv`): the first, or a replan that found a
@@ -339,7 +318,7 @@ fn read_centre(path: &Path) -> Result<Vec<CentrePose>, RunDirError> {
 }
 
 fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDirError> {
-    let mut steps: Vec<(usize, Vec<Option<AgentRecord>>)> = Vec::new();
+    let mut steps: Vec<(usize, Vec<Option<AgentStep>>)> = Vec::new();
     csv_rows(path, |_, r: TrajectoryRow| {
         if r.agent >= agents {
             return Err(format!(
@@ -347,7 +326,7 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
                 r.agent
             ));
         }
-        let record = AgentRecord {
+        let record = AgentStep {
             position: point("x", r.x, "y", r.y)?,
             slot: point("slot_x", r.slot_x, "slot_y", r.slot_y)?,
             best: point("best_x", r.best_x, "best_y", r.best_y)?,
@@ -355,7 +334,7 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
             clearance_m: r.clearance_m,
             status: r.status,
             alive: r.alive,
-            path: Vec::new(),
+            waypoints: Vec::new(),
         };
         match steps.last_mut() {
             Some((step, _)) if *step > r.step => {
@@ -382,7 +361,7 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
         .into_iter()
         .map(|(step, slots)| {
             let have = slots.iter().filter(|a| a.is_some()).count();
-            let complete: Option<Vec<AgentRecord>> = slots.into_iter().collect();
+            let complete: Option<Vec<AgentStep>> = slots.into_iter().collect();
             complete
                 .map(|records| StepRecord {
                     step,
@@ -411,7 +390,7 @@ fn read_moves(path: &Path, steps: &mut [StepRecord]) -> Result<(), RunDirError> 
     })?;
     for ((i, agent), mut points) in indexed {
         points.sort_by_key(|&(index, _)| index);
-        steps[i].agents[agent].path = points.into_iter().map(|(_, p)| p).collect();
+        steps[i].agents[agent].waypoints = points.into_iter().map(|(_, p)| p).collect();
     }
     Ok(())
 }

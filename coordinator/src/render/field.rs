@@ -6,17 +6,14 @@
 //! every plan (the first and each replan taken, dashed and lighter, a dot where each
 //! replan starts) under the path actually followed (solid).
 
-use plotters::coord::Shift;
-use plotters::prelude::DrawingArea;
-
-use super::canvas::{Backend, Figure};
+use super::canvas::Backend;
 use super::data::RunData;
 use super::font;
 use super::geom::{self, Xy};
 use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::MapLayout;
 use super::palette;
-use super::scene::{self, Painter, alpha, fmt_m, line, map_layout, solid};
+use super::scene::{self, MapFigure, Painter, alpha, fmt_m, line, map_layout, solid};
 
 /// Largest plotting area of the field figure, in pixels.
 pub const MAX_PLOT_PX: (u32, u32) = (1000, 720);
@@ -216,19 +213,19 @@ impl FieldFigure<'_> {
     }
 }
 
-impl Figure for FieldFigure<'_> {
-    fn size_px(&self) -> (u32, u32) {
-        (self.layout.width_px, self.layout.height_px)
+impl MapFigure for FieldFigure<'_> {
+    fn header(&self) -> &Header {
+        &self.header
     }
 
-    fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        root.fill(&palette::WHITE)?;
-        self.header.draw(root)?;
-        let chart = scene::map_chart(root, &self.layout)?;
-        let p = Painter::new(&chart, &self.layout);
+    fn map_layout(&self) -> &MapLayout {
+        &self.layout
+    }
+
+    fn paint<DB: Backend>(&self, p: &Painter<'_, '_, DB>) -> anyhow::Result<()> {
         let s = &self.data.scenario;
         p.obstacles(&s.obstacles, self.margin_m)?;
-        self.draw_changing_world(&p)?;
+        self.draw_changing_world(p)?;
 
         let path: Vec<Xy> = self
             .data
@@ -245,13 +242,7 @@ impl Figure for FieldFigure<'_> {
             travelled += (b.x_m - a.x_m).hypot(b.y_m - a.y_m);
             if travelled >= spacing_m {
                 travelled = 0.0;
-                p.arrow(
-                    (b.x_m, b.y_m),
-                    b.heading_rad,
-                    18.0,
-                    solid(palette::CENTRE_PATH),
-                    2,
-                )?;
+                p.centre_arrow(b, 18.0)?;
             }
         }
         for (pose, color, label) in [

@@ -1,19 +1,17 @@
 //! The formation figure (the paper's Fig. 7): every agent at its slot with the formation
 //! centre at the start pose, each agent's safety circle, and slot labels.
 
-use plotters::coord::Shift;
-use plotters::prelude::DrawingArea;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use shared::geometry::Point;
 
-use super::canvas::{Backend, Figure};
+use super::canvas::Backend;
 use super::data::RunData;
 use super::font;
 use super::geom::{View, Xy};
 use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::MapLayout;
 use super::palette;
-use super::scene::{self, Painter, alpha, fmt_m, line, map_layout, solid};
+use super::scene::{self, MapFigure, Painter, alpha, fmt_m, line, map_layout, solid};
 
 /// Largest plotting area of the formation figure, in pixels.
 pub const MAX_PLOT_PX: (u32, u32) = (900, 680);
@@ -146,16 +144,16 @@ impl<'a> FormationFigure<'a> {
     }
 }
 
-impl Figure for FormationFigure<'_> {
-    fn size_px(&self) -> (u32, u32) {
-        (self.layout.width_px, self.layout.height_px)
+impl MapFigure for FormationFigure<'_> {
+    fn header(&self) -> &Header {
+        &self.header
     }
 
-    fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        root.fill(&palette::WHITE)?;
-        self.header.draw(root)?;
-        let chart = scene::map_chart(root, &self.layout)?;
-        let p = Painter::new(&chart, &self.layout);
+    fn map_layout(&self) -> &MapLayout {
+        &self.layout
+    }
+
+    fn paint<DB: Backend>(&self, p: &Painter<'_, '_, DB>) -> anyhow::Result<()> {
         let s = &self.data.scenario;
         let start = s.path.start;
         let centre: Xy = (start.x_m, start.y_m);

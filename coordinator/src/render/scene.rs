@@ -12,10 +12,10 @@ use plotters::prelude::{
 };
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
-use shared::geometry::{Disk, Point};
+use shared::geometry::{Disk, Point, Pose};
 
-use super::canvas::Backend;
-use super::data::UnknownRecord;
+use super::canvas::{Backend, Figure};
+use super::data::{CentrePose, UnknownRecord};
 use super::font;
 use super::geom::{self, View, Xy};
 use super::header::Header;
@@ -125,6 +125,31 @@ pub fn view_of(layout: &MapLayout) -> View {
     }
 }
 
+/// A figure that is one map under a header: it says its header and layout, and paints
+/// the map; the white canvas, the header and the axes are drawn for it.
+pub trait MapFigure {
+    /// The header above the map.
+    fn header(&self) -> &Header;
+    /// The canvas and the map's place on it.
+    fn map_layout(&self) -> &MapLayout;
+    /// Paint the map's content.
+    fn paint<DB: Backend>(&self, p: &Painter<'_, '_, DB>) -> anyhow::Result<()>;
+}
+
+impl<T: MapFigure> Figure for T {
+    fn size_px(&self) -> (u32, u32) {
+        let layout = self.map_layout();
+        (layout.width_px, layout.height_px)
+    }
+
+    fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
+        root.fill(&palette::WHITE)?;
+        self.header().draw(root)?;
+        let chart = map_chart(root, self.map_layout())?;
+        self.paint(&Painter::new(&chart, self.map_layout()))
+    }
+}
+
 /// Draws clipped shapes in metres onto a map.
 pub struct Painter<'c, 'a, DB: Backend> {
     chart: &'c MapChart<'a, DB>,
@@ -212,6 +237,24 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
             return Ok(());
         }
         self.polygon(&geom::circle(c, r, self.px_per_m), style)
+    }
+
+    /// The formation centre at `pose`: an arrow `len_px` long in the centre path's colour.
+    pub fn centre_arrow(&self, pose: Pose, len_px: f64) -> anyhow::Result<()> {
+        let tail = (pose.x_m, pose.y_m);
+        self.arrow(
+            tail,
+            pose.heading_rad,
+            len_px,
+            solid(palette::CENTRE_PATH),
+            2,
+        )
+    }
+
+    /// The centre's whole path, faint (the backdrop of a moving scene).
+    pub fn faint_centre_path(&self, centre: &[CentrePose]) -> anyhow::Result<()> {
+        let path: Vec<Xy> = centre.iter().map(|c| (c.pose.x_m, c.pose.y_m)).collect();
+        self.polyline(&path, line(alpha(palette::CENTRE_PATH, 0.3), 2))
     }
 
     /// An arrow from `tail` along `heading_rad`, `len_px` long.

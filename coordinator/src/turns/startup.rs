@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
-use shared::record::FaultKind;
+use shared::record::{Fault, FaultKind};
 use wire::StateKind;
 
 use super::driver::Driver;
@@ -170,13 +170,13 @@ impl Driver<'_, '_> {
         self.ipc.close_channel(agent);
         self.ipc.cleanup_dead_nodes();
         if self.recorder.alive()[agent] {
-            self.recorder.freeze(
-                step,
+            self.recorder.freeze(Fault {
                 agent,
-                FaultKind::FailedToStart,
-                format!("the agent process did not start: {why}"),
-                None,
-            );
+                step,
+                kind: FaultKind::FailedToStart,
+                detail: format!("the agent process did not start: {why}"),
+                detection_ms: None,
+            });
         }
         if self.options.respawn {
             self.respawn(step, agent)?;

@@ -1,7 +1,6 @@
 //! The paper's failed zeroing barrier with a LogSumExp-smoothed max, kept for comparison.
 
-use crate::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
+use crate::geometry::{Disk, Field, Point, Pose, Vector};
 use crate::vocabulary::{AgentSpec, Body, CbfSettings, CbfSettingsError, Move};
 
 use super::*;
@@ -28,11 +27,8 @@ use super::*;
 /// reduces to `h = ||x - s|| - R`, convex, and is safe.
 #[derive(Clone, Debug)]
 pub struct ZcbfLogSumExpPlanner {
-    field: Field,
-    slot: Slot,
-    radius_m: f64,
-    obstacles: DiskGrid,
-    settings: CbfSettings,
+    /// The agent, its field and obstacles, as the safe planner holds them.
+    base: CbfPlanner,
     sharpness_per_m: f64,
 }
 
@@ -49,7 +45,7 @@ impl ZcbfLogSumExpPlanner {
         settings: CbfSettings,
         sharpness_per_m: f64,
     ) -> Result<Self, CbfSettingsError> {
-        settings.validate_for_agent(spec.radius_m)?;
+        let base = CbfPlanner::new(field, obstacles, spec, settings)?;
         if !(sharpness_per_m.is_finite() && sharpness_per_m > 0.0) {
             return Err(CbfSettingsError::NotPositive {
                 name: "sharpness_per_m",
@@ -57,42 +53,38 @@ impl ZcbfLogSumExpPlanner {
             });
         }
         Ok(Self {
-            field,
-            slot: spec.slot,
-            radius_m: spec.radius_m,
-            obstacles: DiskGrid::new(obstacles.to_vec()),
-            settings,
+            base,
             sharpness_per_m,
         })
     }
 
     /// This agent's radius, in metres.
     pub fn radius_m(&self) -> f64 {
-        self.radius_m
+        self.base.radius_m
     }
 
     /// The ideal slot when the centre is at `centre`.
     pub fn slot_position(&self, centre: &Pose) -> Point {
-        self.slot.ideal_position(centre)
+        self.base.slot.ideal_position(centre)
     }
 
     /// The barrier at `me` and its gradient: `(h, grad h)`; `None` when nothing is sensed.
     pub fn barrier(&self, me: &Point, others: &[Body]) -> Option<(f64, Vector)> {
-        let sensing_m = self.settings.sensing_radius_m;
+        let sensing_m = self.base.settings.sensing_radius_m;
         // (g_j = overlap depth, unit direction away from j)
         let mut terms: Vec<(f64, Vector)> = Vec::new();
         let edges = [
             (me.x, Vector::new(1.0, 0.0)),
-            (self.field.width_m - me.x, Vector::new(-1.0, 0.0)),
+            (self.base.field.width_m - me.x, Vector::new(-1.0, 0.0)),
             (me.y, Vector::new(0.0, 1.0)),
-            (self.field.height_m - me.y, Vector::new(0.0, -1.0)),
+            (self.base.field.height_m - me.y, Vector::new(0.0, -1.0)),
         ];
         for (inset_m, inward) in edges {
             if inset_m <= sensing_m {
-                terms.push((self.radius_m - inset_m, inward));
+                terms.push((self.base.radius_m - inset_m, inward));
             }
         }
-        for (centre, radius_m, _) in sensed(&self.obstacles, others, me, sensing_m) {
+        for (centre, radius_m, _) in sensed(&self.base.obstacles, others, me, sensing_m) {
             let away = me - centre;
             let distance_m = away.norm();
             let direction = if distance_m > 0.0 {
@@ -100,7 +92,7 @@ impl ZcbfLogSumExpPlanner {
             } else {
                 Vector::zeros()
             };
-            terms.push((self.radius_m + radius_m - distance_m, direction));
+            terms.push((self.base.radius_m + radius_m - distance_m, direction));
         }
         let top = terms.iter().map(|t| t.0).fold(f64::NEG_INFINITY, f64::max);
         if terms.is_empty() || !top.is_finite() {
@@ -120,13 +112,13 @@ impl ZcbfLogSumExpPlanner {
     /// The velocity chosen at `me` towards `slot`: the single-constraint QP's solution,
     /// capped at the maximum speed.
     pub fn velocity(&self, slot: &Point, me: &Point, others: &[Body]) -> Result<Vector, QpError> {
-        let u_nom = self.settings.nominal(slot, me);
+        let u_nom = self.base.settings.nominal(slot, me);
         let rows: Vec<HalfPlane> = self
             .barrier(me, others)
-            .map(|(h, gradient)| HalfPlane::new(-gradient, self.settings.gamma_per_s * h))
+            .map(|(h, gradient)| HalfPlane::new(-gradient, self.base.settings.gamma_per_s * h))
             .into_iter()
             .collect();
-        Ok(self.settings.capped(solve_qp_2d(&u_nom, &rows)?))
+        Ok(self.base.settings.capped(solve_qp_2d(&u_nom, &rows)?))
     }
 
     /// Plan this agent's move (same interface as [`CbfPlanner::plan_move`]). **Unsafe**:
@@ -134,6 +126,6 @@ impl ZcbfLogSumExpPlanner {
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         let slot = self.slot_position(centre);
         let u = self.velocity(&slot, me, others).ok();
-        step_move(slot, me, u, self.settings.dt_s)
+        step_move(slot, me, u, self.base.settings.dt_s)
     }
 }

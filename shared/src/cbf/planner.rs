@@ -11,12 +11,12 @@ use super::*;
 /// the safety argument). Same turn interface as [`crate::turn::BestPointPlanner`].
 #[derive(Clone, Debug)]
 pub struct CbfPlanner {
-    field: Field,
-    slot: Slot,
-    radius_m: f64,
+    pub(super) field: Field,
+    pub(super) slot: Slot,
+    pub(super) radius_m: f64,
     /// Static obstacles, true radii.
-    obstacles: DiskGrid,
-    settings: CbfSettings,
+    pub(super) obstacles: DiskGrid,
+    pub(super) settings: CbfSettings,
 }
 
 impl CbfPlanner {

@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::vocabulary::Named;
+
 /// What went wrong with an agent, and when.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Fault {
@@ -118,10 +120,16 @@ impl std::str::FromStr for FaultKind {
     type Err = UnknownFaultKind;
 
     fn from_str(name: &str) -> Result<Self, Self::Err> {
-        Self::ALL
-            .into_iter()
-            .find(|k| k.name() == name)
-            .ok_or_else(|| UnknownFaultKind(name.to_string()))
+        <Self as Named>::from_name(name).ok_or_else(|| UnknownFaultKind(name.to_string()))
+    }
+}
+
+impl Named for FaultKind {
+    const ALL: &'static [Self] = &Self::ALL;
+    const WHAT: &'static str = "fault kind";
+
+    fn name(&self) -> &'static str {
+        FaultKind::name(self)
     }
 }
 

@@ -306,20 +306,20 @@ impl<'a> Recorder<'a> {
     /// obstacle where it stands, and the death is recorded with how long it took to
     /// notice.
     pub fn freeze_dead(&mut self, step: usize, agent: usize, detail: String, detection_ms: f64) {
-        self.freeze(step, agent, FaultKind::Dead, detail, Some(detection_ms));
+        self.freeze(Fault {
+            agent,
+            step,
+            kind: FaultKind::Dead,
+            detail,
+            detection_ms: Some(detection_ms),
+        });
     }
 
-    /// Take `agent` out of the formation: it stays as a static obstacle where it stands,
-    /// and a fault of `kind` is recorded ([`FaultKind::Dead`],
+    /// Take the fault's agent out of the formation: it stays as a static obstacle where it
+    /// stands, and the fault is recorded ([`FaultKind::Dead`],
     /// [`FaultKind::FailedToStart`], ...).
-    pub fn freeze(
-        &mut self,
-        step: usize,
-        agent: usize,
-        kind: FaultKind,
-        detail: String,
-        detection_ms: Option<f64>,
-    ) {
+    pub fn freeze(&mut self, fault: Fault) {
+        let (step, agent) = (fault.step, fault.agent);
         let here = self.bodies[agent].position;
         let centre = self
             .run
@@ -334,7 +334,7 @@ impl<'a> Recorder<'a> {
             waypoints: vec![here],
         });
         self.alive[agent] = false;
-        self.note_fault(step, agent, kind, detail, detection_ms);
+        self.run.faults.push(fault);
     }
 
     /// Put `agent` back into the formation (a replacement process took its place).

@@ -9,6 +9,8 @@
 //! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
 //! - [`AgentSpec`]: one agent of a scenario (its slot, radius, top speed and sensing
 //!   radius);
+//! - [`Named`]: the values files and the command line spell by name, read and written
+//!   through one helper;
 //! - [`TurnMode`]: one mover at a time, or parallel groups;
 //! - [`PlannerKind`] and [`PlannerSpec`]: which controller moves the agents, with which
 //!   settings;
@@ -21,6 +23,7 @@ mod body;
 mod capacity;
 mod cbf_settings;
 mod moves;
+pub mod named;
 mod planner;
 mod turn_mode;
 
@@ -29,5 +32,6 @@ pub use body::Body;
 pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
 pub use cbf_settings::{CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
 pub use moves::{Move, MoveStatus};
+pub use named::Named;
 pub use planner::{PlannerKind, PlannerSpec};
 pub use turn_mode::TurnMode;

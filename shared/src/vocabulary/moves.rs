@@ -97,3 +97,12 @@ impl Move {
         self.waypoints.last().copied().unwrap_or(self.best)
     }
 }
+
+impl super::Named for MoveStatus {
+    const ALL: &'static [Self] = &Self::ALL;
+    const WHAT: &'static str = "move status";
+
+    fn name(&self) -> &'static str {
+        MoveStatus::name(self)
+    }
+}

@@ -2,7 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::vocabulary::{AgentSpec, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
+use crate::vocabulary::{
+    AgentSpec, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M, Named,
+};
 
 /// Which controller moves the agents.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
@@ -45,7 +47,7 @@ impl PlannerKind {
     /// assert_eq!(PlannerKind::from_name("best_point"), None);
     /// ```
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == name)
+        <Self as Named>::from_name(name)
     }
 
     /// The wire code.
@@ -56,6 +58,15 @@ impl PlannerKind {
     /// The planner with wire code `code`, if any.
     pub fn from_code(code: u32) -> Option<Self> {
         Self::ALL.get(code as usize).copied()
+    }
+}
+
+impl Named for PlannerKind {
+    const ALL: &'static [Self] = &Self::ALL;
+    const WHAT: &'static str = "planner";
+
+    fn name(&self) -> &'static str {
+        PlannerKind::name(self)
     }
 }
 

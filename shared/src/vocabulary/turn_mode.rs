@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::Named;
+
 /// How the agents of a step take their turns (`[turns] mode` in a scenario).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
@@ -18,6 +20,9 @@ pub enum TurnMode {
 }
 
 impl TurnMode {
+    /// Both modes.
+    pub const ALL: [TurnMode; 2] = [Self::Sequential, Self::Parallel];
+
     /// The name used in files and on the command line.
     pub fn name(&self) -> &'static str {
         match self {
@@ -34,8 +39,15 @@ impl TurnMode {
     /// assert_eq!(TurnMode::from_name("Parallel"), None);
     /// ```
     pub fn from_name(name: &str) -> Option<Self> {
-        [Self::Sequential, Self::Parallel]
-            .into_iter()
-            .find(|m| m.name() == name)
+        <Self as Named>::from_name(name)
+    }
+}
+
+impl Named for TurnMode {
+    const ALL: &'static [Self] = &Self::ALL;
+    const WHAT: &'static str = "turn mode";
+
+    fn name(&self) -> &'static str {
+        TurnMode::name(self)
     }
 }

@@ -11,6 +11,8 @@
 use std::fmt;
 use std::str::FromStr;
 
+use shared::vocabulary::Named;
+
 /// How an agent misbehaves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Misbehave {
@@ -147,16 +149,22 @@ impl FromStr for Misbehave {
             Some((name, victim)) => (name, Some(victim.parse().map_err(|_| unknown())?)),
             None => (s, None),
         };
-        let mode = *Self::ALL
-            .iter()
-            .find(|m| m.name() == name)
-            .ok_or_else(unknown)?;
+        let mode = <Self as Named>::from_name(name).ok_or_else(unknown)?;
         match (mode, victim) {
             (Self::Impersonate { .. }, Some(victim)) => Ok(Self::Impersonate { victim }),
             (Self::SpoofReady { .. }, Some(victim)) => Ok(Self::SpoofReady { victim }),
             (mode, None) if mode.victim().is_none() => Ok(mode),
             _ => Err(unknown()),
         }
+    }
+}
+
+impl Named for Misbehave {
+    const ALL: &'static [Self] = &Self::ALL;
+    const WHAT: &'static str = "misbehave mode";
+
+    fn name(&self) -> &'static str {
+        Misbehave::name(self)
     }
 }
 
