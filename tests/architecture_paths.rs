@@ -1,6 +1,6 @@
 //! ARCHITECTURE.md's "Where each concept lives" table against the repository: every path
 //! the table names exists. A path is a backticked span in the table's `file` column
-//! outside parentheses (those name items inside a file, such as `TurnPlanner::plan_turn`);
+//! outside parentheses (those name items inside a file, such as `TurnController::plan_turn`);
 //! `{a,b,c}` lists expand to one path each (`shared/src/geometry/{pose,disk}.rs` is
 //! `shared/src/geometry/pose.rs` and `shared/src/geometry/disk.rs`), and a path ending in
 //! `/` names a folder.
@@ -176,7 +176,7 @@ fn brace_lists_expand_to_one_path_per_choice() {
 #[test]
 fn items_in_parentheses_are_not_paths() {
     assert_eq!(
-        paths_in_cell("`shared/src/turn.rs` (`TurnPlanner::plan_turn`)"),
+        paths_in_cell("`shared/src/turn.rs` (`TurnController::plan_turn`)"),
         ["shared/src/turn.rs"]
     );
     assert_eq!(

@@ -1,4 +1,4 @@
-//! `coordinator compare`: every planner through the same processes and the same safety
+//! `coordinator compare`: every controller through the same processes and the same safety
 //! monitor. The paper's LogSumExp barrier tries unsafe moves (the monitor refuses them,
 //! so nobody collides); the barrier-function QP never does.
 
@@ -22,27 +22,27 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
         String::from_utf8_lossy(&output.stderr)
     );
     let md = std::fs::read_to_string(out.join("compare.md")).expect("compare.md");
-    assert!(md.starts_with("| scenario | planner |"));
+    assert!(md.starts_with("| scenario | controller |"));
     let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
     let headers = reader.headers().expect("headers").clone();
     let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
     let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
-    assert_eq!(rows.len(), 4, "four planners on the paper example");
+    assert_eq!(rows.len(), 4, "four controllers on the paper example");
     for r in &rows {
         assert_eq!(
             &r[col("collisions")],
             "0",
-            "the monitor keeps every planner safe"
+            "the monitor keeps every controller safe"
         );
         assert_eq!(&r[col("completed")], "true");
     }
-    let by = |planner: &str| {
+    let by = |controller: &str| {
         rows.iter()
-            .find(|r| &r[col("planner")] == planner)
-            .expect(planner)
+            .find(|r| &r[col("controller")] == controller)
+            .expect(controller)
     };
-    let unsafe_moves = |planner: &str| {
-        by(planner)[col("unsafe_moves")]
+    let unsafe_moves = |controller: &str| {
+        by(controller)[col("unsafe_moves")]
             .parse::<usize>()
             .expect("count")
     };
@@ -52,8 +52,8 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
         unsafe_moves("zcbf-logsumexp") > 0,
         "the smoothed max overshoots (paper, IV.C.1)"
     );
-    let final_dev = |planner: &str| {
-        by(planner)[col("final_mean_deviation_m")]
+    let final_dev = |controller: &str| {
+        by(controller)[col("final_mean_deviation_m")]
             .parse::<f64>()
             .expect("dev")
     };
@@ -74,7 +74,7 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
 }
 
 #[test]
-fn compare_runs_every_planner_in_every_turn_mode_asked_for() {
+fn compare_runs_every_controller_in_every_turn_mode_asked_for() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("cmp");
     let scenario = support::repo_root()
@@ -84,7 +84,7 @@ fn compare_runs_every_planner_in_every_turn_mode_asked_for() {
         .arg("compare")
         .arg(&scenario)
         .args([
-            "--planners",
+            "--controllers",
             "best-point,cbf",
             "--turns",
             "sequential,parallel",
@@ -102,7 +102,12 @@ fn compare_runs_every_planner_in_every_turn_mode_asked_for() {
     let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
     let got: Vec<(String, String)> = rows
         .iter()
-        .map(|r| (r[col("turns")].to_string(), r[col("planner")].to_string()))
+        .map(|r| {
+            (
+                r[col("turns")].to_string(),
+                r[col("controller")].to_string(),
+            )
+        })
         .collect();
     let want: Vec<(String, String)> = [
         ("sequential", "best-point"),
@@ -120,8 +125,8 @@ fn compare_runs_every_planner_in_every_turn_mode_asked_for() {
         assert!(max_move <= 0.5 + 1e-6, "the top speed holds: {max_move}");
     }
     // Each run in a folder naming its mode, its resolved scenario in that mode.
-    for (mode, planner) in [("sequential", "cbf"), ("parallel", "best-point")] {
-        let run = out.join(format!("paper-top-speed-{planner}-{mode}"));
+    for (mode, controller) in [("sequential", "cbf"), ("parallel", "best-point")] {
+        let run = out.join(format!("paper-top-speed-{controller}-{mode}"));
         let text = std::fs::read_to_string(run.join("scenario.toml")).expect("scenario.toml");
         assert!(text.contains(&format!("mode = \"{mode}\"")), "{mode}");
         let summary: serde_json::Value =
@@ -174,7 +179,7 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
     let output = Command::new(support::coordinator_bin())
         .arg("compare")
         .arg(&paper)
-        .args(["--planners", "zcbf-logsumexp,best-point", "--out"])
+        .args(["--controllers", "zcbf-logsumexp,best-point", "--out"])
         .arg(&out)
         .env("FORMATION_AGENT_BIN", support::agent_bin())
         // Warnings on, as a user has them by default: still no line per refused move.
@@ -191,12 +196,12 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
         line_budget(2),
         lines[..lines.len().min(20)].join("\n")
     );
-    for planner in ["zcbf-logsumexp", "best-point"] {
-        let line = format!("paper-example with {planner}: completed, 0 collisions, ");
+    for controller in ["zcbf-logsumexp", "best-point"] {
+        let line = format!("paper-example with {controller}: completed, 0 collisions, ");
         assert_eq!(
             lines.iter().filter(|l| l.starts_with(&line)).count(),
             1,
-            "one result line for {planner}:\n{stderr}"
+            "one result line for {controller}:\n{stderr}"
         );
     }
 
@@ -207,7 +212,7 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
     let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
     let zcbf = rows
         .iter()
-        .find(|r| &r[col("planner")] == "zcbf-logsumexp")
+        .find(|r| &r[col("controller")] == "zcbf-logsumexp")
         .expect("zcbf row");
     let refused: usize = zcbf[col("unsafe_moves")].parse().expect("count");
     assert!(refused > 0, "the smoothed max overshoots");
@@ -223,14 +228,14 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
         .filter(|f| f["kind"] == "rejected")
         .count();
     assert_eq!(rejected, refused);
-    // The run's folder holds the resolved scenario, with the planner as run.
+    // The run's folder holds the resolved scenario, with the controller as run.
     let text = std::fs::read_to_string(run_dir.join("scenario.toml")).expect("scenario.toml");
     let resolved =
         shared::scenario::Scenario::parse(&text, "scenario.toml").expect("resolved loads");
     let original = shared::scenario::Scenario::load(&paper).expect("paper.toml");
     assert_eq!(
         resolved,
-        original.with_planner(shared::vocabulary::PlannerKind::ZcbfLogsumexp)
+        original.with_controller(shared::vocabulary::ControllerKind::ZcbfLogsumexp)
     );
     assert!(!text.contains("random"));
 }
@@ -243,7 +248,7 @@ fn compare_refuses_a_folder_holding_something_unless_forced() {
     std::fs::write(out.join("old.md"), b"old").expect("write");
     let compare = |force: bool| {
         let mut c = Command::new(support::coordinator_bin());
-        c.args(["compare", "--planners", "best-point", "--out"])
+        c.args(["compare", "--controllers", "best-point", "--out"])
             .arg(&out)
             .env("FORMATION_AGENT_BIN", support::agent_bin());
         if force {

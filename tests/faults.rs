@@ -178,7 +178,7 @@ fn random_agents_killed_at_random_steps_over_twenty_seeds() {
 /// Wait until `count` agent processes of coordinator `pid` run.
 fn wait_for_agents(pid: u32, count: usize) {
     let deadline = Instant::now() + Duration::from_secs(30);
-    while support::processes_mentioning(&format!("--run {}", prefix_stem(pid))).len() < count {
+    while support::processes_mentioning(&format!("--prefix {}", prefix_stem(pid))).len() < count {
         assert!(Instant::now() < deadline, "agents did not start");
         std::thread::sleep(Duration::from_millis(10));
     }
@@ -215,7 +215,7 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
         let pid = run.id();
         wait_for_agents(pid, 64);
         let held = run.hold();
-        let victims = support::processes_mentioning(&format!("--run {}", prefix_stem(pid)));
+        let victims = support::processes_mentioning(&format!("--prefix {}", prefix_stem(pid)));
         let victim = victims[rng.random_range(0..victims.len())];
         kill(Pid::from_raw(victim as i32), Signal::SIGKILL).expect("kill agent");
         drop(held);
@@ -256,7 +256,7 @@ fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_
     let killed = Instant::now();
     drop(held);
     assert_eq!(run.wait().signal(), Some(Signal::SIGKILL as i32));
-    let needle = format!("--run {}", prefix_stem(pid));
+    let needle = format!("--prefix {}", prefix_stem(pid));
     while !support::processes_mentioning(&needle).is_empty() {
         assert!(
             killed.elapsed() < Duration::from_secs(1),

@@ -10,7 +10,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::SystemTime;
 
 use shared::scenario::Scenario;
-use shared::vocabulary::PlannerKind;
+use shared::vocabulary::ControllerKind;
 
 fn coordinator(args: &[&str]) -> Command {
     let mut c = Command::new(support::coordinator_bin());
@@ -93,7 +93,7 @@ fn a_folder_holding_a_run_is_refused_without_force_and_replaced_whole_with_it() 
 
     // With --force: the new run whole, nothing of the old one (no plots/ with
     // --no-plots), no temporary folder left beside it.
-    let forced = run(&["--no-plots", "--force", "--planner", "cbf"], &out);
+    let forced = run(&["--no-plots", "--force", "--controller", "cbf"], &out);
     assert!(forced.status.success(), "{}", stderr(&forced));
     assert!(!out.join("plots").exists(), "old plots/ survived");
     assert_eq!(
@@ -113,10 +113,10 @@ fn a_folder_holding_a_run_is_refused_without_force_and_replaced_whole_with_it() 
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary"))
             .expect("summary.json parses");
     assert_eq!(summary["completed"], true);
-    // The planner as run is the one in the folder's scenario.
+    // The controller as run is the one in the folder's scenario.
     let text = std::fs::read_to_string(out.join("scenario.toml")).expect("scenario.toml");
     let resolved = Scenario::parse(&text, "scenario.toml").expect("resolved scenario loads");
-    assert_eq!(resolved.planner.kind, PlannerKind::Cbf);
+    assert_eq!(resolved.controller.kind, ControllerKind::Cbf);
 
     // The replaced folder still renders.
     let render = coordinator(&["render"])

@@ -423,7 +423,7 @@ fn agent_of(pid: u32) -> Option<usize> {
 fn wait_for_agents(pid: u32, count: usize) -> Vec<u32> {
     let deadline = Instant::now() + Duration::from_secs(30);
     loop {
-        let found = support::processes_mentioning(&format!("--run {}", prefix_stem(pid)));
+        let found = support::processes_mentioning(&format!("--prefix {}", prefix_stem(pid)));
         if found.len() >= count {
             return found;
         }

@@ -186,7 +186,7 @@ impl IpcTransport {
             obstacles: scenario.static_obstacles(),
             moving: scenario.moving,
             agents: scenario.agents,
-            planner: scenario.planner,
+            controller: scenario.controller,
         };
         let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));

@@ -1,5 +1,5 @@
 //! One formation agent: it waits for its turn, reads the world, computes its slot, best
-//! point and path with [`shared::turn::BestPointPlanner`], and publishes its move.
+//! point and path with [`shared::turn::BestPointController`], and publishes its move.
 //!
 //! The turn loop, [`serve`], talks to the world only through the [`Transport`] trait, so
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.
@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, bail};
 use clap::Parser;
 use shared::geometry::Point;
-use shared::turn::TurnPlanner;
+use shared::turn::TurnController;
 use shared::vocabulary::Body;
 
 use wire::misbehave::Misbehave;
@@ -33,8 +33,14 @@ pub use transport::{Command, Reply, Transport, TurnInput};
 #[command(name = "agent", version, about = "One formation agent process")]
 pub struct Args {
     /// The run's iceoryx2 prefix (given by the coordinator); not with `--connect`.
-    #[arg(long, required_unless_present = "connect", conflicts_with = "connect")]
-    pub run: Option<String>,
+    /// `--run` is its older name.
+    #[arg(
+        long,
+        alias = "run",
+        required_unless_present = "connect",
+        conflicts_with = "connect"
+    )]
+    pub prefix: Option<String>,
     /// Take turns over Zenoh from the coordinator's router at this endpoint
     /// (`tcp/HOST:PORT` or `tls/HOST:PORT`): an agent on another machine, started by the
     /// user.
@@ -42,7 +48,7 @@ pub struct Args {
     pub connect: Option<net::Endpoint>,
     /// Relay mode (started by the coordinator): stand for an agent that takes its turns
     /// over Zenoh from the router at this endpoint.
-    #[arg(long, value_name = "ENDPOINT", requires = "run")]
+    #[arg(long, value_name = "ENDPOINT", requires = "prefix")]
     pub relay: Option<net::Endpoint>,
     /// Relay mode: start the agent itself, on this host.
     #[arg(long, requires = "relay")]
@@ -158,8 +164,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         #[cfg(not(feature = "zenoh"))]
         bail!("{NO_ZENOH}");
     }
-    let Some(prefix) = args.run.as_deref() else {
-        bail!("either --run (started by the coordinator) or --connect ENDPOINT");
+    let Some(prefix) = args.prefix.as_deref() else {
+        bail!("either --prefix (started by the coordinator) or --connect ENDPOINT");
     };
     // Join only a run that exists (a node opened for no run would leave files behind),
     // and only through a folder no other user can reach (ours, 0700, not a link).
@@ -188,7 +194,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     serve_as(transport, args.agent, mode)
 }
 
-/// Serve as the relay of agent `args.agent` ([`relay::run`]); with `--spawn-agent`, the
+/// Serve as the relay of agent `args.agent` ([`relay::serve_relay`]); with `--spawn-agent`, the
 /// agent is started here, with this agent's test mode and settings.
 #[cfg(feature = "zenoh")]
 fn run_relay(
@@ -205,7 +211,7 @@ fn run_relay(
     if args.allow_plain_tcp {
         extra.push("--allow-plain-tcp".to_string());
     }
-    relay::run(&relay::RelaySettings {
+    relay::serve_relay(&relay::RelaySettings {
         prefix,
         agent: args.agent,
         generation: args.generation,
@@ -260,7 +266,7 @@ fn read_bodies(
 /// move, until [`Command::Quit`].
 pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()> {
     transport.announce_ready()?;
-    let mut planner: Option<TurnPlanner> = None;
+    let mut controller: Option<TurnController> = None;
     // Every agent's radius, from the mission (the world carries positions only).
     let mut radii_m: Vec<f64> = Vec::new();
     // The other agents as bodies; the buffer is kept from turn to turn.
@@ -270,7 +276,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
             Command::Quit => return Ok(()),
             Command::Turn(turn) => turn,
         };
-        if planner.is_none() {
+        if controller.is_none() {
             let mission = transport.mission()?;
             let spec = mission.agents.get(agent).with_context(|| {
                 format!(
@@ -280,19 +286,19 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
             })?;
             // Every real obstacle it may sense, known to the centre or not.
             let obstacles = &mission.obstacles;
-            planner = Some(
-                TurnPlanner::new(&mission.planner, mission.field, obstacles, spec)
-                    .context("the mission's planner settings")?
+            controller = Some(
+                TurnController::new(&mission.controller, mission.field, obstacles, spec)
+                    .context("the mission's controller settings")?
                     .with_moving(&mission.moving, obstacles),
             );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
         }
-        let Some(planner) = planner.as_ref() else {
+        let Some(controller) = controller.as_ref() else {
             continue;
         };
         let started = Instant::now();
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
-        let mv = planner.plan_turn(turn_step(&turn), &turn.centre, &me, &others);
+        let mv = controller.plan_turn(turn_step(&turn), &turn.centre, &me, &others);
         let compute = started.elapsed();
         transport.publish_move(Reply::new(&turn, &mv, compute))?;
     }
@@ -303,7 +309,7 @@ mod tests {
     use std::collections::VecDeque;
 
     use shared::scenario::Scenario;
-    use shared::simulate::{agent_planners, plan_centre_path};
+    use shared::simulate::{agent_controllers, plan_centre_path};
     use shared::vocabulary::Move;
 
     use super::*;
@@ -342,7 +348,7 @@ mod tests {
                 obstacles: scenario.static_obstacles(),
                 moving: scenario.moving.clone(),
                 agents: scenario.agents.clone(),
-                planner: scenario.planner,
+                controller: scenario.controller,
             },
             commands: turns.into_iter().map(Command::Turn).collect(),
             ready: false,
@@ -369,7 +375,7 @@ mod tests {
     }
 
     #[test]
-    fn the_turn_loop_publishes_exactly_the_planners_move_for_every_turn() {
+    fn the_turn_loop_publishes_exactly_the_controllers_move_for_every_turn() {
         let scenario = Scenario::paper();
         let agent = 2;
         let turns = first_turns(&scenario, agent);
@@ -377,7 +383,7 @@ mod tests {
         serve(&mut t, agent).expect("serve");
         assert!(t.ready);
         assert_eq!(t.published.len(), turns.len());
-        let planner = &agent_planners(&scenario).expect("planners")[agent];
+        let controller = &agent_controllers(&scenario).expect("controllers")[agent];
         for ((seq, mv, status), turn) in t.published.iter().zip(&turns) {
             let others: Vec<Body> = turn
                 .bodies
@@ -388,7 +394,7 @@ mod tests {
                     radius_m: scenario.agents[j].radius_m,
                 })
                 .collect();
-            let want = planner.plan_turn(
+            let want = controller.plan_turn(
                 turn_step(turn),
                 &turn.centre,
                 &turn.bodies[agent].1,

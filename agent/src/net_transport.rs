@@ -132,7 +132,7 @@ impl NetTransport {
                     obstacles: scenario.static_obstacles(),
                     moving: scenario.moving,
                     agents: scenario.agents,
-                    planner: scenario.planner,
+                    controller: scenario.controller,
                 });
                 self.send(&Up::Ready {
                     agent,

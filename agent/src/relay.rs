@@ -184,7 +184,7 @@ fn net_turn(t: &TurnInput) -> NetTurn {
 
 /// Serve agent `settings.agent` as its relay until the coordinator says quit (then the
 /// agent is told too) or the agent is gone (an error: the coordinator sees the exit).
-pub fn run(settings: &RelaySettings) -> anyhow::Result<()> {
+pub fn serve_relay(settings: &RelaySettings) -> anyhow::Result<()> {
     let agent = settings.agent;
     let mut ipc = IpcTransport::open(
         settings.prefix,

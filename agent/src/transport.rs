@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Pose};
 use shared::moving_obstacle::MovingObstacle;
-use shared::vocabulary::{AgentSpec, Move, PlannerSpec};
+use shared::vocabulary::{AgentSpec, ControllerSpec, Move};
 
 /// The static scenario as an agent sees it.
 #[derive(Clone, Debug, PartialEq)]
@@ -19,7 +19,7 @@ pub struct MissionView {
     /// Every agent, in agent order.
     pub agents: Vec<AgentSpec>,
     /// The controller and its settings.
-    pub planner: PlannerSpec,
+    pub controller: ControllerSpec,
 }
 
 /// The world at the start of this agent's turn.

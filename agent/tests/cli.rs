@@ -13,7 +13,7 @@ fn the_help_names_every_option() {
     let out = agent().arg("--help").output().expect("agent --help");
     assert!(out.status.success());
     let help = String::from_utf8_lossy(&out.stdout);
-    for option in ["--run", "--agent", "--liveness-ms", "--misbehave"] {
+    for option in ["--prefix", "--agent", "--liveness-ms", "--misbehave"] {
         assert!(help.contains(option), "{option} missing from:\n{help}");
     }
     // The bench's ping-pong is a program of the bench's own.
@@ -30,7 +30,7 @@ fn a_shipping_agent_refuses_a_test_mode_and_says_how_to_build_one() {
     let prefix = format!("refusedmode{}_", std::process::id());
     for mode in ["nan", "raw-length", "impersonate=1", "deaf-to-prepare"] {
         let out = agent()
-            .args(["--run", &prefix, "--agent", "0", "--misbehave", mode])
+            .args(["--prefix", &prefix, "--agent", "0", "--misbehave", mode])
             .env("RUST_LOG", "error")
             .output()
             .expect("agent");
@@ -57,7 +57,7 @@ fn a_shipping_agent_refuses_a_test_mode_and_says_how_to_build_one() {
 fn an_agent_built_with_its_test_modes_takes_one() {
     let prefix = format!("takenmode{}_", std::process::id());
     let out = agent()
-        .args(["--run", &prefix, "--agent", "0", "--misbehave", "nan"])
+        .args(["--prefix", &prefix, "--agent", "0", "--misbehave", "nan"])
         .env("RUST_LOG", "error")
         .output()
         .expect("agent");
@@ -92,11 +92,18 @@ fn remove_files_of(prefix: &str) -> usize {
     removed
 }
 
+/// Also under `--run`, the flag's older name.
 #[test]
 fn joining_a_run_that_does_not_exist_fails_with_one_clear_error() {
+    for flag in ["--prefix", "--run"] {
+        joining_a_run_that_does_not_exist_fails(flag);
+    }
+}
+
+fn joining_a_run_that_does_not_exist_fails(flag: &str) {
     let prefix = format!("nosuchrun{}_", std::process::id());
     let out = agent()
-        .args(["--run", &prefix, "--agent", "0"])
+        .args([flag, &prefix, "--agent", "0"])
         .env("RUST_LOG", "error")
         .output()
         .expect("agent");
@@ -117,7 +124,7 @@ fn joining_a_run_that_does_not_exist_fails_with_one_clear_error() {
 #[test]
 fn an_invalid_run_prefix_is_refused() {
     let out = agent()
-        .args(["--run", "../escape", "--agent", "0"])
+        .args(["--prefix", "../escape", "--agent", "0"])
         .output()
         .expect("agent");
     assert_eq!(out.status.code(), Some(1));
@@ -137,7 +144,7 @@ fn a_run_folder_other_users_could_reach_is_refused_before_anything_is_opened() {
         .expect("run folder");
     std::fs::set_permissions(&root, std::fs::Permissions::from_mode(0o777)).expect("chmod");
     let out = agent()
-        .args(["--run", &prefix, "--agent", "0"])
+        .args(["--prefix", &prefix, "--agent", "0"])
         .env("RUST_LOG", "error")
         .output()
         .expect("agent");

@@ -177,7 +177,7 @@ impl AgentProcesses {
     pub fn spawn(&mut self, agent: usize, extra_args: &[String]) -> anyhow::Result<u32> {
         set_cloexec_on_all_fds();
         let child = Command::new(&self.bin)
-            .args(["--run", &self.prefix, "--agent", &agent.to_string()])
+            .args(["--prefix", &self.prefix, "--agent", &agent.to_string()])
             .args(extra_args)
             .env(wire::RUN_ENV, &self.prefix)
             .stdin(Stdio::null())

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use shared::vocabulary::{PlannerKind, TurnMode};
+use shared::vocabulary::{ControllerKind, TurnMode};
 use wire::misbehave::Misbehave;
 
 use crate::turns::WaitMode;
@@ -30,7 +30,7 @@ pub enum Command {
     /// Run a scenario in this process with the reference simulation (no agent process)
     /// and time it: the yardstick of the multi-process run (JSON on stdout).
     Simulate(SimulateArgs),
-    /// Run every planner on every scenario and tabulate safety, deviation, deadlocks and
+    /// Run every controller on every scenario and tabulate safety, deviation, deadlocks and
     /// compute time (CSV and Markdown).
     Compare(CompareArgs),
     /// Draw the plots (PNG and SVG) and the animation (GIF) of a run directory into
@@ -61,10 +61,10 @@ pub struct RunArgs {
     /// on and, if dead, frozen as an obstacle.
     #[arg(long, default_value_t = 250)]
     pub turn_deadline_ms: u64,
-    /// The controller, overriding the scenario's `planner` (best-point, cbf,
+    /// The controller, overriding the scenario's `controller` (best-point, cbf,
     /// zcbf-logsumexp, orca).
-    #[arg(long, value_parser = parse_planner)]
-    pub planner: Option<PlannerKind>,
+    #[arg(long, alias = "planner", value_parser = parse_controller)]
+    pub controller: Option<ControllerKind>,
     /// Start a replacement process for every agent that dies; it re-joins from where the
     /// dead one stood and takes its slot again.
     #[arg(long)]
@@ -170,9 +170,9 @@ impl NetworkArgs {
 pub struct SimulateArgs {
     /// The scenario file (TOML); the embedded paper example when omitted.
     pub scenario: Option<PathBuf>,
-    /// The controller, overriding the scenario's `planner`.
-    #[arg(long, value_parser = parse_planner)]
-    pub planner: Option<PlannerKind>,
+    /// The controller, overriding the scenario's `controller`.
+    #[arg(long, alias = "planner", value_parser = parse_controller)]
+    pub controller: Option<ControllerKind>,
     /// Time this many runs and report each (the first is often slower: caches).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeat: u32,
@@ -183,10 +183,10 @@ pub struct SimulateArgs {
 pub struct CompareArgs {
     /// Scenario files (TOML); the embedded paper example when none is given.
     pub scenarios: Vec<PathBuf>,
-    /// The planners to compare (comma-separated; default: all).
-    #[arg(long, value_delimiter = ',', value_parser = parse_planner)]
-    pub planners: Vec<PlannerKind>,
-    /// Turn modes to run every planner in (comma-separated: sequential, parallel;
+    /// The controllers to compare (comma-separated; default: all).
+    #[arg(long, alias = "planners", value_delimiter = ',', value_parser = parse_controller)]
+    pub controllers: Vec<ControllerKind>,
+    /// Turn modes to run every controller in (comma-separated: sequential, parallel;
     /// default: each scenario's own `[turns] mode`). Parallel needs a top speed.
     #[arg(long, value_name = "MODE", value_delimiter = ',', value_parser = parse_turn_mode)]
     pub turns: Vec<TurnMode>,
@@ -203,10 +203,13 @@ pub struct CompareArgs {
     pub agent_bin: Option<PathBuf>,
 }
 
-/// A planner name.
-fn parse_planner(s: &str) -> Result<PlannerKind, String> {
-    PlannerKind::from_name(s).ok_or_else(|| {
-        let names: Vec<&str> = PlannerKind::ALL.iter().map(PlannerKind::name).collect();
+/// A controller name.
+fn parse_controller(s: &str) -> Result<ControllerKind, String> {
+    ControllerKind::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = ControllerKind::ALL
+            .iter()
+            .map(ControllerKind::name)
+            .collect();
         format!("{s:?}: one of {}", names.join(", "))
     })
 }
@@ -327,4 +330,41 @@ pub struct BenchArgs {
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Command {
+        Cli::try_parse_from([&["coordinator"], args].concat())
+            .expect("parses")
+            .command
+    }
+
+    /// `--planner` and `--planners`, the flags' names before `--controller`, still work.
+    #[test]
+    fn the_older_flag_names_are_aliases_of_the_controller_flags() {
+        for (old, new) in [
+            (["run", "--planner", "cbf"], ["run", "--controller", "cbf"]),
+            (
+                ["simulate", "--planner", "orca"],
+                ["simulate", "--controller", "orca"],
+            ),
+        ] {
+            let kind = |c: Command| match c {
+                Command::Run(a) => a.controller,
+                Command::Simulate(a) => a.controller,
+                _ => None,
+            };
+            let (old_kind, new_kind) = (kind(parse(&old)), kind(parse(&new)));
+            assert!(old_kind.is_some(), "{old:?}");
+            assert_eq!(old_kind, new_kind, "{old:?}");
+        }
+        let Command::Compare(a) = parse(&["compare", "--planners", "cbf,orca"]) else {
+            panic!("not compare");
+        };
+        assert_eq!(a.controllers, [ControllerKind::Cbf, ControllerKind::Orca]);
+        assert!(Cli::try_parse_from(["coordinator", "run", "--planer", "cbf"]).is_err());
+    }
 }

@@ -1,4 +1,4 @@
-//! `coordinator compare SCENARIO...`: every planner on every scenario (and, with
+//! `coordinator compare SCENARIO...`: every controller on every scenario (and, with
 //! `--turns`, in every turn mode), through the same processes, protocol and safety
 //! monitor, tabulated side by side; each run's own files in a folder of their own.
 
@@ -8,7 +8,7 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::record::{FaultKind, Run};
 use shared::scenario::{Scenario, ScenarioError};
-use shared::vocabulary::{PlannerKind, TurnMode};
+use shared::vocabulary::{ControllerKind, TurnMode};
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;
@@ -21,13 +21,13 @@ use crate::validate::load_and_plan;
 pub struct Row {
     /// Scenario name.
     pub scenario: String,
-    /// Planner name.
-    pub planner: String,
+    /// Controller name.
+    pub controller: String,
     /// Whether the run went through the whole path.
     pub completed: bool,
     /// Agent records overlapping another body at the end of a step (0 when safe).
     pub collisions: usize,
-    /// Moves the safety monitor refused (unsafe moves the planner tried).
+    /// Moves the safety monitor refused (unsafe moves the controller tried).
     pub unsafe_moves: usize,
     /// Smallest clearance over the run, in metres.
     pub min_clearance_m: f64,
@@ -84,12 +84,12 @@ pub(crate) fn with_turn_mode(
     Ok(s)
 }
 
-fn row(run: &Run, planner: PlannerKind, turns: TurnMode, timing: &output::Timing) -> Row {
+fn row(run: &Run, controller: ControllerKind, turns: TurnMode, timing: &output::Timing) -> Row {
     let s = run.summary();
     let compute = &timing.compute_us;
     Row {
         scenario: s.scenario.clone(),
-        planner: planner.name().to_string(),
+        controller: controller.name().to_string(),
         completed: s.completed,
         collisions: s.collisions,
         unsafe_moves: s
@@ -113,13 +113,13 @@ fn row(run: &Run, planner: PlannerKind, turns: TurnMode, timing: &output::Timing
 /// The table as Markdown.
 pub fn markdown(rows: &[Row]) -> String {
     let mut md = String::from(
-        "| scenario | planner | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | deadlocked agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | controller | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | deadlocked agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         md.push_str(&format!(
             "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} | {} | {:.4} | {:.1} |\n",
             r.scenario,
-            r.planner,
+            r.controller,
             r.completed,
             r.collisions,
             r.unsafe_moves,
@@ -146,20 +146,20 @@ fn csv_bytes(rows: &[Row]) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
-/// The folder name of one run of the comparison: `<scenario>-<planner>`, and
-/// `<scenario>-<planner>-<turns>` when the turn modes were asked for (`turns`), made of
+/// The folder name of one run of the comparison: `<scenario>-<controller>`, and
+/// `<scenario>-<controller>-<turns>` when the turn modes were asked for (`turns`), made of
 /// letters, digits, `-` and `_` only, with `-2`, `-3`, ... when two scenarios share a
 /// name.
 fn run_folder_name(
     scenario: &str,
-    planner: PlannerKind,
+    controller: ControllerKind,
     turns: Option<TurnMode>,
     taken: &mut Vec<String>,
 ) -> String {
     let clean = output::file_name_part(scenario);
     let base = match turns {
-        None => format!("{clean}-{}", planner.name()),
-        Some(mode) => format!("{clean}-{}-{}", planner.name(), mode.name()),
+        None => format!("{clean}-{}", controller.name()),
+        Some(mode) => format!("{clean}-{}-{}", controller.name(), mode.name()),
     };
     let name = (1..)
         .map(|k| {
@@ -180,10 +180,10 @@ fn run_folder_name(
 /// `summary.json` with the refused moves in `faults`, its resolved `scenario.toml`, ...)
 /// go to a folder of their own inside the output folder.
 pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
-    let planners = if args.planners.is_empty() {
-        PlannerKind::ALL.to_vec()
+    let controllers = if args.controllers.is_empty() {
+        ControllerKind::ALL.to_vec()
     } else {
-        args.planners.clone()
+        args.controllers.clone()
     };
     // Validate every scenario, in every turn mode asked for, before running anything.
     let loaded = if args.scenarios.is_empty() {
@@ -232,16 +232,16 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
     let mut taken = Vec::new();
     for (l, scenarios) in &runs {
         for (in_mode, asked) in scenarios {
-            for &planner in &planners {
-                let scenario = in_mode.with_planner(planner);
-                let folder = run_folder_name(&scenario.name, planner, *asked, &mut taken);
+            for &controller in &controllers {
+                let scenario = in_mode.with_controller(controller);
+                let folder = run_folder_name(&scenario.name, controller, *asked, &mut taken);
                 // The turn mode is named wherever it was asked for.
                 let label = match asked {
-                    None => format!("{} with {}", scenario.name, planner.name()),
+                    None => format!("{} with {}", scenario.name, controller.name()),
                     Some(m) => format!(
                         "{} with {}, {} turns",
                         scenario.name,
-                        planner.name(),
+                        controller.name(),
                         m.name()
                     ),
                 };
@@ -260,7 +260,7 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
                     &l.centre_path,
                     &outcome.timing,
                 )?;
-                let r = row(&outcome.run, planner, scenario.turns, &outcome.timing);
+                let r = row(&outcome.run, controller, scenario.turns, &outcome.timing);
                 // One line per run, when it is done.
                 eprintln!(
                     "{label}: {}, {} collisions, {} unsafe moves refused, {} faults, {:.1} steps/s -> {folder}/",
@@ -299,12 +299,17 @@ mod tests {
     #[test]
     fn run_folders_are_plain_names_and_never_shared() {
         let mut taken = Vec::new();
-        let a = run_folder_name("paper example/1", PlannerKind::Cbf, None, &mut taken);
-        let b = run_folder_name("paper example/1", PlannerKind::Cbf, None, &mut taken);
-        let c = run_folder_name("paper example/1", PlannerKind::BestPoint, None, &mut taken);
+        let a = run_folder_name("paper example/1", ControllerKind::Cbf, None, &mut taken);
+        let b = run_folder_name("paper example/1", ControllerKind::Cbf, None, &mut taken);
+        let c = run_folder_name(
+            "paper example/1",
+            ControllerKind::BestPoint,
+            None,
+            &mut taken,
+        );
         let d = run_folder_name(
             "paper example/1",
-            PlannerKind::Orca,
+            ControllerKind::Orca,
             Some(TurnMode::Parallel),
             &mut taken,
         );

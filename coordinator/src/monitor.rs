@@ -1,5 +1,5 @@
 //! The independent safety monitor: every published move is checked with parry against
-//! the true obstacles and agents before it is accepted (the planners' own geometry, with
+//! the true obstacles and agents before it is accepted (the controllers' own geometry, with
 //! its margins and arcs, is not consulted).
 
 use nalgebra::{Isometry2, Vector2};

@@ -14,8 +14,8 @@ use crate::validate::load_and_plan;
 /// completed, and exits 1.
 pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
-    let scenario = &match args.planner {
-        Some(kind) => loaded.scenario.with_planner(kind),
+    let scenario = &match args.controller {
+        Some(kind) => loaded.scenario.with_controller(kind),
         None => loaded.scenario.clone(),
     };
     let centre_path = &loaded.centre_path;

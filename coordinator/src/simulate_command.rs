@@ -1,4 +1,4 @@
-//! `coordinator simulate [SCENARIO] [--planner P] [--repeat N]`: the reference simulation
+//! `coordinator simulate [SCENARIO] [--controller P] [--repeat N]`: the reference simulation
 //! (`shared::simulate`, every agent in this process, no IPC) timed, the yardstick a
 //! multi-process run's step loop (`steps_per_s` in its `summary.json`) is measured
 //! against. One JSON object on stdout, one line on stderr.
@@ -21,7 +21,7 @@ struct SimulateReport {
     agents: usize,
     steps: usize,
     turns: String,
-    planner: &'static str,
+    controller: &'static str,
     collisions: usize,
     mean_deviation_m: f64,
     max_move_m: f64,
@@ -36,8 +36,8 @@ struct SimulateReport {
 /// Carry out `simulate`.
 pub fn execute(args: &SimulateArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
-    let scenario = match args.planner {
-        Some(kind) => loaded.scenario.with_planner(kind),
+    let scenario = match args.controller {
+        Some(kind) => loaded.scenario.with_controller(kind),
         None => loaded.scenario.clone(),
     };
     let mut run_s = Vec::new();
@@ -57,7 +57,7 @@ pub fn execute(args: &SimulateArgs) -> Result<(), CliError> {
         agents: summary.agents,
         steps: summary.steps,
         turns: scenario.turns.name().to_string(),
-        planner: scenario.planner.kind.name(),
+        controller: scenario.controller.kind.name(),
         collisions: summary.collisions,
         mean_deviation_m: summary.mean_deviation_m,
         max_move_m: summary.max_move_m,

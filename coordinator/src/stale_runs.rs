@@ -94,8 +94,8 @@ fn stale_prefix(name: &str) -> Option<RunPrefix> {
 }
 
 /// Whether a process was started for run `prefix` (its command line holds
-/// `--run <prefix>`).
+/// `--prefix <prefix>`).
 fn processes_serving(prefix: &str) -> bool {
-    let needle: Vec<u8> = [b"--run\0".as_slice(), prefix.as_bytes(), b"\0"].concat();
+    let needle: Vec<u8> = [b"--prefix\0".as_slice(), prefix.as_bytes(), b"\0"].concat();
     procfs::any_command_line_holds(&needle)
 }

@@ -24,7 +24,7 @@ use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
 use shared::record::Recorder;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::turn::{BestPointPlanner, PLANNING_MARGIN_M};
+use shared::turn::{BestPointController, PLANNING_MARGIN_M};
 use shared::vocabulary::Body;
 
 /// Radius of every (inflated) disk, in metres.
@@ -134,17 +134,17 @@ fn packed_scenario() -> Scenario {
     Scenario::parse(&text, "packed-200").expect("a valid scenario")
 }
 
-/// One agent's turn: its planner's index, the centre, its position, the other bodies.
+/// One agent's turn: its controller's index, the centre, its position, the other bodies.
 type Turn = (usize, Pose, Point, Vec<Body>);
 
 /// Every turn of the steps `sampled` of the reference simulation of `scenario` (the same
 /// turns as `simulate`), run up to the last of them.
-fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointPlanner>, Vec<Turn>) {
+fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointController>, Vec<Turn>) {
     let path = plan_centre_path(scenario).expect("a centre path");
-    let planners: Vec<BestPointPlanner> = scenario
+    let controllers: Vec<BestPointController> = scenario
         .agents
         .iter()
-        .map(|spec| BestPointPlanner::new(scenario.field, &scenario.obstacles, spec))
+        .map(|spec| BestPointController::new(scenario.field, &scenario.obstacles, spec))
         .collect();
     let mut recorder = Recorder::new(scenario, path[0]);
     let mut turns = Vec::new();
@@ -155,22 +155,22 @@ fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointPlann
         .unwrap_or(0)
         .min(path.len() - 1);
     for (step, centre) in path.iter().enumerate().take(last + 1).skip(1) {
-        for (agent, planner) in planners.iter().enumerate() {
+        for (agent, controller) in controllers.iter().enumerate() {
             let me = recorder.bodies()[agent].position;
             let others = recorder.others(agent);
             if sampled.contains(&step) {
                 turns.push((agent, *centre, me, others.clone()));
             }
-            let _ = recorder.submit(step, agent, planner.plan_move(centre, &me, &others));
+            let _ = recorder.submit(step, agent, controller.plan_move(centre, &me, &others));
         }
         recorder.end_step(step);
     }
-    (planners, turns)
+    (controllers, turns)
 }
 
 fn bench_packed_formation(c: &mut Criterion) {
     let scenario = packed_scenario();
-    let (planners, turns) = recorded_turns(&scenario, &[10, 40, 80, 120, 160, 200]);
+    let (controllers, turns) = recorded_turns(&scenario, &[10, 40, 80, 120, 160, 200]);
     // Each turn's free space as `plan_move` sees it (the field inset by the inflation
     // aside), its slot and its start.
     let radius_m = scenario.agents[0].radius_m;
@@ -197,7 +197,7 @@ fn bench_packed_formation(c: &mut Criterion) {
             (
                 obstacles,
                 agents,
-                planners[*agent].slot_position(centre),
+                controllers[*agent].slot_position(centre),
                 *me,
             )
         })
@@ -234,7 +234,7 @@ fn bench_packed_formation(c: &mut Criterion) {
         b.iter(|| {
             next = (next + 1) % turns.len();
             let (agent, centre, me, others) = &turns[next];
-            black_box(planners[*agent].plan_move(centre, me, others))
+            black_box(controllers[*agent].plan_move(centre, me, others))
         })
     });
     group.finish();

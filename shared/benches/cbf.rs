@@ -10,7 +10,7 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{CbfPlanner, solve_qp_2d};
+use shared::cbf::{CbfController, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, Field, Point, Pose, Vector};
 use shared::vocabulary::{AgentSpec, Body, CbfSettings};
@@ -26,7 +26,7 @@ struct Query {
     others: Vec<Body>,
 }
 
-fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
+fn workload(count: usize, seed: u64) -> (CbfController, Vec<Query>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let field = Field::new(100.0, 100.0);
     let obstacles: Vec<Disk> = (0..count)
@@ -39,7 +39,7 @@ fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
         })
         .collect();
     let spec = AgentSpec::new(Slot::new(0.0, 0.0), AGENT_RADIUS_M);
-    let planner = CbfPlanner::new(field, &obstacles, &spec, CbfSettings::default())
+    let controller = CbfController::new(field, &obstacles, &spec, CbfSettings::default())
         .expect("default settings are valid");
     let free = |p: &Point, others: &[Body]| {
         field.signed_inset_m(p) >= AGENT_RADIUS_M
@@ -77,19 +77,19 @@ fn workload(count: usize, seed: u64) -> (CbfPlanner, Vec<Query>) {
             others,
         });
     }
-    (planner, queries)
+    (controller, queries)
 }
 
 fn bench_cbf(c: &mut Criterion) {
     let mut group = c.benchmark_group("cbf");
     for (seed, count) in [100usize, 500, 1500].into_iter().enumerate() {
-        let (planner, queries) = workload(count, 0xcbf + seed as u64);
+        let (controller, queries) = workload(count, 0xcbf + seed as u64);
         let problems: Vec<(Vector, Vec<_>)> = queries
             .iter()
             .map(|q| {
                 let slot = q.centre.position();
                 let u_nom = (slot - q.me).cap_magnitude(1.0);
-                (u_nom, planner.constraints(&q.me, &q.others))
+                (u_nom, controller.constraints(&q.me, &q.others))
             })
             .collect();
         let mut next = 0;
@@ -105,7 +105,7 @@ fn bench_cbf(c: &mut Criterion) {
             b.iter(|| {
                 next = (next + 1) % queries.len();
                 let q = &queries[next];
-                black_box(planner.plan_move(&q.centre, black_box(&q.me), &q.others))
+                black_box(controller.plan_move(&q.centre, black_box(&q.me), &q.others))
             })
         });
     }

@@ -259,11 +259,11 @@ pub(crate) fn check_turning_radius(turning_radius_m: f64) {
     );
 }
 
-/// Test tolerance of the curve planners, in metres and radians.
+/// Test tolerance of the curve controllers, in metres and radians.
 #[cfg(test)]
 pub(crate) const TOLERANCE: f64 = 1e-9;
 
-/// Test helper of the curve planners: `actual` and `expected` agree to [`TOLERANCE`] in
+/// Test helper of the curve controllers: `actual` and `expected` agree to [`TOLERANCE`] in
 /// position and heading (headings compared modulo a full turn).
 #[cfg(test)]
 pub(crate) fn assert_pose_close(actual: &Pose, expected: &Pose) {

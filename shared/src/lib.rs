@@ -4,20 +4,20 @@
 //! One concept per module:
 //! - [`geometry`]: points, poses, disks, the field, the disk grid index, free space;
 //! - [`formation`]: ideal slots (the paper's equation 2);
-//! - [`vocabulary`]: the words every other part speaks (bodies, moves, agents, planners
+//! - [`vocabulary`]: the words every other part speaks (bodies, moves, agents, controllers
 //!   and their settings, capacities); a leaf, so the modules form no import cycle;
 //! - [`best_point`]: the exact best point (Theorem 1) with reachability;
 //! - [`disk_path`]: shortest collision-free path for a point among disks;
 //! - [`curve`]: curvature-bounded paths (arcs and lines) between poses;
 //! - [`reeds_shepp`] and [`dubins`]: the shortest such paths;
 //! - [`hybrid_astar`]: the formation centre's planner;
-//! - [`cbf`]: the control-barrier-function planners and their exact 2-D QP;
+//! - [`cbf`]: the control-barrier-function controllers and their exact 2-D QP;
 //! - [`orca`]: the reactive baseline ORCA (RVO2, on `dodgy_2d`), cut to stay safe;
 //! - [`moving_obstacle`]: obstacles driven along routes, and when they move;
 //! - [`course`]: the centre's course in a changing world (obstacles found on the way,
 //!   online replanning, waits);
 //! - [`scenario`]: the TOML scenario model and its validation;
-//! - [`turn`]: one agent's turn: the paper's best-point planner, and every planner behind
+//! - [`turn`]: one agent's turn: the paper's best-point controller, and every controller behind
 //!   one interface, shared by simulation and agents;
 //! - [`groups`]: parallel turns: which agents may move at once;
 //! - [`sensing`]: which agents an agent senses (limited sensing);

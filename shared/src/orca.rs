@@ -16,7 +16,7 @@
 //!    move). The time horizon is [`ORCA_TIME_HORIZON_STEPS`] steps; ORCA sees the agent
 //!    grown by [`ORCA_RADIUS_MARGIN_M`].
 //!
-//!    The planner keeps no state between turns, so the agent's current velocity, from
+//!    The controller keeps no state between turns, so the agent's current velocity, from
 //!    which ORCA builds its half-planes, is taken to be the preferred one. With a
 //!    current velocity of zero instead, the half-plane of a body straight ahead would
 //!    only slow the agent down along its line, never turn it: it would stop in front of
@@ -76,11 +76,11 @@ pub const ORCA_RADIUS_MARGIN_M: f64 = 1e-3;
 /// again in `f64`).
 const SPEED_SLACK: f64 = 1e-6;
 
-/// The ORCA planner of one agent: ORCA's velocity towards the slot, kept in the field and
+/// The ORCA controller of one agent: ORCA's velocity towards the slot, kept in the field and
 /// cut before the first contact (see the module documentation). Same turn interface as
-/// [`crate::cbf::CbfPlanner`].
+/// [`crate::cbf::CbfController`].
 #[derive(Clone, Debug)]
-pub struct OrcaPlanner {
+pub struct OrcaController {
     field: Field,
     slot: Slot,
     radius_m: f64,
@@ -90,8 +90,8 @@ pub struct OrcaPlanner {
     sensing_radius_m: Option<f64>,
 }
 
-impl OrcaPlanner {
-    /// The planner of agent `spec` in `field` among `obstacles` (true radii), moving at
+impl OrcaController {
+    /// The controller of agent `spec` in `field` among `obstacles` (true radii), moving at
     /// most `max_step_m` per turn and seeing the bodies whose disks come within
     /// `sensing_radius_m` of its centre (`None`: every body). A `max_step_m` that is not
     /// a positive finite number makes the agent stay put. Far bodies are ignored only if
@@ -201,7 +201,7 @@ impl OrcaPlanner {
     }
 
     /// The bodies ORCA sees from `me`, as `(centre, radius_m)`: the sensed obstacles in
-    /// the order given to [`OrcaPlanner::new`], then the sensed `others` in order.
+    /// the order given to [`OrcaController::new`], then the sensed `others` in order.
     fn sensed(&self, me: &Point, others: &[Body]) -> Vec<(Point, f64)> {
         let seen = |centre: &Point, radius_m: f64| match self.sensing_radius_m {
             Some(sensing_m) => (me - centre).norm() - radius_m <= sensing_m,

@@ -1,7 +1,7 @@
 //! The safety invariant, checked with plain geometry: for every pair of bodies a, b at
 //! every instant, `||p_a - p_b|| >= r_a + r_b` (to [`SAFETY_TOLERANCE_M`]).
 //!
-//! This check knows nothing of the planners' inflation, margins or arcs: it takes the
+//! This check knows nothing of the controllers' inflation, margins or arcs: it takes the
 //! polyline a body follows and the true radii. The coordinator's monitor is a second,
 //! independent implementation of the same check on parry.
 

@@ -30,7 +30,7 @@ impl SensedAgents {
 
     /// The agents agent `agent` (of spec `spec`) senses, itself included, in increasing
     /// order: every agent without a sensing radius. The test is
-    /// [`AgentSpec::senses`], the one the planner applies, so the planner finds in this
+    /// [`AgentSpec::senses`], the one the controller applies, so the controller finds in this
     /// list exactly the bodies it would pick from all of them.
     ///
     /// ```

@@ -1,7 +1,7 @@
 //! The reference simulation: the paper's solution flow (Fig. 5) in one process.
 //!
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
-//! plans its move while the others stand still ([`TurnPlanner::plan_move`]), and the
+//! plans its move while the others stand still ([`TurnController::plan_move`]), and the
 //! move is checked against the safety invariant before it is taken. With parallel turns
 //! the agents of one group ([`turn_groups`]) plan against the same snapshot and their
 //! moves are taken together. The multi-process
@@ -13,7 +13,7 @@ use crate::groups::turn_groups;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
-use crate::turn::TurnPlanner;
+use crate::turn::TurnController;
 use crate::vocabulary::CbfSettingsError;
 use crate::vocabulary::Move;
 
@@ -32,16 +32,16 @@ pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
     Ok(hybrid_astar::resample(&dense, p.step_m))
 }
 
-/// One planner per agent, in agent order, of the scenario's kind. The scenario's
+/// One controller per agent, in agent order, of the scenario's kind. The scenario's
 /// settings were validated for every agent, so this cannot fail on a loaded scenario.
-pub fn agent_planners(scenario: &Scenario) -> Result<Vec<TurnPlanner>, CbfSettingsError> {
+pub fn agent_controllers(scenario: &Scenario) -> Result<Vec<TurnController>, CbfSettingsError> {
     // Agents plan around every real obstacle they sense, known to the centre or not.
     let obstacles = scenario.static_obstacles();
     scenario
         .agents
         .iter()
         .map(|a| {
-            TurnPlanner::new(&scenario.planner, scenario.field, &obstacles, a)
+            TurnController::new(&scenario.controller, scenario.field, &obstacles, a)
                 .map(|p| p.with_moving(&scenario.moving, &obstacles))
         })
         .collect()
@@ -54,8 +54,8 @@ pub enum SimulateError {
     #[error("centre path: {0}")]
     Path(#[from] PlanError),
     /// The barrier-function settings do not suit an agent.
-    #[error("planner settings: {0}")]
-    Planner(#[from] CbfSettingsError),
+    #[error("controller settings: {0}")]
+    Controller(#[from] CbfSettingsError),
 }
 
 /// Plan the centre path and run the whole scenario.
@@ -113,7 +113,7 @@ pub fn simulate_along_with_deaths(
     centre_path: &[Pose],
     deaths: &[(usize, usize)],
 ) -> Result<Run, SimulateError> {
-    let planners = agent_planners(scenario)?;
+    let controllers = agent_controllers(scenario)?;
     let mut course = Course::new(scenario, centre_path);
     let mut recorder = Recorder::new(scenario, course.pose());
     let mut step = 0;
@@ -155,7 +155,7 @@ pub fn simulate_along_with_deaths(
                     let me = recorder.bodies()[agent].position;
                     (
                         agent,
-                        planners[agent].plan_turn(step, centre, &me, &recorder.others(agent)),
+                        controllers[agent].plan_turn(step, centre, &me, &recorder.others(agent)),
                     )
                 })
                 .collect();

@@ -4,7 +4,7 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{CbfPlanner, ZcbfLogSumExpPlanner, is_deadlocked, solve_qp_2d};
+use shared::cbf::{CbfController, ZcbfLogSumExpController, is_deadlocked, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::safety::check_move;
@@ -73,13 +73,13 @@ fn head_on_the_cbf_agent_stops_in_front_of_the_obstacle_and_deadlocks() {
     let field = Field::new(30.0, 20.0);
     let obstacles = [Disk::new(15.0, 10.0, 1.0)];
     let radius_m = 0.3;
-    let planner = CbfPlanner::new(field, &obstacles, &spec(radius_m), CbfSettings::default())
+    let controller = CbfController::new(field, &obstacles, &spec(radius_m), CbfSettings::default())
         .expect("default settings are valid");
     let slot = Point::new(25.0, 10.0);
     let mut me = Point::new(5.0, 10.0);
     let mut deadlocked_at = None;
     for step in 0..60 {
-        let mv = planner.plan_move(&at(slot), &me, &[]);
+        let mv = controller.plan_move(&at(slot), &me, &[]);
         assert!(move_clearance_m(&field, &obstacles, &[], radius_m, &mv) >= 0.0);
         check_move(
             &field,
@@ -105,7 +105,7 @@ fn head_on_the_cbf_agent_stops_in_front_of_the_obstacle_and_deadlocks() {
     );
     let step = deadlocked_at.expect("the agent deadlocks");
     assert!(step < 30, "deadlocked at step {step}");
-    let last = planner.plan_move(&at(slot), &me, &[]);
+    let last = controller.plan_move(&at(slot), &me, &[]);
     assert!(is_deadlocked(&last, &me));
     assert_ne!(last.status, MoveStatus::AtSlot);
 }
@@ -115,14 +115,14 @@ fn off_axis_the_cbf_agent_slides_around_the_obstacle_to_its_slot() {
     let field = Field::new(30.0, 20.0);
     let obstacles = [Disk::new(15.0, 10.0, 1.0)];
     let radius_m = 0.3;
-    let planner =
-        CbfPlanner::new(field, &obstacles, &spec(radius_m), CbfSettings::default()).unwrap();
+    let controller =
+        CbfController::new(field, &obstacles, &spec(radius_m), CbfSettings::default()).unwrap();
     let slot = Point::new(25.0, 10.2);
     let mut me = Point::new(5.0, 10.0);
     let mut min_clearance_m = f64::INFINITY;
     let mut reached = None;
     for step in 0..200 {
-        let mv = planner.plan_move(&at(slot), &me, &[]);
+        let mv = controller.plan_move(&at(slot), &me, &[]);
         min_clearance_m =
             min_clearance_m.min(move_clearance_m(&field, &obstacles, &[], radius_m, &mv));
         me = mv.best;
@@ -148,7 +148,7 @@ fn the_logsumexp_barrier_overshoots_into_an_obstacle_where_the_cbf_does_not() {
     let start = Point::new(11.6, 10.0);
     let slot = Point::new(20.0, 10.0);
     let settings = CbfSettings::default();
-    let lse = ZcbfLogSumExpPlanner::new(
+    let lse = ZcbfLogSumExpController::new(
         field,
         &obstacles,
         &spec(radius_m),
@@ -156,7 +156,7 @@ fn the_logsumexp_barrier_overshoots_into_an_obstacle_where_the_cbf_does_not() {
         DEFAULT_LSE_SHARPNESS_PER_M,
     )
     .unwrap();
-    let cbf = CbfPlanner::new(field, &obstacles, &spec(radius_m), settings).unwrap();
+    let cbf = CbfController::new(field, &obstacles, &spec(radius_m), settings).unwrap();
 
     let run = |plan: &dyn Fn(&Point) -> Move| -> (f64, Point) {
         let mut me = start;
@@ -189,7 +189,7 @@ fn the_logsumexp_barrier_overshoots_into_an_obstacle_where_the_cbf_does_not() {
 }
 
 /// How often the comparison sees it: agents cross random obstacle fields towards random
-/// slots, each planner in a plain stepping loop; the LogSumExp barrier breaks the
+/// slots, each controller in a plain stepping loop; the LogSumExp barrier breaks the
 /// invariant on some runs, the CBF on none.
 #[test]
 fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
@@ -219,7 +219,7 @@ fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
             continue;
         }
         runs += 1;
-        let lse = ZcbfLogSumExpPlanner::new(
+        let lse = ZcbfLogSumExpController::new(
             field,
             &obstacles,
             &spec(radius_m),
@@ -227,7 +227,7 @@ fn across_random_fields_only_the_logsumexp_barrier_breaks_the_invariant() {
             DEFAULT_LSE_SHARPNESS_PER_M,
         )
         .unwrap();
-        let cbf = CbfPlanner::new(field, &obstacles, &spec(radius_m), settings).unwrap();
+        let cbf = CbfController::new(field, &obstacles, &spec(radius_m), settings).unwrap();
         let (mut me_lse, mut me_cbf, mut violated) = (start, start, false);
         for _ in 0..60 {
             cbf_steps += 1;
@@ -263,7 +263,7 @@ fn with_a_single_neighbour_the_logsumexp_barrier_is_safe() {
     let field = Field::new(100.0, 100.0);
     let obstacles = [Disk::new(50.0, 50.0, 1.0)];
     let radius_m = 0.3;
-    let lse = ZcbfLogSumExpPlanner::new(
+    let lse = ZcbfLogSumExpController::new(
         field,
         &obstacles,
         &spec(radius_m),
@@ -306,8 +306,9 @@ fn same_inputs_give_bit_identical_outputs() {
     ];
     let bits = |p: &Point| (p.x.to_bits(), p.y.to_bits());
     let trace = || {
-        let cbf = CbfPlanner::new(field, &obstacles, &spec(0.3), CbfSettings::default()).unwrap();
-        let lse = ZcbfLogSumExpPlanner::new(
+        let cbf =
+            CbfController::new(field, &obstacles, &spec(0.3), CbfSettings::default()).unwrap();
+        let lse = ZcbfLogSumExpController::new(
             field,
             &obstacles,
             &spec(0.3),
@@ -333,7 +334,7 @@ fn same_inputs_give_bit_identical_outputs() {
         out
     };
     assert_eq!(trace(), trace());
-    let rows = CbfPlanner::new(field, &obstacles, &spec(0.3), CbfSettings::default())
+    let rows = CbfController::new(field, &obstacles, &spec(0.3), CbfSettings::default())
         .unwrap()
         .constraints(&Point::new(9.0, 6.9), &others);
     let u = Vector::new(0.8, -0.3);

@@ -430,7 +430,7 @@ step_m = 0.25
 centre_clearance_m = 0.5
 "#;
         let scenario = Scenario::parse(text, "sensing-turns.toml").expect("scenario");
-        let planner = &shared::simulate::agent_planners(&scenario).expect("planners")[0];
+        let controller = &shared::simulate::agent_controllers(&scenario).expect("controllers")[0];
         // The agent near the obstacle (so it often has to escape), others around it.
         let obstacle = scenario.moving[0].position_at(step);
         let me = Point::new(
@@ -465,8 +465,8 @@ centre_clearance_m = 0.5
             (me.y + slot.1).clamp(0.5, 19.5),
             0.0,
         );
-        let all = planner.plan_turn(step, &centre, &me, &others);
-        let seen = planner.plan_turn(step, &centre, &me, &sensed);
+        let all = controller.plan_turn(step, &centre, &me, &others);
+        let seen = controller.plan_turn(step, &centre, &me, &sensed);
         prop_assert_eq!(all, seen);
     }
 }

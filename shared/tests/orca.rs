@@ -1,4 +1,4 @@
-//! The ORCA planner ([`OrcaPlanner`]): exact free moves, safety of every move along its
+//! The ORCA controller ([`OrcaController`]): exact free moves, safety of every move along its
 //! whole segment (by the plain-geometry check with the true radii), the step bound, and
 //! the independence from bodies beyond the sensing radius.
 
@@ -9,7 +9,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
-use shared::orca::OrcaPlanner;
+use shared::orca::OrcaController;
 use shared::safety::check_move;
 use shared::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
@@ -35,12 +35,12 @@ fn bits(mv: &Move) -> (Vec<(u64, u64)>, MoveStatus) {
 #[test]
 fn a_free_agent_moves_straight_towards_its_slot_by_at_most_one_step() {
     let field = Field::new(20.0, 20.0);
-    let planner = OrcaPlanner::new(field, &[], &spec(0.5), 0.7, Some(3.0));
+    let controller = OrcaController::new(field, &[], &spec(0.5), 0.7, Some(3.0));
     let me = Point::new(2.0, 3.0);
 
     // Far slot: one full step along the straight line.
     let slot = Point::new(12.0, 9.0);
-    let mv = planner.plan_move(&at(&slot), &me, &[]);
+    let mv = controller.plan_move(&at(&slot), &me, &[]);
     assert_eq!(mv.status, MoveStatus::Deviated);
     assert_eq!(mv.waypoints, vec![me, mv.best]);
     let step = mv.best - me;
@@ -50,13 +50,13 @@ fn a_free_agent_moves_straight_towards_its_slot_by_at_most_one_step() {
 
     // Near slot: onto it, exactly.
     let slot = Point::new(2.3, 3.4);
-    let mv = planner.plan_move(&at(&slot), &me, &[]);
+    let mv = controller.plan_move(&at(&slot), &me, &[]);
     assert_eq!(mv.status, MoveStatus::AtSlot);
     assert_eq!(mv.best, slot);
     assert_eq!(mv.waypoints, vec![me, slot]);
 
     // At the slot: stays.
-    let mv = planner.plan_move(&at(&me), &me, &[]);
+    let mv = controller.plan_move(&at(&me), &me, &[]);
     assert_eq!(mv.status, MoveStatus::AtSlot);
     assert_eq!(mv.waypoints, vec![me]);
 
@@ -66,8 +66,8 @@ fn a_free_agent_moves_straight_towards_its_slot_by_at_most_one_step() {
         radius_m: 0.5,
     };
     let slot = Point::new(12.0, 3.0);
-    let free = planner.plan_move(&at(&slot), &me, &[]);
-    let beside = planner.plan_move(&at(&slot), &me, &[aside]);
+    let free = controller.plan_move(&at(&slot), &me, &[]);
+    let beside = controller.plan_move(&at(&slot), &me, &[aside]);
     assert_eq!(bits(&free), bits(&beside));
     assert_eq!(beside.best, Point::new(2.7, 3.0));
 }
@@ -79,11 +79,11 @@ fn an_agent_goes_around_an_obstacle_on_its_way_to_the_slot() {
     // symmetric and only slows the agent down (it stops in front of the obstacle).
     let obstacles = [Disk::new(6.0, 5.1, 1.0)];
     let grid = DiskGrid::new(obstacles.to_vec());
-    let planner = OrcaPlanner::new(field, &obstacles, &spec(0.3), 0.25, Some(2.0));
+    let controller = OrcaController::new(field, &obstacles, &spec(0.3), 0.25, Some(2.0));
     let slot = Point::new(10.0, 5.0);
     let mut me = Point::new(2.0, 5.0);
     for _ in 0..100 {
-        let mv = planner.plan_move(&at(&slot), &me, &[]);
+        let mv = controller.plan_move(&at(&slot), &me, &[]);
         check_move(&field, &grid, &[], 0.3, &me, &mv.waypoints, MAX_WAYPOINTS)
             .unwrap_or_else(|v| panic!("{v} moving {me} -> {}", mv.best));
         assert!((mv.best - me).norm() <= 0.25 + 1e-9);
@@ -98,12 +98,12 @@ fn an_agent_goes_around_an_obstacle_on_its_way_to_the_slot() {
 #[test]
 fn an_agent_never_leaves_the_field_and_slides_along_its_edge() {
     let field = Field::new(10.0, 10.0);
-    let planner = OrcaPlanner::new(field, &[], &spec(0.5), 1.0, None);
+    let controller = OrcaController::new(field, &[], &spec(0.5), 1.0, None);
     let grid = DiskGrid::new(Vec::new());
     let slot = Point::new(-5.0, 4.0);
     let mut me = Point::new(3.0, 6.0);
     for _ in 0..200 {
-        let mv = planner.plan_move(&at(&slot), &me, &[]);
+        let mv = controller.plan_move(&at(&slot), &me, &[]);
         check_move(&field, &grid, &[], 0.5, &me, &mv.waypoints, MAX_WAYPOINTS)
             .unwrap_or_else(|v| panic!("{v} moving {me} -> {}", mv.best));
         assert!(mv.best.y <= me.y, "{me} -> {}", mv.best);
@@ -119,9 +119,9 @@ fn an_agent_never_leaves_the_field_and_slides_along_its_edge() {
 fn an_overlapping_agent_stays_put() {
     let field = Field::new(10.0, 10.0);
     let obstacles = [Disk::new(5.0, 5.0, 1.0)];
-    let planner = OrcaPlanner::new(field, &obstacles, &spec(0.5), 1.0, Some(3.0));
+    let controller = OrcaController::new(field, &obstacles, &spec(0.5), 1.0, Some(3.0));
     let me = Point::new(6.0, 5.0);
-    let mv = planner.plan_move(&Pose::new(9.0, 5.0, 0.0), &me, &[]);
+    let mv = controller.plan_move(&Pose::new(9.0, 5.0, 0.0), &me, &[]);
     assert_eq!(mv.status, MoveStatus::Stayed);
     assert_eq!(mv.waypoints, vec![me]);
 }
@@ -129,7 +129,7 @@ fn an_overlapping_agent_stays_put() {
 #[test]
 fn bodies_that_are_not_finite_do_not_make_orca_panic() {
     let field = Field::new(10.0, 10.0);
-    let planner = OrcaPlanner::new(field, &[], &spec(0.5), 1.0, None);
+    let controller = OrcaController::new(field, &[], &spec(0.5), 1.0, None);
     let me = Point::new(3.0, 3.0);
     let others = [
         Body {
@@ -145,7 +145,7 @@ fn bodies_that_are_not_finite_do_not_make_orca_panic() {
             radius_m: f64::NAN,
         },
     ];
-    let mv = planner.plan_move(&Pose::new(8.0, 3.0, 0.0), &me, &others);
+    let mv = controller.plan_move(&Pose::new(8.0, 3.0, 0.0), &me, &others);
     assert_eq!(mv.waypoints[0], me);
     assert!(mv.best.x.is_finite() && mv.best.y.is_finite());
 }
@@ -212,8 +212,8 @@ fn world(seed: u64) -> World {
     w
 }
 
-fn planner(w: &World, obstacles: &[Disk]) -> OrcaPlanner {
-    OrcaPlanner::new(
+fn controller(w: &World, obstacles: &[Disk]) -> OrcaController {
+    OrcaController::new(
         w.field,
         obstacles,
         &spec(w.radius_m),
@@ -240,13 +240,13 @@ proptest! {
     #[test]
     fn orca_moves_are_safe_and_at_most_one_step(seed in any::<u64>()) {
         let w = world(seed);
-        let planner = planner(&w, &w.obstacles);
+        let controller = controller(&w, &w.obstacles);
         let grid = DiskGrid::new(w.obstacles.clone());
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0dca);
         let mut me = w.start;
         for step in 0..15 {
             let centre = random_centre(&mut rng, &w.field);
-            let mv = planner.plan_move(&centre, &me, &w.others);
+            let mv = controller.plan_move(&centre, &me, &w.others);
             prop_assert_eq!(mv.waypoints[0], me);
             prop_assert_eq!(mv.waypoints.last().copied(), Some(mv.best));
             let verdict = check_move(&w.field, &grid, &w.others, w.radius_m, &me,
@@ -256,7 +256,7 @@ proptest! {
             let step_m = (mv.best - me).norm();
             prop_assert!(step_m <= w.max_step_m + 1e-9, "step {step}: {step_m} m");
             // Same inputs, same bits.
-            prop_assert_eq!(bits(&mv), bits(&planner.plan_move(&centre, &me, &w.others)));
+            prop_assert_eq!(bits(&mv), bits(&controller.plan_move(&centre, &me, &w.others)));
             me = mv.best;
         }
     }
@@ -275,7 +275,7 @@ proptest! {
         let me = w.start;
         let far_m = sensing_m + w.radius_m;
         let is_far = |c: &Point, r: f64| (c - me).norm() - r > far_m;
-        let mv = planner(&w, &w.obstacles).plan_move(&centre, &me, &w.others);
+        let mv = controller(&w, &w.obstacles).plan_move(&centre, &me, &w.others);
 
         let mut away = |r: f64| {
             let angle = rng.random_range(0.0..std::f64::consts::TAU);
@@ -288,14 +288,14 @@ proptest! {
         more_obstacles.insert(rng.random_range(0..=w.obstacles.len()), far_obstacle);
         let mut more_others = w.others.clone();
         more_others.insert(rng.random_range(0..=w.others.len()), far_other);
-        let more = planner(&w, &more_obstacles).plan_move(&centre, &me, &more_others);
+        let more = controller(&w, &more_obstacles).plan_move(&centre, &me, &more_others);
         prop_assert_eq!(bits(&mv), bits(&more), "adding far bodies changed the move");
 
         let near_obstacles: Vec<Disk> = w.obstacles.iter().copied()
             .filter(|d| !is_far(&d.centre, d.radius_m)).collect();
         let near_others: Vec<Body> = w.others.iter().copied()
             .filter(|b| !is_far(&b.position, b.radius_m)).collect();
-        let fewer = planner(&w, &near_obstacles).plan_move(&centre, &me, &near_others);
+        let fewer = controller(&w, &near_obstacles).plan_move(&centre, &me, &near_others);
         prop_assert_eq!(bits(&mv), bits(&fewer), "removing far bodies changed the move");
     }
 }

@@ -5,7 +5,7 @@
 //!   pairwise intersection) in floating point; on small-integer problems (full of
 //!   parallel rows, repeated lines and single-point feasible sets), the same candidates in
 //!   exact rational arithmetic.
-//! - [`CbfPlanner`] moves from random safe states, over random fields and settings, keep
+//! - [`CbfController`] moves from random safe states, over random fields and settings, keep
 //!   the safety invariant along the whole segment, checked by brute force.
 
 mod support;
@@ -13,7 +13,7 @@ mod support;
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{CbfPlanner, HalfPlane, QpError, solve_qp_2d};
+use shared::cbf::{CbfController, HalfPlane, QpError, solve_qp_2d};
 use shared::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::safety::check_move;
@@ -331,7 +331,7 @@ proptest! {
     fn cbf_moves_keep_the_invariant_along_the_whole_segment(seed in any::<u64>()) {
         let w = world(seed);
         let spec = AgentSpec::new(Slot::new(0.0, 0.0), w.radius_m);
-        let planner = CbfPlanner::new(w.field, &w.obstacles, &spec, w.settings)
+        let controller = CbfController::new(w.field, &w.obstacles, &spec, w.settings)
             .expect("the settings are valid by construction");
         let grid = DiskGrid::new(w.obstacles.clone());
         let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xdead_beef);
@@ -342,7 +342,7 @@ proptest! {
                 rng.random_range(-5.0..w.field.height_m + 5.0),
                 0.0,
             );
-            let mv = planner.plan_move(&centre, &me, &w.others);
+            let mv = controller.plan_move(&centre, &me, &w.others);
             prop_assert_eq!(mv.waypoints[0], me);
             prop_assert_eq!(*mv.waypoints.last().unwrap(), mv.best);
             let c = segment_clearance_m(&w, &me, &mv.best);

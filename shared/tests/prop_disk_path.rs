@@ -1,5 +1,5 @@
 //! Property tests for `shared::disk_path::shortest_path`, checked independently of the
-//! planner's own geometry:
+//! controller's own geometry:
 //!
 //! - validity: continuity, exact end points, brute-force clearance of dense samples
 //!   (spacing 1e-4 m) against every disk, exact distance of every straight piece, field

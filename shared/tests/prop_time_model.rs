@@ -1,5 +1,5 @@
 //! Properties of time in the model (top speed, limited sensing, parallel turn groups) for
-//! [`TurnPlanner`] with the paper's best-point planner, on random small worlds, checked
+//! [`TurnController`] with the paper's best-point controller, on random small worlds, checked
 //! with the plain-geometry safety invariant against every body, seen or not:
 //!
 //! - no move is longer than the agent's top speed;
@@ -19,8 +19,8 @@ use shared::geometry::{
 };
 use shared::groups::turn_groups;
 use shared::safety::check_move;
-use shared::turn::{PLANNING_MARGIN_M, TurnPlanner};
-use shared::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, PlannerSpec, TurnMode};
+use shared::turn::{PLANNING_MARGIN_M, TurnController};
+use shared::vocabulary::{AgentSpec, Body, ControllerSpec, MAX_WAYPOINTS, Move, TurnMode};
 
 /// Slack on lengths and distances, in metres.
 const TOLERANCE_M: f64 = 1e-9;
@@ -170,14 +170,18 @@ fn others(bodies: &[Body], i: usize) -> Vec<Body> {
         .collect()
 }
 
-fn planner(w: &World, obstacles: &[Disk], i: usize) -> TurnPlanner {
-    TurnPlanner::new(&PlannerSpec::default(), w.field, obstacles, &w.specs[i])
-        .expect("the best-point planner takes any spec")
+fn controller(w: &World, obstacles: &[Disk], i: usize) -> TurnController {
+    TurnController::new(&ControllerSpec::default(), w.field, obstacles, &w.specs[i])
+        .expect("the best-point controller takes any spec")
 }
 
 /// Agent `i`'s move among the world's bodies.
 fn plan(w: &World, i: usize) -> Move {
-    planner(w, &w.obstacles, i).plan_move(&w.centre, &w.bodies[i].position, &others(&w.bodies, i))
+    controller(w, &w.obstacles, i).plan_move(
+        &w.centre,
+        &w.bodies[i].position,
+        &others(&w.bodies, i),
+    )
 }
 
 /// The safety invariant against every obstacle and every other agent of the snapshot.

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 use shared::scenario::Scenario;
-use shared::vocabulary::{PlannerKind, TurnMode};
+use shared::vocabulary::{ControllerKind, TurnMode};
 
 /// `a` and `b` equal with `==`, and bit for bit: Debug prints every float in its
 /// shortest round-trip form, which tells `-0.0` from `0.0` and any two different finite
@@ -39,8 +39,8 @@ fn round_trip(s: &Scenario, what: &str) -> String {
         "{what}: every obstacle listed\n{text}"
     );
     assert_eq!(
-        doc["planner"].as_str(),
-        Some(s.planner.kind.name()),
+        doc["controller"].as_str(),
+        Some(s.controller.kind.name()),
         "{what}"
     );
     assert_eq!(
@@ -85,8 +85,8 @@ fn every_shipped_scenario_resolves_to_a_file_that_loads_to_the_same_scenario() {
         let s = Scenario::load(file).unwrap_or_else(|e| panic!("{e}"));
         let original = Scenario::read(file).expect("read");
         generated += usize::from(original.contains("[obstacles.random]"));
-        for kind in PlannerKind::ALL {
-            let text = round_trip(&s.with_planner(kind), &what);
+        for kind in ControllerKind::ALL {
+            let text = round_trip(&s.with_controller(kind), &what);
             assert!(text.contains(&what), "{what}: the source is named");
         }
     }
@@ -106,6 +106,36 @@ fn every_test_scenario_that_loads_resolves_to_a_file_that_loads_to_the_same_scen
     assert!(loaded.len() >= 5, "{files:?}");
     for (file, s) in &loaded {
         round_trip(s, &file.display().to_string());
+    }
+}
+
+/// The older key `planner` still reads as `controller`, and the resolved file writes
+/// `controller`.
+#[test]
+fn the_older_key_planner_reads_as_controller() {
+    let paper = shared::scenario::PAPER_SCENARIO_TOML;
+    assert!(
+        paper.contains("\n[field]"),
+        "the paper example changed shape"
+    );
+    for kind in ControllerKind::ALL {
+        let with = |key: &str| {
+            paper.replacen(
+                "\n[field]",
+                &format!("\n{key} = \"{}\"\n\n[field]", kind.name()),
+                1,
+            )
+        };
+        let old = Scenario::parse(&with("planner"), "old.toml").expect("older key");
+        let new = Scenario::parse(&with("controller"), "new.toml").expect("key");
+        assert_eq!(old.controller.kind, kind);
+        assert_same(&old, &new, kind.name());
+        let text = round_trip(&old, kind.name());
+        assert!(
+            text.contains(&format!("controller = \"{}\"", kind.name())),
+            "{text}"
+        );
+        assert!(!text.contains("planner ="), "{text}");
     }
 }
 
@@ -197,7 +227,7 @@ struct Random {
     slots: Vec<(f64, f64, Option<f64>, Option<f64>)>,
     max_step_m: Option<f64>,
     sensing_extra_m: Option<f64>,
-    planner: Option<PlannerKind>,
+    controller: Option<ControllerKind>,
     cbf: Option<(f64, f64, f64, f64, f64, f64)>,
     parallel: bool,
 }
@@ -239,8 +269,8 @@ fn random_scenario() -> impl Strategy<Value = Random> {
         prop::option::of(0.3..1.0f64),
         prop::option::of(0.0..2.0f64),
     );
-    let planner = (
-        prop::option::of(prop::sample::select(PlannerKind::ALL.to_vec())),
+    let controller = (
+        prop::option::of(prop::sample::select(ControllerKind::ALL.to_vec())),
         prop::option::of((
             0.1..1.0f64,
             0.5..1.5f64,
@@ -251,7 +281,7 @@ fn random_scenario() -> impl Strategy<Value = Random> {
         )),
         any::<bool>(),
     );
-    (head, obstacles, formation, planner).prop_map(
+    (head, obstacles, formation, controller).prop_map(
         |(
             (
                 name,
@@ -268,7 +298,7 @@ fn random_scenario() -> impl Strategy<Value = Random> {
             ),
             (obstacle_radius_m, positions, disks, random, moving, unknown),
             (agent_radius_m, slot0_r_m, slots, max_step_m, sensing_extra_m),
-            (planner, cbf, parallel),
+            (controller, cbf, parallel),
         )| {
             let at = |(fx, fy): (f64, f64)| (fx * w, fy * h);
             Random {
@@ -313,7 +343,7 @@ fn random_scenario() -> impl Strategy<Value = Random> {
                 slots,
                 max_step_m,
                 sensing_extra_m,
-                planner,
+                controller,
                 cbf,
                 parallel,
             }
@@ -334,8 +364,8 @@ impl Random {
         let mut t = String::new();
         let _ = writeln!(t, "name = {}", toml::Value::String(self.name.clone()));
         let _ = writeln!(t, "seed = {}", self.seed);
-        if let Some(kind) = self.planner {
-            let _ = writeln!(t, "planner = \"{}\"", kind.name());
+        if let Some(kind) = self.controller {
+            let _ = writeln!(t, "controller = \"{}\"", kind.name());
         }
         let _ = writeln!(
             t,

@@ -10,7 +10,7 @@ use shared::record::Run;
 use shared::safety::{self, SAFETY_TOLERANCE_M};
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
-use shared::vocabulary::{Body, MAX_WAYPOINTS, MoveStatus, PlannerKind};
+use shared::vocabulary::{Body, ControllerKind, MAX_WAYPOINTS, MoveStatus};
 
 fn scenario_files() -> Vec<PathBuf> {
     let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios"));
@@ -162,11 +162,11 @@ fn every_shipped_scenario_runs_safely_and_the_formation_recovers() {
 }
 
 #[test]
-fn the_barrier_function_planner_never_breaks_clearance_on_any_shipped_static_scenario() {
+fn the_barrier_function_controller_never_breaks_clearance_on_any_shipped_static_scenario() {
     for file in scenario_files() {
         let scenario = Scenario::load(&file)
             .unwrap()
-            .with_planner(PlannerKind::Cbf);
+            .with_controller(ControllerKind::Cbf);
         let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
         if scenario.changes() {
             // A reactive baseline is not claimed safe against moving obstacles: it gets
@@ -188,7 +188,7 @@ fn orca_never_breaks_clearance_or_its_top_speed_on_any_shipped_static_scenario()
     for file in scenario_files() {
         let scenario = Scenario::load(&file)
             .unwrap()
-            .with_planner(PlannerKind::Orca);
+            .with_controller(ControllerKind::Orca);
         let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
         if scenario.changes() {
             // A reactive baseline is not claimed safe against moving obstacles: it gets

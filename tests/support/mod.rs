@@ -156,7 +156,7 @@ pub fn summary(out: &Path) -> Value {
 pub fn assert_nothing_left(pid: u32) {
     let stem = prefix_stem(pid);
     let deadline = Instant::now() + Duration::from_secs(2);
-    while !processes_mentioning(&format!("--run {stem}")).is_empty() {
+    while !processes_mentioning(&format!("--prefix {stem}")).is_empty() {
         assert!(
             Instant::now() < deadline,
             "agent processes of {stem} left running"

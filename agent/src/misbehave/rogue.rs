@@ -48,7 +48,7 @@ fn service_name(s: &str) -> anyhow::Result<ServiceName> {
 /// The process id of agent `victim` of run `prefix`, found the way any local process
 /// can: its command line.
 fn victim_pid(prefix: &str, victim: usize) -> Option<u32> {
-    let needle = format!("--run\0{prefix}\0--agent\0{victim}\0");
+    let needle = format!("--prefix\0{prefix}\0--agent\0{victim}\0");
     std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
         let pid: u32 = e.file_name().to_str()?.parse().ok()?;
         let cmdline = std::fs::read(e.path().join("cmdline")).ok()?;

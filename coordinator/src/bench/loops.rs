@@ -69,7 +69,7 @@ pub struct WaitReport {
     pub ipc_overhead_us: Distribution,
     /// Where the IPC overhead goes: waking (or reaching) the agent, its reading and
     /// writing, reaching the coordinator.
-    pub overhead_split: super::report::OverheadSplit,
+    pub overhead_split: super::split::OverheadSplit,
     /// The coordinator's own time per turn outside the turns (judging and recording the
     /// moves, the monitor, building the next world): the step loop's time minus every
     /// turn's latency, over the turns, microseconds (mean over every run). Sequential
@@ -99,7 +99,7 @@ pub fn prepare(file: &Path, rounds: usize) -> Result<Loaded, CliError> {
 
 /// Run the comparison on `loaded` ([`prepare`]), `rounds` rounds, with the agent
 /// executable `bin`.
-pub fn run(
+pub fn measure(
     loaded: Loaded,
     rounds: usize,
     bin: &Path,
@@ -227,7 +227,7 @@ fn wait_report(
         turn_us: Distribution::of(&turn),
         compute_us: Distribution::of(&compute),
         ipc_overhead_us: Distribution::of(&overhead),
-        overhead_split: super::report::OverheadSplit::of(&measured),
+        overhead_split: super::split::OverheadSplit::of(&measured),
         polled_share: if measured.is_empty() {
             0.0
         } else {

@@ -31,6 +31,7 @@ pub mod loops;
 pub mod plot;
 pub mod report;
 pub mod scenario;
+pub mod split;
 pub mod turns;
 
 use std::path::PathBuf;
@@ -48,7 +49,8 @@ use crate::procfs;
 use crate::stats::Distribution;
 use crate::turns::{BetweenSteps, RunOptions, run_scenario_with};
 
-pub use report::{EchoSplit, OverheadSplit, Report, RunReport, Targets};
+pub use report::{Report, RunReport, Targets};
+pub use split::{EchoSplit, OverheadSplit};
 
 /// Fixed part of a serialized world (seq, step, token, turn agent, centre pose), bytes:
 /// the wire header, so the socket carries what a turn carries.
@@ -177,7 +179,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
                 b.rounds
             );
         }
-        report.turns = Some(turns::run(b, prepared, &bin)?);
+        report.turns = Some(turns::measure(b, prepared, &bin)?);
     }
     if let (Some(file), Some(loaded)) = (&args.loop_scenario, loop_prepared) {
         if !args.json {
@@ -187,7 +189,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
                 args.loop_rounds
             );
         }
-        report.loops = Some(loops::run(loaded, args.loop_rounds, &bin, !args.json)?);
+        report.loops = Some(loops::measure(loaded, args.loop_rounds, &bin, !args.json)?);
     }
 
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -356,7 +358,7 @@ fn bench_one(
         pp.block(&mut session, pp.blocks, blocks, args.round_trips, sizes)?;
     }
     session.finish()?;
-    // Every agent's first turn is a warm-up (planner construction, first page touches).
+    // Every agent's first turn is a warm-up (controller construction, first page touches).
     let measured: Vec<_> = outcome
         .turn_samples
         .iter()

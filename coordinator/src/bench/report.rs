@@ -4,9 +4,9 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
+use super::split::{EchoSplit, OverheadSplit};
 use crate::procfs::IdleCpu;
 use crate::stats::Distribution;
-use crate::turns::TurnSample;
 
 /// The whole report (`{"runs": [...], ...}`).
 #[derive(Clone, Debug, Serialize)]
@@ -42,7 +42,7 @@ pub struct RunReport {
     /// Steps of the path.
     pub steps: usize,
     /// Turns whose samples were dropped as warm-up (every agent's first turn: its
-    /// planner is built then and its pages are touched for the first time).
+    /// controller is built then and its pages are touched for the first time).
     pub warmup_turns: usize,
     /// Turn latency: turn rung to move received, microseconds.
     pub turn_us: Distribution,
@@ -96,50 +96,6 @@ pub struct RunReport {
     pub floor_blocks: usize,
     /// The targets (reported, never asserted).
     pub targets: Targets,
-}
-
-/// The IPC overhead of a turn in three parts, from the agent's timestamps on the
-/// machine's monotonic clock (turns whose stamps were missing are left out).
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct OverheadSplit {
-    /// Turn rung to agent awake: waking the agent's process, microseconds.
-    pub to_agent_us: Distribution,
-    /// Agent awake to move sent, minus compute: reading the world and writing the
-    /// move in shared memory, microseconds.
-    pub agent_io_us: Distribution,
-    /// Move sent to the coordinator holding it: waking the coordinator, microseconds.
-    pub to_coordinator_us: Distribution,
-}
-
-impl OverheadSplit {
-    /// The split of the turns in `samples` that carry the agent's stamps.
-    pub(crate) fn of(samples: &[TurnSample]) -> Self {
-        let splits: Vec<_> = samples
-            .iter()
-            .filter_map(|t| t.split.map(|s| (s, t.compute_us)))
-            .collect();
-        Self {
-            to_agent_us: Distribution::of_iter(splits.iter().map(|(s, _)| s.to_agent_us)),
-            agent_io_us: Distribution::of_iter(
-                splits
-                    .iter()
-                    .map(|(s, compute)| (s.in_agent_us - compute).max(0.0)),
-            ),
-            to_coordinator_us: Distribution::of_iter(
-                splits.iter().map(|(s, _)| s.to_coordinator_us),
-            ),
-        }
-    }
-}
-
-/// The echo's round trip in its two wake-ups (what is left is the agent sending its
-/// empty answer).
-#[derive(Clone, Copy, Debug, Serialize)]
-pub struct EchoSplit {
-    /// Echo rung to agent awake, microseconds.
-    pub to_agent_us: Distribution,
-    /// Answer sent to the coordinator holding it, microseconds.
-    pub to_coordinator_us: Distribution,
 }
 
 /// The latency targets and whether this run met them.

@@ -1,6 +1,6 @@
 //! The benchmark's generated scenario: N agents in a block formation crossing an open
 //! field on a straight line, with a few obstacles beside the line (close enough that
-//! every agent's planner sees them, never in the formation's way).
+//! every agent's controller sees them, never in the formation's way).
 
 use anyhow::Context;
 use shared::geometry::Pose;

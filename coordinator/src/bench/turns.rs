@@ -163,7 +163,11 @@ pub fn prepare(b: &TurnsBench<'_>) -> Result<Prepared, CliError> {
 
 /// Run the comparison `b`, prepared as `prepared` ([`prepare`]), with the agent
 /// executable `bin`.
-pub fn run(b: &TurnsBench<'_>, prepared: Prepared, bin: &Path) -> Result<TurnsReport, CliError> {
+pub fn measure(
+    b: &TurnsBench<'_>,
+    prepared: Prepared,
+    bin: &Path,
+) -> Result<TurnsReport, CliError> {
     let Prepared {
         sequential: seq,
         parallel: par,

@@ -1,4 +1,4 @@
-//! `bench-peer --run PREFIX --agent 0 [--uds PATH]`: the other end of the latency floor
+//! `bench-peer --prefix PREFIX --agent 0 [--uds PATH]`: the other end of the latency floor
 //! that `coordinator bench` measures in the same run as the turns (see the bench's
 //! `floor` module). A program of the bench's own, started by `coordinator bench` from
 //! beside its executable; the shipping agent knows nothing of it.
@@ -39,7 +39,7 @@ use wire::{
 };
 
 /// Command line of the ping-pong process (started by `coordinator bench` as it starts an
-/// agent: `--run PREFIX --agent 0` first).
+/// agent: `--prefix PREFIX --agent 0` first).
 #[derive(Debug, Parser)]
 #[command(
     name = "bench-peer",
@@ -49,7 +49,7 @@ use wire::{
 struct Args {
     /// The bench session's iceoryx2 prefix.
     #[arg(long)]
-    run: String,
+    prefix: String,
     /// The index the session starts it as (always 0; unused).
     #[arg(long, default_value_t = 0)]
     agent: usize,
@@ -66,7 +66,7 @@ fn main() -> ExitCode {
     coordinator::logging::init();
     let args = Args::parse();
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
-    match run(&args.run, args.uds.as_deref(), liveness) {
+    match serve(&args.prefix, args.uds.as_deref(), liveness) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             tracing::error!("bench-peer: {e:#}");
@@ -77,7 +77,7 @@ fn main() -> ExitCode {
 
 /// Serve the ping-pong of run `prefix` (and the socket at `uds`, if given).
 /// `liveness` is how often the process checks that the coordinator is still there.
-fn run(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result<()> {
+fn serve(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result<()> {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGTERM);
     let parent = getppid();

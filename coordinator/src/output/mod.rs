@@ -45,7 +45,7 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 
 /// Create `dir` and write every output file of `run` into it, with the scenario as run in
 /// its resolved form (`scenario.toml`: every obstacle listed, every default and the
-/// planner written out; see [`Scenario::to_resolved_toml`]), so the run can be rendered
+/// controller written out; see [`Scenario::to_resolved_toml`]), so the run can be rendered
 /// again, or reproduced elsewhere, without this program's random obstacle generator.
 /// `source` names the scenario file in the header comment; `first_plan` is the centre path
 /// planned before the run (the one the run started along), written as plan 0 of

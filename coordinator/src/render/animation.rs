@@ -17,11 +17,10 @@ use super::geom::Xy;
 use super::gif_writer::GifWriter;
 use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::{MapLayout, Margins};
+use super::map_figure::map_layout;
 use super::metrics::StepMetrics;
 use super::palette;
-use super::scene::{
-    self, MAP_BOTTOM_PX, MAP_RIGHT_PX, Painter, alpha, fill, line, map_layout, solid,
-};
+use super::scene::{self, MAP_BOTTOM_PX, MAP_RIGHT_PX, Painter, alpha, fill, line, solid};
 use super::text::TextSetter;
 
 /// Most frames in an animation.
@@ -356,7 +355,7 @@ impl<'a> Animation<'a> {
     ) -> anyhow::Result<()> {
         let step = &self.data.steps[at];
         // The changing world under the formation: each unknown obstacle as the centre's
-        // planner knew it during this step, each moving obstacle where it stands.
+        // controller knew it during this step, each moving obstacle where it stands.
         for u in &self.data.unknown {
             p.unknown_obstacle(u, u.known_at(step.step), self.margin_m)?;
         }

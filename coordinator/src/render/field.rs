@@ -12,8 +12,9 @@ use super::font;
 use super::geom::{self, Xy};
 use super::header::{self, Header, LegendItem, Swatch};
 use super::layout::MapLayout;
+use super::map_figure::{MapFigure, map_layout};
 use super::palette;
-use super::scene::{self, MapFigure, Painter, alpha, fmt_m, line, map_layout, solid};
+use super::scene::{self, Painter, alpha, fmt_m, line, solid};
 
 /// Largest plotting area of the field figure, in pixels.
 pub const MAX_PLOT_PX: (u32, u32) = (1000, 720);

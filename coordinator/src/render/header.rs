@@ -45,7 +45,7 @@ pub fn changing_world_legend(scenario: &Scenario, routes: bool) -> Vec<LegendIte
                 edge: Some(solid(palette::UNKNOWN_OBSTACLE)),
                 dashed: true,
             },
-            "unknown to the planner",
+            "unknown to the controller",
         ));
         legend.push(LegendItem::new(
             Swatch::Disk {

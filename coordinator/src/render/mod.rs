@@ -33,6 +33,7 @@ mod geom;
 mod gif_writer;
 mod header;
 pub mod layout;
+mod map_figure;
 pub mod metrics;
 mod palette;
 mod scene;

@@ -2,8 +2,6 @@
 //! with their safety margins, circles, polylines and arrows clipped to the view. The
 //! header above every plot is in `header.rs`.
 
-use std::ops::Range;
-
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
@@ -14,12 +12,11 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
 use shared::geometry::{Disk, Point, Pose};
 
-use super::canvas::{Backend, Figure};
+use super::canvas::Backend;
 use super::data::{CentrePose, UnknownRecord};
 use super::font;
 use super::geom::{self, View, Xy};
-use super::header::Header;
-use super::layout::{MapLayout, Margins};
+use super::layout::MapLayout;
 use super::palette;
 
 /// A chart whose both axes are in metres.
@@ -97,24 +94,6 @@ pub fn map_chart_bare<'a, DB: Backend>(
         .build_cartesian_2d(layout.x_m.clone(), layout.y_m.clone())?)
 }
 
-/// The layout of a map of `x_m` by `y_m` with `header` above it and the map's margins
-/// (axes on the left and at the bottom): as large as fits `max_plot_px`, at least
-/// `min_width_px` wide.
-pub fn map_layout(
-    x_m: Range<f64>,
-    y_m: Range<f64>,
-    max_plot_px: (u32, u32),
-    min_width_px: u32,
-    header: &Header,
-) -> MapLayout {
-    MapLayout::fit(x_m, y_m, max_plot_px, min_width_px, |w| Margins {
-        top: header.height_px(w),
-        left: MAP_LEFT_PX,
-        bottom: MAP_BOTTOM_PX,
-        right: MAP_RIGHT_PX,
-    })
-}
-
 /// The view rectangle of `layout`.
 pub fn view_of(layout: &MapLayout) -> View {
     View {
@@ -122,31 +101,6 @@ pub fn view_of(layout: &MapLayout) -> View {
         x1: layout.x_m.end,
         y0: layout.y_m.start,
         y1: layout.y_m.end,
-    }
-}
-
-/// A figure that is one map under a header: it says its header and layout, and paints
-/// the map; the white canvas, the header and the axes are drawn for it.
-pub trait MapFigure {
-    /// The header above the map.
-    fn header(&self) -> &Header;
-    /// The canvas and the map's place on it.
-    fn map_layout(&self) -> &MapLayout;
-    /// Paint the map's content.
-    fn paint<DB: Backend>(&self, p: &Painter<'_, '_, DB>) -> anyhow::Result<()>;
-}
-
-impl<T: MapFigure> Figure for T {
-    fn size_px(&self) -> (u32, u32) {
-        let layout = self.map_layout();
-        (layout.width_px, layout.height_px)
-    }
-
-    fn draw<DB: Backend>(&self, root: &DrawingArea<DB, Shift>) -> anyhow::Result<()> {
-        root.fill(&palette::WHITE)?;
-        self.header().draw(root)?;
-        let chart = map_chart(root, self.map_layout())?;
-        self.paint(&Painter::new(&chart, self.map_layout()))
     }
 }
 

@@ -15,7 +15,7 @@ use super::*;
 /// the max replaced by the LogSumExp smooth max
 /// `(1/k) ln sum_j exp(k g_j)`, `g_j = r_i + r_j - ||x_i - s_j||`, `k` the sharpness.
 /// A single constraint `grad h . u >= -gamma h` (i.e. `-grad h . u <= gamma h`), the same
-/// nominal velocity, settings and time step as [`CbfPlanner`].
+/// nominal velocity, settings and time step as [`CbfController`].
 ///
 /// Why it fails. LogSumExp over-approximates the max, so `h` is a lower bound of the true
 /// signed clearance; what breaks is the constraint built from it: `grad h` is the
@@ -26,17 +26,17 @@ use super::*;
 /// length `dt |u|` overshoots `h = 0` and enters an obstacle. With one neighbour only it
 /// reduces to `h = ||x - s|| - R`, convex, and is safe.
 #[derive(Clone, Debug)]
-pub struct ZcbfLogSumExpPlanner {
-    /// The agent, its field and obstacles, as the safe planner holds them.
-    base: CbfPlanner,
+pub struct ZcbfLogSumExpController {
+    /// The agent, its field and obstacles, as the safe controller holds them.
+    base: CbfController,
     sharpness_per_m: f64,
 }
 
-impl ZcbfLogSumExpPlanner {
-    /// The planner of agent `spec` in `field` among `obstacles` (true radii), with the
+impl ZcbfLogSumExpController {
+    /// The controller of agent `spec` in `field` among `obstacles` (true radii), with the
     /// LogSumExp sharpness `sharpness_per_m` (see
     /// [`DEFAULT_LSE_SHARPNESS_PER_M`](crate::vocabulary::DEFAULT_LSE_SHARPNESS_PER_M)).
-    /// The settings are checked as for [`CbfPlanner`]: it fails even with settings that
+    /// The settings are checked as for [`CbfController`]: it fails even with settings that
     /// make the CBF safe.
     pub fn new(
         field: Field,
@@ -45,7 +45,7 @@ impl ZcbfLogSumExpPlanner {
         settings: CbfSettings,
         sharpness_per_m: f64,
     ) -> Result<Self, CbfSettingsError> {
-        let base = CbfPlanner::new(field, obstacles, spec, settings)?;
+        let base = CbfController::new(field, obstacles, spec, settings)?;
         if !(sharpness_per_m.is_finite() && sharpness_per_m > 0.0) {
             return Err(CbfSettingsError::NotPositive {
                 name: "sharpness_per_m",
@@ -121,7 +121,7 @@ impl ZcbfLogSumExpPlanner {
         Ok(self.base.settings.capped(solve_qp_2d(&u_nom, &rows)?))
     }
 
-    /// Plan this agent's move (same interface as [`CbfPlanner::plan_move`]). **Unsafe**:
+    /// Plan this agent's move (same interface as [`CbfController::plan_move`]). **Unsafe**:
     /// the step may overlap an obstacle or agent.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         let slot = self.slot_position(centre);

@@ -1,9 +1,9 @@
-//! CBF-QP mode: a control barrier function planner for single-integrator agents
+//! CBF-QP mode: a control barrier function controller for single-integrator agents
 //! (`x' = u`), and, for comparison only, a reproduction of the paper's failed zeroing
 //! barrier with a LogSumExp-smoothed max (section IV.C of the paper "Collision Avoidance
 //! and Formation Control").
 //!
-//! # The safe planner ([`CbfPlanner`])
+//! # The safe controller ([`CbfController`])
 //!
 //! Each turn the agent picks the velocity closest to a nominal one,
 //! `u_nom = gain * (slot - x_i)` saturated at the maximum speed, subject to one linear
@@ -28,7 +28,7 @@
 //! `h(x + t u) >= h`: the distance never shrinks. The margin `m` absorbs rounding, so
 //! rounding never shows up as a violation of the true invariant `||p_a - p_b|| >= r_a + r_b`.
 //! Neighbours farther than the sensing radius cannot be reached in one step because the
-//! planner refuses a sensing radius shorter than the agent's radius plus one step at
+//! controller refuses a sensing radius shorter than the agent's radius plus one step at
 //! maximum speed, and the step never exceeds the maximum speed (a solution faster than
 //! it, possible only in the band, is scaled down, which keeps every constraint's
 //! guarantee).
@@ -41,18 +41,18 @@
 //! lies straight behind an obstacle slows down in front of it and stops (see
 //! [`is_deadlocked`]); off the axis it slides around the obstacle.
 //!
-//! # The failed barrier ([`ZcbfLogSumExpPlanner`])
+//! # The failed barrier ([`ZcbfLogSumExpController`])
 //!
 //! The paper used a single barrier `h_i = -max_j (r_i + r_j - ||x_i - s_j||)` with the
 //! max replaced by its LogSumExp smoothing. It is kept here, unsafe by design, so that the
 //! comparison can show how often its moves break the invariant.
 
+mod controller;
 mod logsumexp;
-mod planner;
 mod qp;
 
-pub use logsumexp::ZcbfLogSumExpPlanner;
-pub use planner::CbfPlanner;
+pub use controller::CbfController;
+pub use logsumexp::ZcbfLogSumExpController;
 pub use qp::{HalfPlane, QpError, solve_qp_2d};
 
 use std::ops::ControlFlow;
@@ -66,7 +66,7 @@ pub const AT_SLOT_TOLERANCE_M: f64 = 1e-9;
 /// A move shorter than this, in metres, counts as no motion for [`is_deadlocked`].
 pub const DEADLOCK_STEP_M: f64 = 1e-9;
 
-// The nominal controller of the barrier planners, private to them.
+// The nominal controller of the barrier controllers, private to them.
 impl CbfSettings {
     /// The nominal velocity towards `slot` from `me`, saturated at the maximum speed.
     pub(super) fn nominal(&self, slot: &Point, me: &Point) -> Vector {
@@ -92,7 +92,7 @@ impl CbfSettings {
 
 /// Whether an agent standing at `me` that made move `mv` is deadlocked: it neither moved
 /// (by more than [`DEADLOCK_STEP_M`]) nor is at its slot (within
-/// [`AT_SLOT_TOLERANCE_M`]). Works for moves of any planner.
+/// [`AT_SLOT_TOLERANCE_M`]). Works for moves of any controller.
 pub fn is_deadlocked(mv: &Move, me: &Point) -> bool {
     (mv.best - me).norm() <= DEADLOCK_STEP_M && (mv.slot - mv.best).norm() > AT_SLOT_TOLERANCE_M
 }

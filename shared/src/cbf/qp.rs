@@ -1,4 +1,4 @@
-//! The exact 2-D quadratic programme of the barrier planners: the velocity closest to a
+//! The exact 2-D quadratic programme of the barrier controllers: the velocity closest to a
 //! nominal one inside a set of half-planes.
 
 use crate::geometry::Vector;

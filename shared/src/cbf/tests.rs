@@ -1,4 +1,4 @@
-//! Tests of the QP and the barrier planners.
+//! Tests of the QP and the barrier controllers.
 
 use super::*;
 

@@ -4,7 +4,7 @@ use super::{Point, Vector};
 
 /// A closed disk: the set of points within `radius_m` of `centre`.
 ///
-/// Planners work with *inflated* disks: an obstacle or another agent grown by the moving
+/// Controllers work with *inflated* disks: an obstacle or another agent grown by the moving
 /// agent's own radius, so that the moving agent becomes a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Disk {

@@ -1,4 +1,4 @@
-//! Plane geometry shared by every planner: points, disks, polylines, the rectangular
+//! Plane geometry shared by every controller: points, disks, polylines, the rectangular
 //! field, and a uniform-grid spatial index over disks.
 //!
 //! Everything is `f64` and uses nalgebra's `Point2`/`Vector2`, the same types parry2d-f64

@@ -1,86 +1,14 @@
-//! The file side of a scenario: reading the TOML text, the raw serde structures of the
-//! format (units in the names, unknown fields refused; read by [`Scenario::parse`] and
-//! written by the resolved form, `super::resolved`), the errors that name the line or the
-//! field, and the embedded paper scenario.
-
-use std::path::Path;
+//! The file side of a scenario: the raw serde structures of the format (units in the
+//! names, unknown fields refused; read by [`Scenario::parse`](super::Scenario::parse) and
+//! written by the resolved form, `super::resolved`), and the TOML errors that name the
+//! line or the field.
 
 use serde::{Deserialize, Serialize};
 
-use super::check::Checker;
-use super::{Scenario, ScenarioError};
+use super::ScenarioError;
 use crate::geometry::Pose;
 use crate::moving_obstacle::Route;
-use crate::vocabulary::{PlannerKind, TurnMode};
-
-/// The paper's example (section III), embedded so `coordinator run` works with no file.
-pub const PAPER_SCENARIO_TOML: &str = include_str!("../../../scenarios/paper.toml");
-/// The name shown for the embedded paper scenario in messages.
-pub const PAPER_SCENARIO_NAME: &str = "<embedded paper.toml>";
-
-impl Scenario {
-    /// Read and validate the scenario file at `path`.
-    pub fn load(path: &Path) -> Result<Self, ScenarioError> {
-        Self::parse(&Self::read(path)?, &path.display().to_string())
-    }
-
-    /// The text of the scenario file at `path` (a directory, a missing file or a file
-    /// that is not UTF-8 is a [`ScenarioError::Read`]).
-    pub fn read(path: &Path) -> Result<String, ScenarioError> {
-        let file = path.display().to_string();
-        if path.is_dir() {
-            return Err(ScenarioError::Read {
-                file,
-                reason: "is a directory, not a scenario file".into(),
-            });
-        }
-        std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
-            file,
-            reason: e.to_string(),
-        })
-    }
-
-    /// The paper's example, embedded in the library.
-    pub fn paper() -> Self {
-        match Self::parse(PAPER_SCENARIO_TOML, PAPER_SCENARIO_NAME) {
-            Ok(s) => s,
-            // The embedded file is checked by the test suite; reaching this is a build bug.
-            Err(e) => panic!("embedded paper scenario is invalid: {e}"),
-        }
-    }
-
-    /// Parse and validate scenario text; `file` names it in errors.
-    ///
-    /// ```
-    /// use shared::scenario::Scenario;
-    /// let text = r#"
-    /// name = "two"
-    /// [field]
-    /// width_m = 20.0
-    /// height_m = 10.0
-    /// [formation]
-    /// slots = [ { r_m = 0.0, theta_deg = 0.0 }, { r_m = 1.0, theta_deg = 90.0 } ]
-    /// [path]
-    /// start = { x_m = 3.0, y_m = 5.0, heading_deg = 0.0 }
-    /// goal = { x_m = 17.0, y_m = 5.0, heading_deg = 0.0 }
-    /// turning_radius_m = 2.0
-    /// step_m = 0.5
-    /// centre_clearance_m = 0.3
-    /// "#;
-    /// let s = Scenario::parse(text, "two.toml").unwrap();
-    /// assert_eq!(s.agents.len(), 2);
-    /// assert_eq!(s.agents[1].radius_m, 0.3, "the paper's default agent radius");
-    /// assert_eq!(s.path.step_m, 0.5);
-    /// // A value out of range is refused, naming the file and the field.
-    /// let bad = text.replace("step_m = 0.5", "step_m = -1.0");
-    /// let e = Scenario::parse(&bad, "two.toml").unwrap_err();
-    /// assert_eq!(e.to_string(), "two.toml: path.step_m: must be positive, got -1");
-    /// ```
-    pub fn parse(text: &str, file: &str) -> Result<Self, ScenarioError> {
-        let raw = parse_file(text, file)?;
-        Checker { file }.check(raw)
-    }
-}
+use crate::vocabulary::{ControllerKind, TurnMode};
 
 // ---------------------------------------------------------------------------------------
 // The file format (serde side). Units are in the names; unknown fields are errors. A key
@@ -97,8 +25,9 @@ pub(super) struct ScenarioFile {
     pub(super) obstacles: ObstaclesFile,
     pub(super) formation: FormationFile,
     pub(super) path: PathFile,
-    #[serde(default)]
-    pub(super) planner: PlannerKind,
+    /// `controller`; the older spelling `planner` is still read.
+    #[serde(default, alias = "planner")]
+    pub(super) controller: ControllerKind,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) cbf: Option<CbfFile>,
     #[serde(default)]
@@ -268,7 +197,7 @@ impl PoseFile {
     }
 }
 
-fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
+pub(super) fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
     let syntax = |e: toml::de::Error| ScenarioError::Parse {
         file: file.to_string(),
         field: e

@@ -14,12 +14,13 @@
 //! - `resolved`: [`Scenario::to_resolved_toml`], the scenario written back as a
 //!   self-contained file.
 //!
-//! The agents, the planner and the capacities a scenario is made of are in
+//! The agents, the controller and the capacities a scenario is made of are in
 //! [`crate::vocabulary`].
 
 mod check;
 mod error;
 mod file;
+mod load;
 mod model;
 mod random;
 mod resolved;
@@ -28,7 +29,7 @@ pub use check::{
     MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, MAX_STEPS,
 };
 pub use error::ScenarioError;
-pub use file::{PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
+pub use load::{PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
 pub use model::{PathSpec, Scenario};
 pub use resolved::{ResolveError, moving_obstacle_table};
 

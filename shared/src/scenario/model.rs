@@ -2,7 +2,7 @@
 
 use crate::geometry::{Disk, Field, Pose};
 use crate::moving_obstacle::MovingObstacle;
-use crate::vocabulary::{AgentSpec, PlannerKind, PlannerSpec, TurnMode};
+use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode};
 
 /// A validated scenario: every number finite and in range, every body placed legally.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,7 +27,7 @@ pub struct Scenario {
     /// Formation centre path settings.
     pub path: PathSpec,
     /// The controller and its settings.
-    pub planner: PlannerSpec,
+    pub controller: ControllerSpec,
     /// One mover at a time, or parallel groups.
     pub turns: TurnMode,
 }
@@ -53,10 +53,10 @@ pub struct PathSpec {
 }
 
 impl Scenario {
-    /// The same scenario run by another planner.
-    pub fn with_planner(&self, kind: PlannerKind) -> Self {
+    /// The same scenario run by another controller.
+    pub fn with_controller(&self, kind: ControllerKind) -> Self {
         let mut s = self.clone();
-        s.planner.kind = kind;
+        s.controller.kind = kind;
         s
     }
 

@@ -34,7 +34,7 @@ impl Scenario {
     /// The scenario as a self-contained TOML file in the scenario format: every obstacle
     /// listed as an `[[obstacles.disk]]` with its radius (random ones as drawn, no
     /// `[obstacles.random]` left), every agent with its own radius, every default
-    /// written out (the seed, the default radii, the planner, the `[cbf]` settings,
+    /// written out (the seed, the default radii, the controller, the `[cbf]` settings,
     /// `allow_reverse`, the turn mode). Numbers are written in a form that parses back to
     /// the same bits (`toml` writes Rust's shortest round-trip digits), and angles in the
     /// degrees that convert back to the same radians, so [`Scenario::parse`] of the text
@@ -52,7 +52,7 @@ impl Scenario {
             "# Resolved form of scenario {name} as run, from {source}:\n\
              # every obstacle listed explicitly ({} obstacles, those drawn from the seed\n\
              # included; the seed is kept but no longer draws any), every default written\n\
-             # out, the planner as run. It loads to the same scenario, bit for bit.\n\n{body}",
+             # out, the controller as run. It loads to the same scenario, bit for bit.\n\n{body}",
             self.obstacles.len(),
             source = comment_safe(source),
         ))
@@ -67,7 +67,7 @@ impl Scenario {
                 reason: format!("{} is beyond TOML's integers", self.seed),
             });
         }
-        let c = &self.planner.cbf;
+        let c = &self.controller.cbf;
         Ok(ScenarioFile {
             name: self.name.clone(),
             seed: self.seed,
@@ -86,14 +86,14 @@ impl Scenario {
                 allow_reverse: self.path.allow_reverse,
                 max_lag_m: self.path.max_lag_m,
             },
-            planner: self.planner.kind,
+            controller: self.controller.kind,
             cbf: Some(CbfFile {
                 gamma_per_s: Some(c.gamma_per_s),
                 dt_s: Some(c.dt_s),
                 gain_per_s: Some(c.gain_per_s),
                 max_speed_m_per_s: Some(c.max_speed_m_per_s),
                 sensing_radius_m: Some(c.sensing_radius_m),
-                lse_sharpness_per_m: Some(self.planner.lse_sharpness_per_m),
+                lse_sharpness_per_m: Some(self.controller.lse_sharpness_per_m),
             }),
             turns: TurnsFile { mode: self.turns },
         })
@@ -314,7 +314,7 @@ mod tests {
         let text = r#"
 name = "odd \"name\" \u00e9 # not a comment"
 seed = 9223372036854775807
-planner = "cbf"
+controller = "cbf"
 [cbf]
 gamma_per_s = 0.30000000000000004
 dt_s = 3.0

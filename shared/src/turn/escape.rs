@@ -9,9 +9,9 @@ use crate::geometry::{
 use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
 
-use super::{PLANNING_MARGIN_M, TurnPlanner};
+use super::{PLANNING_MARGIN_M, TurnController};
 
-impl TurnPlanner {
+impl TurnController {
     /// [`Self::plan_turn`] before looking ahead: the escape, if any, and the plan round
     /// the reach disks `reach` (with a step to spare) of the `sensed` moving obstacles;
     /// `others` are the sensed bodies.
@@ -98,7 +98,7 @@ impl TurnPlanner {
         let (i, away_rad) = deepest_of(me, reach, keep_m)?;
         let (deepest, spare_m) = (reach[i], spares_m.get(i).copied().unwrap_or(0.0));
         let big_r = deepest.radius_m + keep_m + PLANNING_MARGIN_M;
-        // Planning frame as in BestPointPlanner: the agent a point, every body grown by
+        // Planning frame as in BestPointController: the agent a point, every body grown by
         // its radius and the margin, the field inset by as much.
         let grow_m = self.spec.radius_m + PLANNING_MARGIN_M;
         let offset = Vector::new(grow_m, grow_m);

@@ -7,10 +7,10 @@ use crate::moving_obstacle::MovingObstacle;
 use crate::survival_grid::SurvivalGrid;
 use crate::vocabulary::{Body, Move, MoveStatus};
 
-use super::{PLANNING_MARGIN_M, TurnPlanner};
+use super::{PLANNING_MARGIN_M, TurnController};
 
 /// How many steps ahead along the moving obstacles' routes an agent looks when it weighs
-/// moves ([`TurnPlanner::plan_turn`]).
+/// moves ([`TurnController::plan_turn`]).
 pub const LOOKAHEAD_TURNS: usize = 20;
 
 /// An agent replaces its planned move by one that stays clear longer only when an
@@ -43,7 +43,7 @@ pub const LOOKAHEAD_DIRECTIONS: usize = 36;
 /// of a gap that is closing may take several turns at the top speed.
 pub const LOOKAHEAD_RUN_TURNS: usize = 8;
 
-impl TurnPlanner {
+impl TurnController {
     /// The move `planned`, or one that keeps the agent clear of the `sensed` moving
     /// obstacles longer.
     ///

@@ -2,29 +2,29 @@
 //! point, shortest collision-free path to it, as a polyline the agent then follows.
 //!
 //! This is the one place the decision is made: the reference simulation and the agent
-//! process both call [`TurnPlanner::plan_move`] (the paper's [`BestPointPlanner`] or a
-//! barrier planner), so their trajectories agree to the bit.
+//! process both call [`TurnController::plan_move`] (the paper's [`BestPointController`] or a
+//! barrier controller), so their trajectories agree to the bit.
 //!
-//! One concept a file: here the dispatch over the controllers ([`TurnPlanner`]); in
-//! `best_point_planner.rs` the paper's planner; in `escape.rs` a turn among moving
+//! One concept a file: here the dispatch over the controllers ([`TurnController`]); in
+//! `best_point_controller.rs` the paper's controller; in `escape.rs` a turn among moving
 //! obstacles (the escape from an obstacle's reach and the plan round the reach disks);
 //! in `look_ahead.rs` the look-ahead along the moving obstacles' routes.
 
 use std::borrow::Cow;
 
-use crate::cbf::{CbfPlanner, ZcbfLogSumExpPlanner};
+use crate::cbf::{CbfController, ZcbfLogSumExpController};
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, polyline_prefix};
 use crate::moving_obstacle::MovingObstacle;
-use crate::orca::OrcaPlanner;
+use crate::orca::OrcaController;
 use crate::vocabulary::{
-    AgentSpec, Body, CbfSettingsError, Move, MoveStatus, PlannerKind, PlannerSpec,
+    AgentSpec, Body, CbfSettingsError, ControllerKind, ControllerSpec, Move, MoveStatus,
 };
 
-mod best_point_planner;
+mod best_point_controller;
 mod escape;
 mod look_ahead;
 
-pub use best_point_planner::BestPointPlanner;
+pub use best_point_controller::BestPointController;
 pub use look_ahead::{
     LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_TURNS, LOOKAHEAD_TRIGGER_TURNS, LOOKAHEAD_TURNS,
     SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
@@ -38,7 +38,7 @@ pub const PLANNING_MARGIN_M: f64 = 1e-3;
 /// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
 /// top speed applied: what the reference simulation and the agent processes call.
 #[derive(Clone, Debug)]
-pub struct TurnPlanner {
+pub struct TurnController {
     controller: Controller,
     spec: AgentSpec,
     /// The moving obstacles of the scenario ([`Self::with_moving`]).
@@ -51,43 +51,47 @@ pub struct TurnPlanner {
 /// The controllers.
 #[derive(Clone, Debug)]
 enum Controller {
-    /// The paper's method, exact ([`BestPointPlanner`]).
-    BestPoint(BestPointPlanner),
+    /// The paper's method, exact ([`BestPointController`]).
+    BestPoint(BestPointController),
     /// The control-barrier-function QP.
-    Cbf(CbfPlanner),
+    Cbf(CbfController),
     /// The paper's failed LogSumExp barrier, for comparison.
-    ZcbfLogSumExp(ZcbfLogSumExpPlanner),
+    ZcbfLogSumExp(ZcbfLogSumExpController),
     /// ORCA, the reactive baseline.
-    Orca(OrcaPlanner),
+    Orca(OrcaController),
 }
 
-impl TurnPlanner {
-    /// The planner `planner.kind` for agent `spec` in `field` among `obstacles` (true
-    /// radii). A barrier planner senses no farther than the agent does.
+impl TurnController {
+    /// The controller `controller.kind` for agent `spec` in `field` among `obstacles` (true
+    /// radii). A barrier controller senses no farther than the agent does.
     pub fn new(
-        planner: &PlannerSpec,
+        controller: &ControllerSpec,
         field: Field,
         obstacles: &[Disk],
         spec: &AgentSpec,
     ) -> Result<Self, CbfSettingsError> {
-        let mut cbf = planner.cbf;
+        let mut cbf = controller.cbf;
         if let Some(sensing_m) = spec.sensing_radius_m {
             cbf.sensing_radius_m = cbf.sensing_radius_m.min(sensing_m);
         }
-        let controller = match planner.kind {
-            PlannerKind::BestPoint => {
-                Controller::BestPoint(BestPointPlanner::new(field, obstacles, spec))
+        let controller = match controller.kind {
+            ControllerKind::BestPoint => {
+                Controller::BestPoint(BestPointController::new(field, obstacles, spec))
             }
-            PlannerKind::Cbf => Controller::Cbf(CbfPlanner::new(field, obstacles, spec, cbf)?),
-            PlannerKind::ZcbfLogsumexp => Controller::ZcbfLogSumExp(ZcbfLogSumExpPlanner::new(
-                field,
-                obstacles,
-                spec,
-                cbf,
-                planner.lse_sharpness_per_m,
-            )?),
-            // Its maximum speed is the top speed; without one, the barrier planners' step.
-            PlannerKind::Orca => Controller::Orca(OrcaPlanner::new(
+            ControllerKind::Cbf => {
+                Controller::Cbf(CbfController::new(field, obstacles, spec, cbf)?)
+            }
+            ControllerKind::ZcbfLogsumexp => {
+                Controller::ZcbfLogSumExp(ZcbfLogSumExpController::new(
+                    field,
+                    obstacles,
+                    spec,
+                    cbf,
+                    controller.lse_sharpness_per_m,
+                )?)
+            }
+            // Its maximum speed is the top speed; without one, the barrier controllers' step.
+            ControllerKind::Orca => Controller::Orca(OrcaController::new(
                 field,
                 obstacles,
                 spec,
@@ -104,7 +108,7 @@ impl TurnPlanner {
         })
     }
 
-    /// This planner in a world with `moving` obstacles: [`Self::plan_turn`] plans around
+    /// This controller in a world with `moving` obstacles: [`Self::plan_turn`] plans around
     /// them. `obstacles` are the static ones given to [`Self::new`] (true radii).
     pub fn with_moving(mut self, moving: &[MovingObstacle], obstacles: &[Disk]) -> Self {
         if !moving.is_empty() {
@@ -114,7 +118,7 @@ impl TurnPlanner {
         self
     }
 
-    /// The agent this planner moves.
+    /// The agent this controller moves.
     pub fn spec(&self) -> &AgentSpec {
         &self.spec
     }

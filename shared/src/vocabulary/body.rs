@@ -1,4 +1,4 @@
-//! A body in the plane, as a planner sees the other agents.
+//! A body in the plane, as a controller sees the other agents.
 
 use crate::geometry::Point;
 

@@ -1,6 +1,6 @@
 //! The fixed capacities: how many agents, obstacles and waypoints every part of the
 //! system holds at most. The wire messages are sized by them, and the scenario checks and
-//! the planners refuse anything larger, so nothing is ever cut short in transit.
+//! the controllers refuse anything larger, so nothing is ever cut short in transit.
 
 /// Most agents a scenario may hold (the wire types' fixed capacity).
 pub const MAX_AGENTS: usize = 1024;

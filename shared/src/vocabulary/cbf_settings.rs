@@ -1,6 +1,6 @@
-//! The barrier-function planners' settings ([`crate::cbf`]) and their validation: part
-//! of a [`PlannerSpec`](crate::vocabulary::PlannerSpec), so of every scenario, whichever
-//! planner runs it.
+//! The barrier-function controllers' settings ([`crate::cbf`]) and their validation: part
+//! of a [`ControllerSpec`](crate::vocabulary::ControllerSpec), so of every scenario, whichever
+//! controller runs it.
 
 /// Extra inflation of every barrier, in metres: the CBF keeps each body at least this
 /// much (minus rounding) away from every other body and from the field edges, so that
@@ -11,7 +11,7 @@ pub const CBF_MARGIN_M: f64 = 1e-6;
 /// over-approximates the max by at most `ln(n) / k` metres (0.069 m for two terms).
 pub const DEFAULT_LSE_SHARPNESS_PER_M: f64 = 10.0;
 
-/// Why CBF settings (or a planner built from them) are unusable.
+/// Why CBF settings (or a controller built from them) are unusable.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
 pub enum CbfSettingsError {
     /// A setting is NaN, infinite, zero or negative.
@@ -41,8 +41,8 @@ pub enum CbfSettingsError {
     },
 }
 
-/// Settings of the CBF-QP planners (shared by [`CbfPlanner`](crate::cbf::CbfPlanner) and
-/// [`ZcbfLogSumExpPlanner`](crate::cbf::ZcbfLogSumExpPlanner) so that the comparison is
+/// Settings of the CBF-QP controllers (shared by [`CbfController`](crate::cbf::CbfController) and
+/// [`ZcbfLogSumExpController`](crate::cbf::ZcbfLogSumExpController) so that the comparison is
 /// like for like).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CbfSettings {

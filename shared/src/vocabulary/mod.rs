@@ -1,20 +1,20 @@
-//! The shared vocabulary: the words the planners, the scenario model, the record of a run
+//! The shared vocabulary: the words the controllers, the scenario model, the record of a run
 //! and the wire types all speak.
 //!
 //! This module is a leaf of the library's module graph: it uses only
 //! [`geometry`](crate::geometry) and [`formation`](crate::formation), so anything may use
 //! it without an import cycle (the test `shared/tests/module_graph.rs` keeps it so).
 //!
-//! - [`Body`]: a disk at a position, as the planners see the other agents;
+//! - [`Body`]: a disk at a position, as the controllers see the other agents;
 //! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
 //! - [`AgentSpec`]: one agent of a scenario (its slot, radius, top speed and sensing
 //!   radius);
 //! - [`Named`]: the values files and the command line spell by name, read and written
 //!   through one helper;
 //! - [`TurnMode`]: one mover at a time, or parallel groups;
-//! - [`PlannerKind`] and [`PlannerSpec`]: which controller moves the agents, with which
+//! - [`ControllerKind`] and [`ControllerSpec`]: which controller moves the agents, with which
 //!   settings;
-//! - [`CbfSettings`]: the barrier-function planners' settings and their validation;
+//! - [`CbfSettings`]: the barrier-function controllers' settings and their validation;
 //! - [`MAX_AGENTS`], [`MAX_OBSTACLES`], [`MAX_WAYPOINTS`]: the fixed capacities every
 //!   part agrees on (the wire messages hold no more).
 
@@ -22,16 +22,16 @@ mod agent;
 mod body;
 mod capacity;
 mod cbf_settings;
+mod controller;
 mod moves;
 pub mod named;
-mod planner;
 mod turn_mode;
 
 pub use agent::AgentSpec;
 pub use body::Body;
 pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
 pub use cbf_settings::{CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
+pub use controller::{ControllerKind, ControllerSpec};
 pub use moves::{Move, MoveStatus};
 pub use named::Named;
-pub use planner::{PlannerKind, PlannerSpec};
 pub use turn_mode::TurnMode;

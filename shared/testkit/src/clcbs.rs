@@ -1,4 +1,4 @@
-//! Reader for the CL-CBS benchmark instances (real obstacle fields for the planners).
+//! Reader for the CL-CBS benchmark instances (real obstacle fields for the controllers).
 //!
 //! The CL-CBS project (APRIL Lab, MIT licence) ships its instances as YAML files of this
 //! shape:

@@ -4,7 +4,7 @@ use rand::Rng;
 use shared::geometry::{Disk, Field, Point, Vector};
 use shared::vocabulary::Body;
 
-/// Draw a start for an agent of radius `radius_m` where planners are put to the test:
+/// Draw a start for an agent of radius `radius_m` where controllers are put to the test:
 /// touching an obstacle or another agent, on the field's left edge, or anywhere, until
 /// `clear(p)` accepts one; `None` after 2000 draws.
 pub fn draw_start(

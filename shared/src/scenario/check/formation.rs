@@ -1,24 +1,24 @@
 //! The formation and its controller checked: every slot with its agent's radius, top
-//! speed and sensing, and the planner with its `[cbf]` settings.
+//! speed and sensing, and the controller with its `[cbf]` settings.
 
 use super::{Checker, num};
 use crate::formation::Slot;
 use crate::geometry::{Field, Pose};
 use crate::scenario::ScenarioError;
 use crate::scenario::file::{CbfFile, FormationFile};
-use crate::vocabulary::{AgentSpec, MAX_AGENTS, PlannerKind, PlannerSpec};
+use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_AGENTS};
 
 impl Checker<'_> {
-    pub(super) fn planner(
+    pub(super) fn controller(
         &self,
-        kind: PlannerKind,
+        kind: ControllerKind,
         raw: Option<&CbfFile>,
         agents: &[AgentSpec],
         side_m: f64,
-    ) -> Result<PlannerSpec, ScenarioError> {
-        let mut spec = PlannerSpec {
+    ) -> Result<ControllerSpec, ScenarioError> {
+        let mut spec = ControllerSpec {
             kind,
-            ..PlannerSpec::default()
+            ..ControllerSpec::default()
         };
         if let Some(c) = raw {
             let set = |name: &str, v: Option<f64>, slot: &mut f64| -> Result<(), ScenarioError> {

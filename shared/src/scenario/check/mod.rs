@@ -18,7 +18,7 @@ mod obstacles;
 /// Largest field side accepted, in metres: beyond this the numbers stop being a field.
 pub const MAX_FIELD_SIDE_M: f64 = 10_000.0;
 /// Bound on the number of centre steps: `step_m` may not cut the field's diagonal into
-/// more than a quarter of this many steps. It also bounds how finely the centre path
+/// more than a quarter of this many steps. It also bounds how finely the centre's
 /// planner samples the path: every `turning_radius_m / 16` and `centre_clearance_m / 2`
 /// at most, so neither may cut the diagonal into more than this many samples.
 pub const MAX_STEPS: usize = 200_000;
@@ -199,7 +199,7 @@ impl Checker<'_> {
         self.formation_fits_at_start(&agents, &all_static, &field, &path)?;
         let moving =
             self.moving_obstacles(&raw.obstacles, &field, &path, &agents, all_static.len())?;
-        let planner = self.planner(raw.planner, raw.cbf.as_ref(), &agents, side_m)?;
+        let controller = self.controller(raw.controller, raw.cbf.as_ref(), &agents, side_m)?;
         let turns = raw.turns.mode;
         if turns == TurnMode::Parallel
             && let Some(i) = agents.iter().position(|a| a.max_step_m.is_none())
@@ -221,7 +221,7 @@ impl Checker<'_> {
             unknown,
             agents,
             path,
-            planner,
+            controller,
             turns,
         })
     }

@@ -102,7 +102,7 @@ impl StateMsg {
 }
 
 /// Largest compute time an agent may report for one move: an hour, in nanoseconds.
-/// Anything above is a corrupt value, not a slow planner.
+/// Anything above is a corrupt value, not a slow controller.
 pub const MAX_COMPUTE_NS: u64 = 3_600 * 1_000_000_000;
 
 /// Why a state sample was refused before anything used it.

@@ -9,7 +9,7 @@ use crate::vocabulary::{
 /// Which controller moves the agents.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum PlannerKind {
+pub enum ControllerKind {
     /// The paper's method: exact best point, then a shortest collision-free path to it.
     #[default]
     BestPoint,
@@ -24,9 +24,10 @@ pub enum PlannerKind {
     Orca,
 }
 
-impl PlannerKind {
-    /// Every planner, in code order.
-    pub const ALL: [PlannerKind; 4] = [Self::BestPoint, Self::Cbf, Self::ZcbfLogsumexp, Self::Orca];
+impl ControllerKind {
+    /// Every controller, in code order.
+    pub const ALL: [ControllerKind; 4] =
+        [Self::BestPoint, Self::Cbf, Self::ZcbfLogsumexp, Self::Orca];
 
     /// The name used in files and on the command line.
     pub fn name(&self) -> &'static str {
@@ -38,13 +39,13 @@ impl PlannerKind {
         }
     }
 
-    /// The planner called `name`, if any.
+    /// The controller called `name`, if any.
     ///
     /// ```
-    /// use shared::vocabulary::PlannerKind;
-    /// assert_eq!(PlannerKind::from_name("cbf"), Some(PlannerKind::Cbf));
-    /// assert_eq!(PlannerKind::from_name(PlannerKind::ZcbfLogsumexp.name()), Some(PlannerKind::ZcbfLogsumexp));
-    /// assert_eq!(PlannerKind::from_name("best_point"), None);
+    /// use shared::vocabulary::ControllerKind;
+    /// assert_eq!(ControllerKind::from_name("cbf"), Some(ControllerKind::Cbf));
+    /// assert_eq!(ControllerKind::from_name(ControllerKind::ZcbfLogsumexp.name()), Some(ControllerKind::ZcbfLogsumexp));
+    /// assert_eq!(ControllerKind::from_name("best_point"), None);
     /// ```
     pub fn from_name(name: &str) -> Option<Self> {
         <Self as Named>::from_name(name)
@@ -55,45 +56,45 @@ impl PlannerKind {
         *self as u32
     }
 
-    /// The planner with wire code `code`, if any.
+    /// The controller with wire code `code`, if any.
     pub fn from_code(code: u32) -> Option<Self> {
         Self::ALL.get(code as usize).copied()
     }
 }
 
-impl Named for PlannerKind {
+impl Named for ControllerKind {
     const ALL: &'static [Self] = &Self::ALL;
-    const WHAT: &'static str = "planner";
+    const WHAT: &'static str = "controller";
 
     fn name(&self) -> &'static str {
-        PlannerKind::name(self)
+        ControllerKind::name(self)
     }
 }
 
 /// The controller and its settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlannerSpec {
+pub struct ControllerSpec {
     /// Which controller.
-    pub kind: PlannerKind,
-    /// Settings of the barrier-function planners (unused by the best-point planner).
+    pub kind: ControllerKind,
+    /// Settings of the barrier-function controllers (unused by the best-point controller).
     pub cbf: CbfSettings,
     /// Sharpness of the LogSumExp smooth max, in 1/m (`zcbf-logsumexp` only).
     pub lse_sharpness_per_m: f64,
 }
 
-impl Default for PlannerSpec {
+impl Default for ControllerSpec {
     fn default() -> Self {
         Self {
-            kind: PlannerKind::BestPoint,
+            kind: ControllerKind::BestPoint,
             cbf: CbfSettings::default(),
             lse_sharpness_per_m: DEFAULT_LSE_SHARPNESS_PER_M,
         }
     }
 }
 
-impl PlannerSpec {
+impl ControllerSpec {
     /// Check the barrier settings for every agent (unused settings are still checked, so
-    /// switching planners on the command line cannot meet an invalid file).
+    /// switching controllers on the command line cannot meet an invalid file).
     pub fn check(&self, agents: &[AgentSpec]) -> Result<(), CbfSettingsError> {
         for a in agents {
             self.cbf.validate_for_agent(a.radius_m)?;

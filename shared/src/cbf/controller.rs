@@ -1,4 +1,4 @@
-//! The safe control-barrier-function planner.
+//! The safe control-barrier-function controller.
 
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
@@ -6,11 +6,11 @@ use crate::vocabulary::{AgentSpec, Body, CBF_MARGIN_M, CbfSettings, CbfSettingsE
 
 use super::*;
 
-/// The CBF-QP planner of one agent: one barrier constraint per sensed neighbour and per
+/// The CBF-QP controller of one agent: one barrier constraint per sensed neighbour and per
 /// field edge, an exact QP, one straight step of `dt` (see the module documentation for
-/// the safety argument). Same turn interface as [`crate::turn::BestPointPlanner`].
+/// the safety argument). Same turn interface as [`crate::turn::BestPointController`].
 #[derive(Clone, Debug)]
-pub struct CbfPlanner {
+pub struct CbfController {
     pub(super) field: Field,
     pub(super) slot: Slot,
     pub(super) radius_m: f64,
@@ -19,8 +19,8 @@ pub struct CbfPlanner {
     pub(super) settings: CbfSettings,
 }
 
-impl CbfPlanner {
-    /// The planner of agent `spec` in `field` among `obstacles` (true radii), after
+impl CbfController {
+    /// The controller of agent `spec` in `field` among `obstacles` (true radii), after
     /// checking `settings` for this agent ([`CbfSettings::validate_for_agent`]).
     pub fn new(
         field: Field,

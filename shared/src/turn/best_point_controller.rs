@@ -1,4 +1,4 @@
-//! The paper's planner for one agent: the exact best point, then the shortest path to
+//! The paper's controller for one agent: the exact best point, then the shortest path to
 //! it.
 
 use crate::best_point::{self, BestPointError};
@@ -9,18 +9,18 @@ use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
 use super::PLANNING_MARGIN_M;
 #[cfg(doc)]
-use super::TurnPlanner;
+use super::TurnController;
 
-/// The paper's planner for one agent (exact best point, then the shortest path to it):
+/// The paper's controller for one agent (exact best point, then the shortest path to it):
 /// everything the agent needs to take its turns; built once, reused every step.
 ///
 /// The agent is planned as a point: every other body is inflated by the agent's radius
 /// plus [`PLANNING_MARGIN_M`], and the field is shrunk by the same amount on every side.
-/// The planners take a field anchored at the origin, so planning happens in a frame
+/// The controllers take a field anchored at the origin, so planning happens in a frame
 /// shifted by that inset; results are mapped back (exactly for the slot and the agent's
 /// own position).
 #[derive(Clone, Debug)]
-pub struct BestPointPlanner {
+pub struct BestPointController {
     /// The field the agent's centre may use, in the planning frame.
     field: Field,
     /// Planning frame origin in world coordinates (the inset on both axes).
@@ -36,8 +36,8 @@ pub struct BestPointPlanner {
     spec: AgentSpec,
 }
 
-impl BestPointPlanner {
-    /// The planner of agent `spec` in `field` among `obstacles` (true radii).
+impl BestPointController {
+    /// The controller of agent `spec` in `field` among `obstacles` (true radii).
     pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
         let grow_m = spec.radius_m + PLANNING_MARGIN_M;
         let offset = Vector::new(grow_m, grow_m);
@@ -94,8 +94,8 @@ impl BestPointPlanner {
     /// Plan this agent's move while every `other` body stands still: the reachable free
     /// point nearest to the slot and the shortest path there. With limited sensing, only
     /// the obstacles it senses are planned around (`others` are taken as given: see
-    /// [`TurnPlanner::plan_move`], which picks the sensed ones); the top speed is
-    /// [`TurnPlanner`]'s business too.
+    /// [`TurnController::plan_move`], which picks the sensed ones); the top speed is
+    /// [`TurnController`]'s business too.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         self.plan_move_within(centre, me, others, self.spec.max_step_m)
     }
