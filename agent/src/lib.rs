@@ -8,12 +8,17 @@
 //! (`--misbehave MODE`, [`misbehave`]), which a shipping agent is built without.
 
 pub mod ipc;
+pub mod link;
 #[cfg(feature = "misbehave")]
 pub mod misbehave;
 #[cfg(feature = "zenoh")]
 pub mod net_transport;
 #[cfg(feature = "zenoh")]
 pub mod relay;
+pub mod sandbox;
+pub mod sandbox_relay;
+pub mod socket_link;
+pub mod socket_transport;
 pub mod transport;
 
 use std::time::{Duration, Instant};
@@ -24,6 +29,7 @@ use shared::geometry::Point;
 use shared::turn::TurnController;
 use shared::vocabulary::Body;
 
+use wire::cgroup::Limits;
 use wire::misbehave::Misbehave;
 
 pub use transport::{Command, Reply, Transport, TurnInput};
@@ -80,9 +86,33 @@ pub struct Args {
     /// attack on purpose (the coordinator must survive it): nan, teleport,
     /// through-obstacle, silent, garbage, overspeed, raw-length, raw-length-ready, replay,
     /// early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork, exit-before-ready,
-    /// deaf-to-prepare.
+    /// deaf-to-prepare; against a sandbox only: scribble, stop-others, rewrite-mission,
+    /// fork-bomb.
     #[arg(long)]
     pub misbehave: Option<Misbehave>,
+    /// Sandbox relay mode (started by the coordinator as root): start this agent as user
+    /// and group UID, in a sandbox, and stand for it on the run's channels.
+    #[arg(long, value_name = "UID", requires = "prefix", conflicts_with_all = ["connect", "relay"])]
+    pub sandbox_uid: Option<u32>,
+    /// With `--sandbox-uid`: put the agent in a control group of its own below the run's
+    /// (`formation-PREFIX`, which the coordinator made), with the limits below; without
+    /// it, only the per-user process limit holds.
+    #[arg(long, requires = "sandbox_uid")]
+    pub cgroup: bool,
+    /// With `--sandbox-uid`: processes and threads the agent may have at most.
+    #[arg(long, default_value_t = Limits::default().pids_max)]
+    pub pids_max: u32,
+    /// With `--sandbox-uid --cgroup`: memory the agent may use at most, in MiB.
+    #[arg(long, default_value_t = Limits::default().memory_mib)]
+    pub memory_mib: u64,
+    /// With `--sandbox-uid --cgroup`: CPU the agent may use at most, in percent of one
+    /// core.
+    #[arg(long, default_value_t = Limits::default().cpu_percent)]
+    pub cpu_percent: u32,
+    /// A sandboxed agent (started by its sandbox relay): take turns over the socket
+    /// inherited as this descriptor.
+    #[arg(long, value_name = "FD", hide = true, conflicts_with_all = ["connect", "relay", "sandbox_uid"])]
+    pub socket_fd: Option<i32>,
 }
 
 /// Install the stderr logger (`RUST_LOG`, default `warn`) and route iceoryx2's own log
@@ -167,10 +197,16 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let Some(prefix) = args.prefix.as_deref() else {
         bail!("either --prefix (started by the coordinator) or --connect ENDPOINT");
     };
+    if let Some(fd) = args.socket_fd {
+        return serve_sandboxed_agent(args, prefix, fd, mode);
+    }
     // Join only a run that exists (a node opened for no run would leave files behind),
     // and only through a folder no other user can reach (ours, 0700, not a link).
     if let Some(root) = wire::run_root(prefix) {
         wire::check_run_root(&root).with_context(|| format!("opening run {prefix}"))?;
+    }
+    if let Some(uid) = args.sandbox_uid {
+        return run_sandbox_relay(args, prefix, uid, liveness);
     }
     if let Some(connect) = &args.relay {
         net::check_security(connect, &security, args.allow_plain_tcp)?;
@@ -191,6 +227,67 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(mode) = mode {
         return misbehave::serve_ipc(transport, args.agent, mode);
     }
+    serve_as(transport, args.agent, mode)
+}
+
+/// Serve as the sandbox relay of agent `args.agent` ([`sandbox_relay::serve_sandboxed`]):
+/// the agent is started here as user `uid`, with this agent's test mode.
+fn run_sandbox_relay(
+    args: &Args,
+    prefix: &str,
+    uid: u32,
+    liveness: Duration,
+) -> anyhow::Result<()> {
+    let limits = Limits {
+        pids_max: args.pids_max,
+        memory_mib: args.memory_mib,
+        cpu_percent: args.cpu_percent,
+    };
+    let cgroup = if args.cgroup {
+        let run = wire::cgroup::CgroupDirs::for_run(prefix).context("the run's control group")?;
+        Some(run.child(&format!("agent-{}-{}", args.agent, args.generation)))
+    } else {
+        None
+    };
+    let agent_args = match args.misbehave {
+        Some(mode) => vec!["--misbehave".to_string(), mode.to_string()],
+        None => Vec::new(),
+    };
+    sandbox_relay::serve_sandboxed(&sandbox_relay::SandboxRelaySettings {
+        prefix,
+        agent: args.agent,
+        generation: args.generation,
+        liveness,
+        sandbox: sandbox::Sandbox {
+            uid,
+            cgroup,
+            limits,
+        },
+        agent_args,
+    })
+}
+
+/// Serve as a sandboxed agent over the socket `fd` its relay handed it. Its test mode's
+/// attacks on the run's shared memory are tried as they would be by any agent (its user
+/// can open none of it); its moves misbehave as asked.
+fn serve_sandboxed_agent(
+    args: &Args,
+    prefix: &str,
+    fd: i32,
+    mode: Option<Misbehave>,
+) -> anyhow::Result<()> {
+    #[cfg(feature = "misbehave")]
+    let _held = match mode {
+        Some(mode) => misbehave::before_opening(prefix, args.agent, mode)?,
+        None => Vec::new(),
+    };
+    #[cfg(not(feature = "misbehave"))]
+    let _ = prefix;
+    if mode == Some(Misbehave::ExitBeforeReady) {
+        std::process::exit(3);
+    }
+    // SAFETY: the relay handed this descriptor over; nothing else in this process owns it.
+    let transport = unsafe { socket_transport::SocketTransport::from_fd(fd, args.agent) };
     serve_as(transport, args.agent, mode)
 }
 

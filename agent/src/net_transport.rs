@@ -11,13 +11,11 @@ use net::zenoh::handlers::FifoChannelHandler;
 use net::zenoh::liveliness::LivelinessToken;
 use net::zenoh::pubsub::{Publisher, Subscriber};
 use net::zenoh::sample::Sample;
-use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
-use shared::geometry::{Point, Pose};
-use shared::scenario::Scenario;
-use shared::vocabulary::MAX_AGENTS;
+use net::{Down, Endpoint, Security, Up};
 
+use crate::link::{mission_view, net_move, turn_input};
 use crate::relay::Token;
-use crate::transport::{Command, MissionView, Reply, Transport, TurnInput};
+use crate::transport::{Command, MissionView, Reply, Transport};
 
 /// The agent's Zenoh session and ports.
 pub struct NetTransport {
@@ -118,22 +116,7 @@ impl NetTransport {
                 Ok(false)
             }
             Down::Mission { nonce, toml } => {
-                let scenario = Scenario::parse(toml, "the mission from the coordinator")
-                    .context("the mission")?;
-                if self.agent >= scenario.agents.len() {
-                    bail!(
-                        "agent {} is not in the mission's {} agents",
-                        self.agent,
-                        scenario.agents.len()
-                    );
-                }
-                self.mission = Some(MissionView {
-                    field: scenario.field,
-                    obstacles: scenario.static_obstacles(),
-                    moving: scenario.moving,
-                    agents: scenario.agents,
-                    controller: scenario.controller,
-                });
+                self.mission = Some(mission_view(toml, self.agent)?);
                 self.send(&Up::Ready {
                     agent,
                     nonce: *nonce,
@@ -143,31 +126,6 @@ impl NetTransport {
             _ => Ok(false),
         }
     }
-}
-
-/// A turn from the network, checked like any input from another machine.
-fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
-    if t.bodies.len() > MAX_AGENTS {
-        bail!("a turn with {} bodies, beyond the capacity", t.bodies.len());
-    }
-    let finite = t.centre.iter().all(|v| v.is_finite())
-        && t.bodies
-            .iter()
-            .all(|(_, p)| p.iter().all(|v| v.is_finite()));
-    if !finite {
-        bail!("a turn with a coordinate that is not a finite number");
-    }
-    Ok(TurnInput {
-        seq: t.seq,
-        step: t.step,
-        token: t.token,
-        centre: Pose::new(t.centre[0], t.centre[1], t.centre[2]),
-        bodies: t
-            .bodies
-            .into_iter()
-            .map(|(j, p)| (j as usize, Point::new(p[0], p[1])))
-            .collect(),
-    })
 }
 
 impl Transport for NetTransport {
@@ -213,23 +171,6 @@ impl Transport for NetTransport {
     }
 
     fn publish_move(&mut self, reply: Reply<'_>) -> anyhow::Result<()> {
-        let Reply {
-            turn,
-            mv,
-            status,
-            compute,
-        } = reply;
-        let xy = |p: &Point| [p.x, p.y];
-        self.send(&Up::Move(NetMove {
-            agent: u32::try_from(self.agent).context("the agent's index")?,
-            seq: turn.seq,
-            step: turn.step,
-            token: turn.token,
-            status,
-            compute_ns: u64::try_from(compute.as_nanos()).unwrap_or(u64::MAX),
-            slot: xy(&mv.slot),
-            best: xy(&mv.best),
-            waypoints: mv.waypoints.iter().map(xy).collect(),
-        }))
+        self.send(&Up::Move(net_move(self.agent, reply)?))
     }
 }

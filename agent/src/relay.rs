@@ -17,12 +17,11 @@ use net::zenoh::Wait;
 use net::zenoh::handlers::FifoChannelHandler;
 use net::zenoh::pubsub::{Publisher, Subscriber};
 use net::zenoh::sample::{Sample, SampleKind};
-use net::{Down, Endpoint, NetMove, NetTurn, Security, Up};
-use shared::geometry::Point;
-use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
+use net::{Down, Endpoint, Security, Up};
 
 use crate::ipc::IpcTransport;
-use crate::transport::{Command, Reply, Transport, TurnInput};
+use crate::link::{move_of, net_turn};
+use crate::transport::{Command, Reply, Transport};
 
 /// How often the relay probes for its agent until it answers.
 const PROBE_PERIOD: Duration = Duration::from_millis(50);
@@ -141,44 +140,6 @@ impl Link {
             }
             None => Ok(None),
         }
-    }
-}
-
-/// A move from the network as the iceoryx2 channel takes it; `None` (logged) if it
-/// cannot be written there. Its values are checked by the coordinator like any move.
-fn move_of(agent: usize, m: NetMove) -> Option<(Move, u32, Duration)> {
-    if m.waypoints.len() > MAX_WAYPOINTS {
-        tracing::warn!(
-            "relay of agent {agent}: a move of {} waypoints, beyond the capacity: dropped",
-            m.waypoints.len()
-        );
-        return None;
-    }
-    let p = |xy: [f64; 2]| Point::new(xy[0], xy[1]);
-    Some((
-        Move {
-            slot: p(m.slot),
-            best: p(m.best),
-            // Only the code below is sent; this field is not read.
-            status: MoveStatus::Stayed,
-            waypoints: m.waypoints.into_iter().map(p).collect(),
-        },
-        m.status,
-        Duration::from_nanos(m.compute_ns),
-    ))
-}
-
-fn net_turn(t: &TurnInput) -> NetTurn {
-    NetTurn {
-        seq: t.seq,
-        step: t.step,
-        token: t.token,
-        centre: [t.centre.x_m, t.centre.y_m, t.centre.heading_rad],
-        bodies: t
-            .bodies
-            .iter()
-            .map(|&(j, p)| (u32::try_from(j).unwrap_or(u32::MAX), [p.x, p.y]))
-            .collect(),
     }
 }
 

@@ -4,9 +4,10 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
 use shared::vocabulary::{ControllerKind, TurnMode};
+use wire::cgroup::Limits;
 use wire::misbehave::Misbehave;
 
-use crate::turns::WaitMode;
+use crate::turns::{SandboxOptions, WaitMode};
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
 /// talking over iceoryx2 shared memory.
@@ -77,7 +78,8 @@ pub struct RunArgs {
     /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
     /// exit-before-ready (attacks on the protocol); deaf-to-prepare (an agent that ignores
-    /// `--wait spin`'s notice); repeatable, e.g. `--misbehave 3=nan`.
+    /// `--wait spin`'s notice); scribble, stop-others, rewrite-mission, fork-bomb (attacks
+    /// a `--sandbox` must hold against); repeatable, e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
     pub misbehave: Vec<(usize, Misbehave)>,
     /// Do not draw the plots and the animation (`coordinator render DIR` draws them
@@ -101,6 +103,68 @@ pub struct RunArgs {
     /// How agents reach the coordinator: `--transport` and the Zenoh options.
     #[command(flatten)]
     pub network: NetworkArgs,
+    /// How the agents are sandboxed: `--sandbox` and its limits.
+    #[command(flatten)]
+    pub sandbox: SandboxArgs,
+}
+
+/// How the agents are sandboxed.
+#[derive(Clone, Debug, Args)]
+pub struct SandboxArgs {
+    /// Run each agent in a sandbox (needs root): a user of its own (`--agent-uids`), a
+    /// control group of its own with the limits below, no new privileges, no descriptor
+    /// but its link, behind a relay of the coordinator's user that alone opens the run's
+    /// shared memory. Not with `--transport zenoh`.
+    #[arg(long)]
+    pub sandbox: bool,
+    /// With `--sandbox`: the first agent's user id; agent I runs as user and group
+    /// FIRST + I.
+    #[arg(long, value_name = "FIRST", default_value_t = SandboxOptions::DEFAULT_FIRST_UID)]
+    pub agent_uids: u32,
+    /// With `--sandbox`: processes and threads an agent may have at most.
+    #[arg(long, value_name = "N", default_value_t = Limits::default().pids_max, value_parser = clap::value_parser!(u32).range(4..))]
+    pub agent_pids_max: u32,
+    /// With `--sandbox`: memory an agent may use at most, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = Limits::default().memory_mib, value_parser = clap::value_parser!(u64).range(16..))]
+    pub agent_memory_mib: u64,
+    /// With `--sandbox`: CPU an agent may use at most, in percent of one core.
+    #[arg(long, value_name = "PERCENT", default_value_t = Limits::default().cpu_percent, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub agent_cpu_percent: u32,
+}
+
+impl SandboxArgs {
+    /// The sandbox asked for, checked against a run of `agents` agents.
+    pub fn options(&self, agents: usize, zenoh: bool) -> Result<Option<SandboxOptions>, String> {
+        if !self.sandbox {
+            return Ok(None);
+        }
+        if zenoh {
+            return Err("--sandbox: not with --transport zenoh (a remote agent is sandboxed by its own host)".into());
+        }
+        // SAFETY: geteuid(2) reads this process's effective user id; it cannot fail.
+        if unsafe { libc::geteuid() } != 0 {
+            return Err(
+                "--sandbox needs root (to give each agent a user and a control group of its own)"
+                    .into(),
+            );
+        }
+        let last = u64::from(self.agent_uids) + agents as u64;
+        if self.agent_uids == 0 || last > u64::from(u32::MAX) {
+            return Err(format!(
+                "--agent-uids {}: the {agents} agents' user ids must lie in 1 to {}",
+                self.agent_uids,
+                u32::MAX
+            ));
+        }
+        Ok(Some(SandboxOptions {
+            first_uid: self.agent_uids,
+            limits: Limits {
+                pids_max: self.agent_pids_max,
+                memory_mib: self.agent_memory_mib,
+                cpu_percent: self.agent_cpu_percent,
+            },
+        }))
+    }
 }
 
 /// How agents reach the coordinator.

@@ -49,6 +49,10 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
             n - 1
         )));
     }
+    let sandbox = args
+        .sandbox
+        .options(scenario.agents.len(), network.is_some())
+        .map_err(CliError::Usage)?;
     // Before any agent is spawned or anything created: a folder holding something is
     // refused unless --force.
     let out = output::OutDir::check(
@@ -66,6 +70,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         progress: !args.quiet,
         wait: args.wait,
         network,
+        sandbox,
         ..RunOptions::default()
     };
     // A failed run still writes what it recorded, marked not completed.

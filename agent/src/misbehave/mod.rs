@@ -11,10 +11,12 @@
 //!   raw bytes in the samples that go out, a handshake in another agent's name, the
 //!   prepare notice that comes in dropped;
 //! - [`before_opening`]: what acts outside the channel, before it is opened (processes
-//!   that try to outlive the run, attacks on other agents' channels).
+//!   that try to outlive the run, attacks on other agents' channels, the attacks a
+//!   sandbox must hold against: files scribbled over, processes stopped, fork bombs).
 
 mod moves;
 mod rogue;
+mod sandbox_attacks;
 mod strays;
 mod tamper;
 
@@ -40,6 +42,7 @@ pub fn before_opening(
     if mode == Misbehave::Fork {
         start_strays(prefix)?;
     }
+    sandbox_attacks::before_opening(prefix, agent, mode);
     Ok(rogue::before_opening(prefix, agent, mode))
 }
 

@@ -177,7 +177,11 @@ pub fn corrupt(
         | Misbehave::Hoard
         | Misbehave::Fork
         | Misbehave::ExitBeforeReady
-        | Misbehave::DeafToPrepare => Some((honest, status)),
+        | Misbehave::DeafToPrepare
+        | Misbehave::Scribble
+        | Misbehave::StopOthers
+        | Misbehave::RewriteMission
+        | Misbehave::ForkBomb => Some((honest, status)),
         Misbehave::Garbage => {
             // Deterministic nonsense, different at every step.
             let s = (step as f64 * 12.9898).sin() * 43_758.545;

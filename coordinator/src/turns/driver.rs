@@ -54,6 +54,8 @@ pub(super) struct Driver<'a, 's> {
     pub(super) hand_over: HandOver,
     /// Whether any agent has a sensing radius (then each world lists what it senses).
     pub(super) senses: bool,
+    /// Whether the run has a control group for its sandboxed agents.
+    pub(super) run_cgroup: bool,
     /// Called after every step.
     pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
 }
@@ -70,6 +72,9 @@ impl Driver<'_, '_> {
         }
         if let Some(network) = &self.options.network {
             extra.extend(network.relay_args(agent));
+        }
+        if let Some(sandbox) = &self.options.sandbox {
+            extra.extend(sandbox.relay_args(agent, self.run_cgroup));
         }
         self.procs.spawn(agent, &extra)?;
         Ok(())

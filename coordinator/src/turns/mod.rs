@@ -37,7 +37,7 @@ mod startup;
 mod turn;
 
 pub use driver::{BetweenSteps, PROGRESS_TARGET};
-pub use options::{RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, WaitMode};
+pub use options::{RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode};
 pub(crate) use outcome::TurnSample;
 pub use outcome::{RunFailure, RunOutcome};
 pub use run::{run_scenario, run_scenario_with};

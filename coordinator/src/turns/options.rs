@@ -80,6 +80,58 @@ pub struct RunOptions {
     /// Agents over Zenoh: each agent's process is a relay to the agent itself, which runs
     /// here or on another machine ([`NetworkOptions`]); `None`: every agent on iceoryx2.
     pub network: Option<NetworkOptions>,
+    /// Each agent in a sandbox behind a relay ([`SandboxOptions`]); `None`: every agent
+    /// as this process's user, on the run's channels itself (it is trusted).
+    pub sandbox: Option<SandboxOptions>,
+}
+
+/// How agents are sandboxed: agent `i` runs as user and group `first_uid + i`, in a
+/// control group of its own with `limits` (when the machine's cgroups can be used),
+/// behind a relay of this process's user that alone opens the run's shared memory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SandboxOptions {
+    /// The first agent's user id.
+    pub first_uid: u32,
+    /// The limits of each agent's control group.
+    pub limits: wire::cgroup::Limits,
+}
+
+impl SandboxOptions {
+    /// The default first user id: high, so that it names no account of a usual system.
+    pub const DEFAULT_FIRST_UID: u32 = 200_000;
+
+    /// The default sandbox.
+    pub fn new() -> Self {
+        Self {
+            first_uid: Self::DEFAULT_FIRST_UID,
+            limits: wire::cgroup::Limits::default(),
+        }
+    }
+
+    /// The relay's arguments for agent `agent`, with `cgroup` if the run has one.
+    pub fn relay_args(&self, agent: usize, cgroup: bool) -> Vec<String> {
+        let uid = self.first_uid.saturating_add(agent as u32);
+        let mut args = vec![
+            "--sandbox-uid".to_string(),
+            uid.to_string(),
+            "--pids-max".to_string(),
+            self.limits.pids_max.to_string(),
+            "--memory-mib".to_string(),
+            self.limits.memory_mib.to_string(),
+            "--cpu-percent".to_string(),
+            self.limits.cpu_percent.to_string(),
+        ];
+        if cgroup {
+            args.push("--cgroup".to_string());
+        }
+        args
+    }
+}
+
+impl Default for SandboxOptions {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// Start-up time allowed per agent on top of [`RunOptions::startup_timeout`]: the agents
@@ -110,6 +162,7 @@ impl Default for RunOptions {
             wait: WaitMode::default(),
             idle_probe: None,
             network: None,
+            sandbox: None,
         }
     }
 }

@@ -94,6 +94,10 @@ pub fn run_scenario_with(
             return Err(fail(e, &recorder, progress));
         }
     };
+    let run_cgroup = options
+        .sandbox
+        .as_ref()
+        .and_then(|_| sandbox_cgroup(&prefix));
     let mut procs = AgentProcesses::new(bin, &prefix, n);
 
     let driven = catch_unwind(AssertUnwindSafe(|| {
@@ -107,6 +111,7 @@ pub fn run_scenario_with(
             missed: vec![0; n],
             hand_over: HandOver::new(options.wait.spins(), n),
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
+            run_cgroup: run_cgroup.is_some(),
             between_steps,
         }
         .drive(centre_path, started)
@@ -118,6 +123,15 @@ pub fn run_scenario_with(
     }
     procs.stop_all(Duration::from_secs(2));
     drop(procs);
+    if let Some(group) = &run_cgroup {
+        // Whatever a sandboxed agent left, whatever pid or session it took.
+        if let Err(e) = group
+            .kill_all(Duration::from_secs(2))
+            .and_then(|()| group.remove(Duration::from_secs(2)))
+        {
+            tracing::warn!("the run's control group: {e}");
+        }
+    }
     if let Some(router) = router {
         router.close();
     }
@@ -146,5 +160,24 @@ pub fn run_scenario_with(
             error,
             partial: Box::new(result),
         }),
+    }
+}
+
+/// The run's control group for its sandboxed agents, made; `None` (with a warning) where
+/// the machine's cgroups cannot be used: the agents are then bounded by their users'
+/// process limits only.
+fn sandbox_cgroup(prefix: &str) -> Option<wire::cgroup::CgroupDirs> {
+    let made = wire::cgroup::CgroupDirs::for_run(prefix).and_then(|group| {
+        group.create()?;
+        Ok(group)
+    });
+    match made {
+        Ok(group) => Some(group),
+        Err(e) => {
+            tracing::warn!(
+                "no control groups for the sandboxed agents ({e}): only their process limits hold"
+            );
+            None
+        }
     }
 }

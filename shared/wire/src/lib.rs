@@ -29,10 +29,12 @@
 //! - `loan`: the one in-place initialisation of a loaned sample ([`loan_default`]);
 //! - `clock`: the machine's monotonic clock ([`monotonic_ns`]);
 //! - `bench`: the latency floor's services and sample ([`BenchPing`]);
+//! - [`cgroup`]: the run's control groups, one per sandboxed agent;
 //! - [`misbehave`]: the agents' test modes.
 #![warn(missing_docs)]
 
 mod bench;
+pub mod cgroup;
 mod clock;
 mod config;
 mod loan;

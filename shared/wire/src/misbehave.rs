@@ -61,6 +61,20 @@ pub enum Misbehave {
     /// Ignore the notice that its turn comes next (`--wait spin`) and sleep until its turn
     /// is rung, as an agent that does not know the notice would; its moves are honest.
     DeafToPrepare,
+    /// Before it starts, write random bytes over every file of the run's folder it can
+    /// open (the iceoryx2 segments, the mission), then serve honestly. Only against a
+    /// sandboxed run (`--sandbox`): a trusted agent can crash the coordinator so.
+    Scribble,
+    /// Before it starts, send SIGSTOP to every other process of the run, then serve
+    /// honestly.
+    StopOthers,
+    /// Before it starts, rewrite the mission file without its obstacles, then serve
+    /// honestly.
+    RewriteMission,
+    /// Before it starts, fork children that sleep until no more can be forked (at most
+    /// 4096), then serve honestly. Only against a sandboxed run: a trusted agent is
+    /// bounded by no limit of its own.
+    ForkBomb,
 }
 
 /// A mode name that is none of [`Misbehave::ALL`]'s.
@@ -74,7 +88,7 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 17] = [
+    pub const ALL: [Self; 21] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
@@ -92,6 +106,10 @@ impl Misbehave {
         Self::Fork,
         Self::ExitBeforeReady,
         Self::DeafToPrepare,
+        Self::Scribble,
+        Self::StopOthers,
+        Self::RewriteMission,
+        Self::ForkBomb,
     ];
 
     /// The mode's name on the command line, without the victim (`impersonate` and
@@ -115,6 +133,10 @@ impl Misbehave {
             Self::Fork => "fork",
             Self::ExitBeforeReady => "exit-before-ready",
             Self::DeafToPrepare => "deaf-to-prepare",
+            Self::Scribble => "scribble",
+            Self::StopOthers => "stop-others",
+            Self::RewriteMission => "rewrite-mission",
+            Self::ForkBomb => "fork-bomb",
         }
     }
 

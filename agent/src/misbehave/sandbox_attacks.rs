@@ -1,0 +1,142 @@
+//! The attacks a sandbox (`coordinator run --sandbox`) must hold against, tried before the
+//! agent starts serving honestly: [`Misbehave::Scribble`], [`Misbehave::StopOthers`],
+//! [`Misbehave::RewriteMission`], [`Misbehave::ForkBomb`]. Each says on stderr, at warn
+//! level, what it reached (`scribble: wrote into 0 of 0 files`), so a test can tell an
+//! attack that was stopped from one that was never tried.
+
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::PathBuf;
+
+use wire::misbehave::Misbehave;
+
+/// At most this many children for [`Misbehave::ForkBomb`].
+const MAX_FORKS: usize = 4096;
+
+/// Carry out `mode` if it is one of this module's, as agent `agent` of run `prefix`.
+pub fn before_opening(prefix: &str, agent: usize, mode: Misbehave) {
+    match mode {
+        Misbehave::Scribble => scribble(prefix, agent),
+        Misbehave::StopOthers => stop_others(prefix, agent),
+        Misbehave::RewriteMission => rewrite_mission(prefix, agent),
+        Misbehave::ForkBomb => fork_bomb(agent),
+        _ => {}
+    }
+}
+
+/// Every file below the run's folder, as far as this process can list it.
+fn run_files(prefix: &str) -> (Vec<PathBuf>, usize) {
+    let mut files = Vec::new();
+    let mut unreadable = 0;
+    let mut pending: Vec<PathBuf> = wire::run_root(prefix).into_iter().collect();
+    while let Some(dir) = pending.pop() {
+        match std::fs::read_dir(&dir) {
+            Ok(entries) => {
+                for path in entries.flatten().map(|e| e.path()) {
+                    if path.is_dir() {
+                        pending.push(path);
+                    } else {
+                        files.push(path);
+                    }
+                }
+            }
+            Err(_) => unreadable += 1,
+        }
+    }
+    (files, unreadable)
+}
+
+fn scribble(prefix: &str, agent: usize) {
+    let (files, unreadable) = run_files(prefix);
+    let mut noise = vec![0u8; 64 << 10];
+    if let Ok(mut random) = std::fs::File::open("/dev/urandom") {
+        let _ = random.read_exact(&mut noise);
+    }
+    let mut written = 0;
+    for file in &files {
+        let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(file) else {
+            continue;
+        };
+        let len = f.metadata().map(|m| m.len()).unwrap_or(0) as usize;
+        let mut at = 0;
+        while at < len {
+            let n = (len - at).min(noise.len());
+            if f.seek(SeekFrom::Start(at as u64)).is_err() || f.write_all(&noise[..n]).is_err() {
+                break;
+            }
+            at += n;
+        }
+        written += 1;
+    }
+    tracing::warn!(
+        "agent {agent} (scribble): wrote into {written} of {} files ({unreadable} folders unreadable)",
+        files.len()
+    );
+}
+
+fn stop_others(prefix: &str, agent: usize) {
+    let me = std::process::id();
+    let needle = format!("--prefix\0{prefix}\0");
+    let (mut tried, mut stopped) = (0, 0);
+    for pid in std::fs::read_dir("/proc")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|&pid| pid != me)
+    {
+        let Ok(cmdline) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
+            continue;
+        };
+        if !cmdline
+            .windows(needle.len())
+            .any(|w| w == needle.as_bytes())
+        {
+            continue;
+        }
+        tried += 1;
+        // SAFETY: kill(2) with a pid read from /proc and a plain signal.
+        if unsafe { libc::kill(pid as libc::pid_t, libc::SIGSTOP) } == 0 {
+            stopped += 1;
+        }
+    }
+    tracing::warn!(
+        "agent {agent} (stop-others): stopped {stopped} of {tried} processes of the run"
+    );
+}
+
+fn rewrite_mission(prefix: &str, agent: usize) {
+    let outcome = match wire::mission_path(prefix) {
+        None => "no mission path".to_string(),
+        Some(path) => match std::fs::read_to_string(&path) {
+            Err(e) => format!("cannot read it: {e}"),
+            Ok(text) => {
+                let cut: String = text
+                    .lines()
+                    .filter(|l| !l.contains("x_m") || l.contains("start") || l.contains("goal"))
+                    .map(|l| format!("{l}\n"))
+                    .collect();
+                match std::fs::write(&path, cut) {
+                    Ok(()) => "rewritten".to_string(),
+                    Err(e) => format!("cannot write it: {e}"),
+                }
+            }
+        },
+    };
+    tracing::warn!("agent {agent} (rewrite-mission): {outcome}");
+}
+
+fn fork_bomb(agent: usize) {
+    let mut forked = 0;
+    while forked < MAX_FORKS {
+        // SAFETY: fork(2); the child only calls pause(2) in a loop, then never returns.
+        match unsafe { libc::fork() } {
+            0 => loop {
+                // SAFETY: pause(2) waits for a signal; nothing else happens here.
+                unsafe { libc::pause() };
+            },
+            pid if pid > 0 => forked += 1,
+            _ => break,
+        }
+    }
+    tracing::warn!("agent {agent} (fork-bomb): forked {forked} children before fork failed");
+}

@@ -1,0 +1,237 @@
+//! Starting an agent in its sandbox: a user of its own, a control group of its own with
+//! limits, no new privileges, no descriptor but its socket, an environment with only what
+//! it needs. The relay (the coordinator's user) starts it and is its only link to the
+//! run: the agent's user can open none of the run's files.
+
+use std::ffi::CString;
+use std::os::fd::{AsRawFd, OwnedFd};
+use std::os::unix::net::UnixStream;
+use std::os::unix::process::CommandExt;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+
+use anyhow::Context;
+use wire::cgroup::{CgroupDirs, Limits, join_opened, raw_fds};
+
+/// The descriptor the sandboxed agent finds its socket on.
+pub const AGENT_SOCKET_FD: i32 = 3;
+
+/// The environment variables an agent keeps (all others are dropped).
+const KEPT_ENV: [&str; 2] = ["RUST_LOG", "RUST_BACKTRACE"];
+
+/// Where and how an agent is sandboxed.
+#[derive(Clone, Debug)]
+pub struct Sandbox {
+    /// Its user and group id.
+    pub uid: u32,
+    /// Its control group (made and limited before it starts), if cgroups are usable.
+    pub cgroup: Option<CgroupDirs>,
+    /// The limits (also the per-user process limit, which holds without cgroups).
+    pub limits: Limits,
+}
+
+/// A sandboxed agent process: killed (with everything in its group) and reaped when
+/// dropped.
+pub struct SandboxedAgent {
+    child: Child,
+    cgroup: Option<CgroupDirs>,
+}
+
+impl SandboxedAgent {
+    /// Its process id.
+    pub fn id(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Whether it has exited (reaping it).
+    pub fn exited(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(Some(_)))
+    }
+}
+
+impl Drop for SandboxedAgent {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        if let Some(group) = &self.cgroup
+            && let Err(e) = group.kill_all(std::time::Duration::from_secs(2))
+        {
+            tracing::warn!("sandboxed agent {}: {e}", self.child.id());
+        }
+        let _ = self.child.wait();
+    }
+}
+
+/// Start `exe` with `args` in `sandbox`, its end of the link as descriptor
+/// [`AGENT_SOCKET_FD`].
+pub fn spawn_sandboxed(
+    exe: &Path,
+    args: &[String],
+    socket: UnixStream,
+    sandbox: &Sandbox,
+) -> anyhow::Result<SandboxedAgent> {
+    let procs: Vec<OwnedFd> = match &sandbox.cgroup {
+        Some(group) => {
+            group.create().context("the agent's control group")?;
+            group.limit(&sandbox.limits).context("the agent's limits")?;
+            group.open_procs().context("the agent's control group")?
+        }
+        None => Vec::new(),
+    };
+    let procs_raw = raw_fds(&procs);
+    let socket_fd = socket.as_raw_fd();
+    let (uid, nproc) = (sandbox.uid, u64::from(sandbox.limits.pids_max));
+    let relay_pid = std::process::id();
+    // The agent is started from a descriptor opened here, as the relay's user: its own
+    // user need not reach the executable's folders (a build under /root, 0700).
+    let exe_file = std::fs::File::open(exe)
+        .with_context(|| format!("opening the agent executable {}", exe.display()))?;
+    let mut env: Vec<(String, std::ffi::OsString)> = KEPT_ENV
+        .iter()
+        .filter_map(|k| Some((k.to_string(), std::env::var_os(k)?)))
+        .collect();
+    if let Some(run) = std::env::var_os(wire::RUN_ENV) {
+        env.push((wire::RUN_ENV.to_string(), run));
+    }
+    let image = ExecImage::new(exe, args, &env)?;
+    // Never on the socket's place: the child puts the socket there first.
+    let _held = (exe_file.as_raw_fd() == AGENT_SOCKET_FD)
+        .then(|| exe_file.try_clone())
+        .transpose()
+        .context("the agent executable")?;
+    let exe_fd = match &_held {
+        Some(clone) => clone.as_raw_fd(),
+        None => exe_file.as_raw_fd(),
+    };
+    let mut command = Command::new(exe);
+    command.current_dir("/").stdin(Stdio::null());
+    // SAFETY: between fork and exec the closure makes only async-signal-safe system
+    // calls (write, dup2, fcntl, setrlimit, setgroups, setresgid, setresuid, prctl,
+    // close_range, fexecve) on values made before the fork; it allocates nothing.
+    unsafe {
+        command.pre_exec(move || {
+            enter_sandbox(&procs_raw, socket_fd, uid, nproc, relay_pid)?;
+            image.exec(exe_fd)
+        });
+    }
+    let child = command
+        .spawn()
+        .with_context(|| format!("starting the sandboxed agent as user {uid}"))?;
+    drop(socket);
+    drop(procs);
+    drop(exe_file);
+    Ok(SandboxedAgent {
+        child,
+        cgroup: sandbox.cgroup.clone(),
+    })
+}
+
+/// The argument and environment vectors of the agent, made before the fork.
+struct ExecImage {
+    _strings: Vec<CString>,
+    argv: Vec<*const libc::c_char>,
+    envp: Vec<*const libc::c_char>,
+}
+
+// SAFETY: the pointers point into `_strings`, owned by the same value and never changed;
+// the value is only read, by the child after the fork.
+unsafe impl Send for ExecImage {}
+// SAFETY: as for Send: nothing is ever written through the pointers.
+unsafe impl Sync for ExecImage {}
+
+impl ExecImage {
+    fn new(
+        exe: &Path,
+        args: &[String],
+        env: &[(String, std::ffi::OsString)],
+    ) -> anyhow::Result<Self> {
+        use std::os::unix::ffi::OsStrExt;
+        let c = |bytes: &[u8]| CString::new(bytes).context("a NUL byte in the agent's arguments");
+        let argv_strings: Vec<CString> = std::iter::once(c(exe.as_os_str().as_bytes()))
+            .chain(args.iter().map(|a| c(a.as_bytes())))
+            .collect::<anyhow::Result<_>>()?;
+        let env_strings: Vec<CString> = env
+            .iter()
+            .map(|(k, v)| c(&[k.as_bytes(), b"=", v.as_bytes()].concat()))
+            .collect::<anyhow::Result<_>>()?;
+        let pointers = |strings: &[CString]| -> Vec<*const libc::c_char> {
+            strings
+                .iter()
+                .map(|s| s.as_ptr())
+                .chain(std::iter::once(std::ptr::null()))
+                .collect()
+        };
+        let (argv, envp) = (pointers(&argv_strings), pointers(&env_strings));
+        let mut strings = argv_strings;
+        strings.extend(env_strings);
+        Ok(Self {
+            _strings: strings,
+            argv,
+            envp,
+        })
+    }
+
+    /// Replace this process by the agent (returns only on failure).
+    fn exec(&self, exe_fd: i32) -> std::io::Result<()> {
+        // SAFETY: both vectors are NULL-terminated arrays of C strings that live as long
+        // as `self`.
+        unsafe { libc::fexecve(exe_fd, self.argv.as_ptr(), self.envp.as_ptr()) };
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+/// In the child, before exec: join the group (while still privileged), take the
+/// socket as descriptor 3, become the agent's user for good, and close the door behind.
+fn enter_sandbox(
+    procs: &[i32],
+    socket_fd: i32,
+    uid: u32,
+    nproc: u64,
+    relay_pid: u32,
+) -> std::io::Result<()> {
+    let check = |r: libc::c_int| {
+        if r < 0 {
+            Err(std::io::Error::last_os_error())
+        } else {
+            Ok(())
+        }
+    };
+    join_opened(procs)?;
+    // SAFETY: plain system calls on integers and static values, nothing allocated.
+    unsafe {
+        if socket_fd == AGENT_SOCKET_FD {
+            // Keep it across exec.
+            check(libc::fcntl(AGENT_SOCKET_FD, libc::F_SETFD, 0))?;
+        } else {
+            check(libc::dup2(socket_fd, AGENT_SOCKET_FD))?;
+        }
+        // Every other descriptor closes at exec (ENOSYS on an old kernel: the coordinator
+        // already marked its own close-on-exec).
+        let _ = libc::syscall(
+            libc::SYS_close_range,
+            AGENT_SOCKET_FD as libc::c_uint + 1,
+            libc::c_uint::MAX,
+            libc::CLOSE_RANGE_CLOEXEC as libc::c_uint,
+        );
+        let limit = libc::rlimit {
+            rlim_cur: nproc,
+            rlim_max: nproc,
+        };
+        check(libc::setrlimit(libc::RLIMIT_NPROC, &limit))?;
+        let no_core = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        check(libc::setrlimit(libc::RLIMIT_CORE, &no_core))?;
+        check(libc::setgroups(0, std::ptr::null()))?;
+        check(libc::setresgid(uid, uid, uid))?;
+        check(libc::setresuid(uid, uid, uid))?;
+        check(libc::prctl(libc::PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0))?;
+        // Set after the change of user, which clears it.
+        check(libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0))?;
+        if libc::getppid() as u32 != relay_pid {
+            // The relay died before the signal was armed.
+            libc::_exit(1);
+        }
+    }
+    Ok(())
+}
