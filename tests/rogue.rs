@@ -18,7 +18,10 @@ const ROGUE: u64 = 3;
 fn attacked_run(args: &[&str], out: &Path) -> Value {
     // A generous deadline: these tests compare trajectories, and a loaded machine must
     // not turn a late honest answer into a missed turn.
-    let args = [args, &["--turn-deadline-ms", "10000"]].concat();
+    // Trusted agents: these attacks are on the run's channels, which only a trusted agent
+    // can reach (a sandboxed one cannot even open them: tests/sandbox.rs); what is tested
+    // here is what the coordinator's own checks make of them.
+    let args = [args, &["--turn-deadline-ms", "10000", "--trusted-agents"]].concat();
     let (output, pid) = run_to_end(&args, out);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{args:?}: {stderr}");

@@ -61,6 +61,9 @@ fn attacked_run(args: &[&str], out: &Path) -> Value {
     if !args.contains(&"--turn-deadline-ms") {
         all.extend(["--turn-deadline-ms", "10000"]);
     }
+    // Trusted agents: the attacks are on the run's channels, which a sandboxed agent
+    // cannot open (tests/sandbox.rs); what is tested is the coordinator's own checks.
+    all.push("--trusted-agents");
     let (output, pid) = run_to_end(&all, out);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{args:?}: {stderr}");

@@ -100,6 +100,32 @@ pub fn raise_fd_limit(agents: usize) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Reap those of `pids` that are, or become within `timeout`, children of this process:
+/// what a killed control group held, which this child subreaper adopts as their parents
+/// die. A pid gone from the system (reaped by another parent) is done with.
+pub fn reap_pids(pids: &[u32], timeout: Duration) {
+    let deadline = Instant::now() + timeout;
+    let mut left: Vec<u32> = pids.to_vec();
+    while !left.is_empty() {
+        left.retain(|&pid| {
+            let pid = Pid::from_raw(pid as i32);
+            match waitpid(pid, Some(WaitPidFlag::WNOHANG)) {
+                Ok(WaitStatus::StillAlive) => true,
+                Ok(_) => false,
+                // Not a child of this process yet (its parent is dying), or gone.
+                Err(Errno::ECHILD) => kill(pid, None) != Err(Errno::ESRCH),
+                Err(_) => false,
+            }
+        });
+        if Instant::now() >= deadline {
+            break;
+        }
+        if !left.is_empty() {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}
+
 /// Mark every open descriptor above stderr close-on-exec, so agents do not inherit the
 /// coordinator's iceoryx2 files (iceoryx2 opens them without `O_CLOEXEC`).
 ///

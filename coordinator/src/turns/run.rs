@@ -117,21 +117,34 @@ pub fn run_scenario_with(
         .drive(centre_path, started)
     }));
 
+    // Every process the sandboxed agents have now: whoever kills them, those orphaned
+    // come to this process (a child subreaper), which must reap them.
+    let members = run_cgroup
+        .as_ref()
+        .map(wire::cgroup::CgroupDirs::processes)
+        .unwrap_or_default();
     // Whatever happened, stop the agents and clean up before reporting.
     for i in procs.running() {
         let _ = ipc.notify_quit(i);
     }
     procs.stop_all(Duration::from_secs(2));
-    drop(procs);
     if let Some(group) = &run_cgroup {
-        // Whatever a sandboxed agent left, whatever pid or session it took.
-        if let Err(e) = group
-            .kill_all(Duration::from_secs(2))
-            .and_then(|()| group.remove(Duration::from_secs(2)))
-        {
+        // Whatever a sandboxed agent left, whatever pid or session it took; what was
+        // orphaned came to this process (a child subreaper), which reaps it.
+        let mut killed = match group.kill_all(Duration::from_secs(2)) {
+            Ok(killed) => killed,
+            Err(e) => {
+                tracing::warn!("the run's control group: {e}");
+                Vec::new()
+            }
+        };
+        killed.extend(members);
+        agents::reap_pids(&killed, Duration::from_secs(1));
+        if let Err(e) = group.remove(Duration::from_secs(2)) {
             tracing::warn!("the run's control group: {e}");
         }
     }
+    drop(procs);
     if let Some(router) = router {
         router.close();
     }

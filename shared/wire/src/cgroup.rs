@@ -228,19 +228,24 @@ impl CgroupDirs {
     }
 
     /// Kill every process in the group and below (SIGKILL), and wait until none is
-    /// left, at most `timeout`.
-    pub fn kill_all(&self, timeout: Duration) -> Result<(), CgroupError> {
+    /// left, at most `timeout`. Returns every process id it found there (a parent that
+    /// adopted them, as a child subreaper does, reaps them by these).
+    pub fn kill_all(&self, timeout: Duration) -> Result<Vec<u32>, CgroupError> {
         let deadline = Instant::now() + timeout;
         let kill_file = self
             .unified
             .as_ref()
             .map(|d| d.join("cgroup.kill"))
             .filter(|f| f.is_file());
+        let mut seen: Vec<u32> = Vec::new();
         loop {
             let left = self.processes();
             if left.is_empty() {
-                return Ok(());
+                seen.sort_unstable();
+                seen.dedup();
+                return Ok(seen);
             }
+            seen.extend(&left);
             if Instant::now() >= deadline {
                 return Err(CgroupError::Survivors {
                     left: left.len(),
@@ -253,7 +258,7 @@ impl CgroupDirs {
                 // One by one, round after round: a forking process is bounded by its
                 // `pids.max`, so the rounds end.
                 None => {
-                    for pid in left {
+                    for &pid in &left {
                         // SAFETY: kill(2) with a pid read from the group's own list.
                         unsafe { libc::kill(pid as libc::pid_t, libc::SIGKILL) };
                     }
