@@ -86,8 +86,8 @@ pub struct Args {
     /// attack on purpose (the coordinator must survive it): nan, teleport,
     /// through-obstacle, silent, garbage, overspeed, raw-length, raw-length-ready, replay,
     /// early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork, exit-before-ready,
-    /// deaf-to-prepare; against a sandbox only: scribble, stop-others, rewrite-mission,
-    /// fork-bomb.
+    /// deaf-to-prepare, late-some, sluggish; against a sandbox only: scribble,
+    /// stop-others, rewrite-mission, fork-bomb.
     #[arg(long)]
     pub misbehave: Option<Misbehave>,
     /// Sandbox relay mode (started by the coordinator as root): start this agent as user

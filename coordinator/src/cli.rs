@@ -62,6 +62,11 @@ pub struct RunArgs {
     /// on and, if dead, frozen as an obstacle.
     #[arg(long, default_value_t = 250)]
     pub turn_deadline_ms: u64,
+    /// The slow bound in milliseconds (default: a fifth of the turn deadline): an agent
+    /// that answers 3 of its last 10 turns later than this is recorded `slow`, killed
+    /// and frozen, as one that misses 3 of its last 10 is `hung`.
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..))]
+    pub slow_turn_ms: Option<u64>,
     /// The controller, overriding the scenario's `controller` (best-point, cbf,
     /// zcbf-logsumexp, orca).
     #[arg(long, alias = "planner", value_parser = parse_controller)]
@@ -78,8 +83,9 @@ pub struct RunArgs {
     /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
     /// exit-before-ready (attacks on the protocol); deaf-to-prepare (an agent that ignores
-    /// `--wait spin`'s notice); scribble, stop-others, rewrite-mission, fork-bomb (attacks
-    /// a `--sandbox` must hold against); repeatable, e.g. `--misbehave 3=nan`.
+    /// `--wait spin`'s notice); late-some, sluggish (late agents); scribble, stop-others,
+    /// rewrite-mission, fork-bomb (attacks a `--sandbox` must hold against); repeatable,
+    /// e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]
     pub misbehave: Vec<(usize, Misbehave)>,
     /// Do not draw the plots and the animation (`coordinator render DIR` draws them

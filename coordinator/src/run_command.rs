@@ -64,6 +64,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
         turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
+        slow_turn: args.slow_turn_ms.map(Duration::from_millis),
         respawn: args.respawn,
         kills: args.kill_agent.clone(),
         misbehave: args.misbehave.clone(),

@@ -84,6 +84,16 @@ impl<T: Transport> Transport for Misbehaving<T> {
                     self.inner.publish_move(reply)?;
                 }
             }
+            Misbehave::LateSome => {
+                if turn.step % 3 != 0 {
+                    std::thread::sleep(LATE_SOME_DELAY);
+                }
+                self.inner.publish_move(reply)?;
+            }
+            Misbehave::Sluggish => {
+                std::thread::sleep(SLUGGISH_DELAY);
+                self.inner.publish_move(reply)?;
+            }
             mode => {
                 let me = turn
                     .bodies
@@ -181,7 +191,9 @@ pub fn corrupt(
         | Misbehave::Scribble
         | Misbehave::StopOthers
         | Misbehave::RewriteMission
-        | Misbehave::ForkBomb => Some((honest, status)),
+        | Misbehave::ForkBomb
+        | Misbehave::LateSome
+        | Misbehave::Sluggish => Some((honest, status)),
         Misbehave::Garbage => {
             // Deterministic nonsense, different at every step.
             let s = (step as f64 * 12.9898).sin() * 43_758.545;
@@ -198,6 +210,13 @@ pub fn corrupt(
         }
     }
 }
+
+/// How late [`Misbehave::LateSome`] answers two turns of three: past a 1 s deadline.
+const LATE_SOME_DELAY: std::time::Duration = std::time::Duration::from_millis(1300);
+
+/// How late [`Misbehave::Sluggish`] answers every turn: within the default deadline, past
+/// the default slow bound (50 ms).
+const SLUGGISH_DELAY: std::time::Duration = std::time::Duration::from_millis(200);
 
 /// Most passes [`Misbehave::Overspeed`] makes over the honest path.
 const OVERSPEED_PASSES: usize = 9;

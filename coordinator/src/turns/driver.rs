@@ -14,6 +14,7 @@ use shared::record::Recorder;
 use shared::scenario::Scenario;
 
 use super::hand_over::HandOver;
+use super::lateness::TurnHistory;
 use super::options::RunOptions;
 use super::outcome::Progress;
 use crate::agents::{AgentProcesses, Exit};
@@ -48,8 +49,8 @@ pub(super) struct Driver<'a, 's> {
     pub(super) procs: &'a mut AgentProcesses,
     pub(super) recorder: &'a mut Recorder<'s>,
     pub(super) progress: &'a mut Progress,
-    /// Consecutive missed turns per agent.
-    pub(super) missed: Vec<u32>,
+    /// How late every agent's last turns were.
+    pub(super) history: TurnHistory,
     /// How a turn is handed over to the next agent.
     pub(super) hand_over: HandOver,
     /// Whether any agent has a sensing radius (then each world lists what it senses).

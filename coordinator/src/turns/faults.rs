@@ -6,6 +6,7 @@ use shared::geometry::Point;
 use shared::record::FaultKind;
 
 use super::driver::Driver;
+use super::lateness::{Lateness, Verdict};
 
 impl Driver<'_, '_> {
     /// A sample on `channel_agent`'s channel was published by process `publisher_pid`,
@@ -98,22 +99,22 @@ impl Driver<'_, '_> {
         self.ipc.close_channel(agent);
         let cleaned = self.ipc.cleanup_dead_nodes();
         tracing::info!("cleaned the resources of {cleaned} dead node(s)");
-        self.missed[agent] = 0;
+        self.history.forget(agent);
         if self.options.respawn {
             self.respawn(step, agent)?;
         }
         Ok(())
     }
 
-    /// A live agent missed its deadline: it keeps its place; after too many misses in a
-    /// row it is declared hung, killed and frozen.
+    /// A live agent missed its deadline: it keeps its place; after too many misses in its
+    /// last turns it is declared hung, killed and frozen.
     pub(super) fn on_missed(
         &mut self,
         step: usize,
         agent: usize,
         slot: Point,
     ) -> anyhow::Result<()> {
-        self.missed[agent] += 1;
+        let verdict = self.history.record(agent, Lateness::Missed);
         self.recorder.refuse(
             step,
             agent,
@@ -124,20 +125,56 @@ impl Driver<'_, '_> {
                 self.options.turn_deadline
             ),
         );
-        if self.missed[agent] >= self.options.max_missed_turns {
+        if let Verdict::Hung { missed } = verdict {
+            let window = self.history.window();
             tracing::warn!(
-                "step {step}: agent {agent} missed {} turns in a row: killing it",
-                self.missed[agent]
+                "step {step}: agent {agent} missed {missed} of its last {window} turns: killing it"
             );
             self.recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Hung,
-                format!("missed {} turns in a row; killed", self.missed[agent]),
+                format!("missed {missed} of its last {window} turns; killed"),
                 None,
             );
             self.on_death(step, agent, Duration::ZERO, "was killed as hung")?;
         }
         Ok(())
+    }
+
+    /// A live agent answered later than the slow bound. After too many such answers in
+    /// its last turns it is declared slow: this answer is refused (it stays), and it is
+    /// killed and frozen; true then.
+    pub(super) fn on_late_answer(
+        &mut self,
+        step: usize,
+        agent: usize,
+        slot: Point,
+        latency: Duration,
+    ) -> anyhow::Result<bool> {
+        let bound = self.options.slow_bound();
+        let turn = if latency > bound {
+            Lateness::Slow
+        } else {
+            Lateness::OnTime
+        };
+        let Verdict::Slow { late } = self.history.record(agent, turn) else {
+            return Ok(false);
+        };
+        let window = self.history.window();
+        tracing::warn!(
+            "step {step}: agent {agent} answered {late} of its last {window} turns later than {bound:?}: killing it"
+        );
+        self.recorder.refuse(
+            step,
+            agent,
+            slot,
+            FaultKind::Slow,
+            format!(
+                "answered {late} of its last {window} turns later than {bound:?} (this one after {latency:?}); killed"
+            ),
+        );
+        self.on_death(step, agent, Duration::ZERO, "was killed as slow")?;
+        Ok(true)
     }
 }

@@ -30,6 +30,7 @@ mod driver;
 mod faults;
 mod hand_over;
 mod judge;
+mod lateness;
 mod options;
 mod outcome;
 mod run;

@@ -54,9 +54,15 @@ pub struct RunOptions {
     /// How long every agent together has to start and shake hands, plus
     /// [`STARTUP_PER_AGENT`] for each agent ([`RunOptions::startup_timeout_for`]).
     pub startup_timeout: Duration,
-    /// Consecutive missed turns after which a live but silent agent is declared hung,
-    /// killed and frozen.
+    /// Missed turns, of the agent's last [`Self::late_window_turns`], after which a live
+    /// but silent agent is declared hung, killed and frozen; as many answers later than
+    /// the slow bound make it slow, killed and frozen alike.
     pub max_missed_turns: u32,
+    /// The window of the hung and slow rules, in the agent's turns.
+    pub late_window_turns: u32,
+    /// The slow bound: an answer later than this after its grant is late (default: a
+    /// fifth of the turn deadline).
+    pub slow_turn: Option<Duration>,
     /// Start a replacement process for every agent that dies.
     pub respawn: bool,
     /// Fault injection: kill agent `.0` with SIGKILL right after granting its turn at
@@ -94,6 +100,13 @@ pub struct SandboxOptions {
     pub first_uid: u32,
     /// The limits of each agent's control group.
     pub limits: wire::cgroup::Limits,
+}
+
+impl RunOptions {
+    /// The slow bound in force: [`Self::slow_turn`], or a fifth of the turn deadline.
+    pub fn slow_bound(&self) -> Duration {
+        self.slow_turn.unwrap_or(self.turn_deadline / 5)
+    }
 }
 
 impl SandboxOptions {
@@ -154,6 +167,8 @@ impl Default for RunOptions {
             turn_deadline: Duration::from_millis(250),
             startup_timeout: Duration::from_secs(30),
             max_missed_turns: 3,
+            late_window_turns: 10,
+            slow_turn: None,
             respawn: false,
             kills: Vec::new(),
             deaths: Vec::new(),

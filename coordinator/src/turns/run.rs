@@ -12,6 +12,7 @@ use wire::{RunPrefix, RunRoot};
 
 use super::driver::{BetweenSteps, Driver};
 use super::hand_over::HandOver;
+use super::lateness::TurnHistory;
 use super::options::RunOptions;
 use super::outcome::{Progress, RunFailure, RunOutcome, outcome};
 use crate::agents::{self, AgentProcesses};
@@ -108,7 +109,11 @@ pub fn run_scenario_with(
             procs: &mut procs,
             recorder: &mut recorder,
             progress: &mut progress,
-            missed: vec![0; n],
+            history: TurnHistory::new(
+                n,
+                options.max_missed_turns as usize,
+                options.late_window_turns as usize,
+            ),
             hand_over: HandOver::new(options.wait.spins(), n),
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             run_cgroup: run_cgroup.is_some(),

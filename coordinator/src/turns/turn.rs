@@ -3,7 +3,7 @@
 //! next, then each answer collected in order and judged, and the group's moves settled
 //! together.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use shared::geometry::{Point, Pose};
 use shared::record::FaultKind;
@@ -14,6 +14,7 @@ use wire::{StateMsg, monotonic_ns};
 use super::answer::{Answer, Turn};
 use super::driver::Driver;
 use super::judge::{judge_move, settle_group};
+use super::lateness::Lateness;
 use super::outcome::TurnSample;
 use crate::ipc::TurnSplit;
 use crate::monitor::SafetyMonitor;
@@ -124,12 +125,17 @@ impl Driver<'_, '_> {
             let slot = self.scenario.agents[agent].slot.ideal_position(centre);
             match self.wait_answer(step, &turn)? {
                 Answer::Move(msg) => {
+                    let latency =
+                        Duration::from_nanos(monotonic_ns().saturating_sub(turn.granted_ns));
+                    if self.on_late_answer(step, agent, slot, latency)? {
+                        continue;
+                    }
                     if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg) {
                         moves.push((agent, mv));
                     }
                 }
                 Answer::Malformed(why) => {
-                    self.missed[agent] = 0;
+                    self.history.record(agent, Lateness::OnTime);
                     tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
                     self.recorder
                         .refuse(step, agent, slot, FaultKind::Malformed, why);
@@ -156,7 +162,6 @@ impl Driver<'_, '_> {
     ) -> Option<Move> {
         let held_ns = monotonic_ns();
         let agent = turn.agent;
-        self.missed[agent] = 0;
         let latency_ns = held_ns.saturating_sub(turn.granted_ns);
         if msg.compute_ns > latency_ns {
             self.recorder.note_fault(

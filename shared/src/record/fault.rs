@@ -61,6 +61,9 @@ pub enum FaultKind {
     /// A moving obstacle's motion came within the agent's reach.
     #[serde(rename = "struck")]
     Struck,
+    /// The agent answered too many of its last turns later than the slow bound; killed.
+    #[serde(rename = "slow")]
+    Slow,
 }
 
 /// A fault name that is none of [`FaultKind::ALL`].
@@ -70,7 +73,7 @@ pub struct UnknownFaultKind(pub String);
 
 impl FaultKind {
     /// Every kind, in the order the documentation lists them.
-    pub const ALL: [FaultKind; 12] = [
+    pub const ALL: [FaultKind; 13] = [
         Self::Rejected,
         Self::Missed,
         Self::Hung,
@@ -83,6 +86,7 @@ impl FaultKind {
         Self::Unsolicited,
         Self::Impersonation,
         Self::Struck,
+        Self::Slow,
     ];
 
     /// The name `summary.json` gives it.
@@ -106,6 +110,7 @@ impl FaultKind {
             Self::Unsolicited => "unsolicited",
             Self::Impersonation => "impersonation",
             Self::Struck => "struck",
+            Self::Slow => "slow",
         }
     }
 }

@@ -75,6 +75,12 @@ pub enum Misbehave {
     /// 4096), then serve honestly. Only against a sandboxed run: a trusted agent is
     /// bounded by no limit of its own.
     ForkBomb,
+    /// Answer two turns of every three 1.3 s after they are granted (past a 1 s
+    /// deadline), the third at once: never three misses in a row.
+    LateSome,
+    /// Answer every turn 200 ms after it is granted: within the default deadline, later
+    /// than the default slow bound.
+    Sluggish,
 }
 
 /// A mode name that is none of [`Misbehave::ALL`]'s.
@@ -88,7 +94,7 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 21] = [
+    pub const ALL: [Self; 23] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
@@ -110,6 +116,8 @@ impl Misbehave {
         Self::StopOthers,
         Self::RewriteMission,
         Self::ForkBomb,
+        Self::LateSome,
+        Self::Sluggish,
     ];
 
     /// The mode's name on the command line, without the victim (`impersonate` and
@@ -137,6 +145,8 @@ impl Misbehave {
             Self::StopOthers => "stop-others",
             Self::RewriteMission => "rewrite-mission",
             Self::ForkBomb => "fork-bomb",
+            Self::LateSome => "late-some",
+            Self::Sluggish => "sluggish",
         }
     }
 
