@@ -183,3 +183,40 @@ fn an_agent_on_another_agents_channel_is_named_killed_and_cannot_speak_for_it() 
         }
     }
 }
+
+/// A trusted agent rewrites the mission file without its obstacles before it starts (a
+/// sandboxed one cannot even read it: tests/sandbox.rs). Every process the coordinator
+/// starts checks the file against the digest it was handed: no agent ever moves by the
+/// forged mission (no move is refused, nobody collides), the attacker refuses its own
+/// forgery and fails to start, and so does any agent that read the file after it was
+/// changed, each saying why on stderr, rather than running on it.
+#[test]
+fn a_rewritten_mission_is_refused_by_every_agent_that_reads_it() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let args = [
+        "--misbehave",
+        "3=rewrite-mission",
+        "--turn-deadline-ms",
+        "10000",
+        "--trusted-agents",
+    ];
+    let (output, pid) = run_to_end(&args, &out);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let s = summary(&out);
+    assert_eq!(s["completed"], true, "{s:#}");
+    assert_safe(&s);
+    assert_nothing_left(pid);
+    assert!(stderr.contains("(rewrite-mission): rewritten"), "{stderr}");
+    assert!(faults_of(&s, "rejected").is_empty(), "{s:#}");
+    let failed = faults_of(&s, "failed-to-start");
+    assert!(
+        failed.iter().any(|f| f["agent"].as_u64() == Some(ROGUE)),
+        "the forger started: {s:#}"
+    );
+    let refusals = stderr
+        .matches("changed since the coordinator wrote it")
+        .count();
+    assert_eq!(refusals, failed.len(), "{stderr}\n{s:#}");
+}

@@ -163,6 +163,7 @@ impl IpcTransport {
         agent: usize,
         generation: u32,
         liveness: Duration,
+        mission_digest: Option<wire::MissionDigest>,
     ) -> anyhow::Result<Self> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
@@ -180,7 +181,7 @@ impl IpcTransport {
         let _ = node.wait(Duration::ZERO);
 
         // Read (and validated) before the handshake: the first turn does not pay for it.
-        let scenario = wire::read_mission(prefix).context("the mission file")?;
+        let scenario = wire::read_mission(prefix, mission_digest).context("the mission file")?;
         let mission = MissionView {
             field: scenario.field,
             obstacles: scenario.static_obstacles(),

@@ -73,6 +73,10 @@ pub struct Args {
     /// This agent's index in the formation.
     #[arg(long)]
     pub agent: usize,
+    /// The SHA-256 digest of the run's mission file (given by the coordinator): a file
+    /// that does not match is refused.
+    #[arg(long, value_name = "HEX")]
+    pub mission_sha256: Option<wire::MissionDigest>,
     /// Which process of this agent this is: 0 for the first, one more for every
     /// replacement; each generation has services of its own (given by the coordinator).
     #[arg(long, default_value_t = 0)]
@@ -221,8 +225,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(mode) => misbehave::before_opening(prefix, args.agent, mode)?,
         None => Vec::new(),
     };
-    let transport = ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness)
-        .with_context(|| format!("opening run {prefix}"))?;
+    let transport = ipc::IpcTransport::open(
+        prefix,
+        args.agent,
+        args.generation,
+        liveness,
+        args.mission_sha256,
+    )
+    .with_context(|| format!("opening run {prefix}"))?;
     #[cfg(feature = "misbehave")]
     if let Some(mode) = mode {
         return misbehave::serve_ipc(transport, args.agent, mode);
@@ -257,6 +267,7 @@ fn run_sandbox_relay(
         prefix,
         agent: args.agent,
         generation: args.generation,
+        mission_digest: args.mission_sha256,
         liveness,
         sandbox: sandbox::Sandbox {
             uid,
@@ -312,6 +323,7 @@ fn run_relay(
         prefix,
         agent: args.agent,
         generation: args.generation,
+        mission_digest: args.mission_sha256,
         liveness,
         connect,
         security,

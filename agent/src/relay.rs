@@ -38,6 +38,8 @@ pub struct RelaySettings<'a> {
     pub agent: usize,
     /// Its process generation.
     pub generation: u32,
+    /// The mission file's digest, as the coordinator handed it.
+    pub mission_digest: Option<wire::MissionDigest>,
     /// How often to check the coordinator while waiting.
     pub liveness: Duration,
     /// The router.
@@ -152,8 +154,9 @@ pub fn serve_relay(settings: &RelaySettings) -> anyhow::Result<()> {
         agent,
         settings.generation,
         settings.liveness,
+        settings.mission_digest,
     )?;
-    let toml = wire::read_mission(settings.prefix)
+    let toml = wire::read_mission(settings.prefix, settings.mission_digest)
         .context("the mission file")?
         .to_resolved_toml("the coordinator")
         .map_err(|e| anyhow::anyhow!("the mission as TOML: {e}"))?;

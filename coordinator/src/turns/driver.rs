@@ -57,6 +57,8 @@ pub(super) struct Driver<'a, 's> {
     pub(super) senses: bool,
     /// Whether the run has a control group for its sandboxed agents.
     pub(super) run_cgroup: bool,
+    /// The mission file's digest, handed to every process started.
+    pub(super) mission_digest: wire::MissionDigest,
     /// Called after every step.
     pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
 }
@@ -65,7 +67,12 @@ impl Driver<'_, '_> {
     /// Start `agent`'s process on its open channel; a replacement never misbehaves.
     pub(super) fn spawn(&mut self, agent: usize, replacement: bool) -> anyhow::Result<()> {
         let generation = self.ipc.generation(agent).unwrap_or(0);
-        let mut extra = vec!["--generation".to_string(), generation.to_string()];
+        let mut extra = vec![
+            "--generation".to_string(),
+            generation.to_string(),
+            "--mission-sha256".to_string(),
+            self.mission_digest.to_string(),
+        ];
         if !replacement
             && let Some((_, mode)) = self.options.misbehave.iter().find(|(a, _)| *a == agent)
         {

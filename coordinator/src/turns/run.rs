@@ -72,9 +72,10 @@ pub fn run_scenario_with(
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
     // The scenario as run, for the agents to read at start-up.
-    if let Err(e) = wire::write_mission(&prefix, scenario) {
-        return Err(fail(e.into(), &recorder, progress));
-    }
+    let mission_digest = match wire::write_mission(&prefix, scenario) {
+        Ok(digest) => digest,
+        Err(e) => return Err(fail(e.into(), &recorder, progress)),
+    };
     let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
         Ok(ipc) => ipc,
         Err(e) => {
@@ -117,6 +118,7 @@ pub fn run_scenario_with(
             hand_over: HandOver::new(options.wait.spins(), n),
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             run_cgroup: run_cgroup.is_some(),
+            mission_digest,
             between_steps,
         }
         .drive(centre_path, started)

@@ -57,8 +57,8 @@ pub use message::{
     WirePoint, WirePose, World,
 };
 pub use mission_file::{
-    MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionFileError, mission_path, read_mission,
-    write_mission,
+    BadMissionDigest, MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionDigest, MissionFileError,
+    mission_path, read_mission, write_mission,
 };
 pub use prefix::{MAX_PREFIX_LEN, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{

@@ -55,6 +55,65 @@ pub enum MissionFileError {
     /// The file is not a valid scenario.
     #[error("the mission file is not a valid scenario: {0}")]
     Invalid(#[from] ScenarioError),
+    /// The file is not the one the coordinator wrote: its digest differs from the one the
+    /// coordinator handed this process.
+    #[error("{}: changed since the coordinator wrote it (SHA-256 {found}, not {expected}): refusing it", path.display())]
+    Changed {
+        /// The file.
+        path: PathBuf,
+        /// The digest the coordinator handed over.
+        expected: MissionDigest,
+        /// The file's.
+        found: MissionDigest,
+    },
+}
+
+/// The SHA-256 digest of a mission file's bytes, handed by the coordinator to every
+/// process it starts (`--mission-sha256 HEX`), which refuses a file that does not match.
+///
+/// ```
+/// use wire::MissionDigest;
+/// let d = MissionDigest::of(b"abc");
+/// assert_eq!(d.to_string(), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+/// assert_eq!(d.to_string().parse::<MissionDigest>(), Ok(d));
+/// assert!("ba78".parse::<MissionDigest>().is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MissionDigest([u8; 32]);
+
+impl MissionDigest {
+    /// The digest of `bytes`.
+    pub fn of(bytes: &[u8]) -> Self {
+        use sha2::Digest as _;
+        Self(sha2::Sha256::digest(bytes).into())
+    }
+}
+
+impl std::fmt::Display for MissionDigest {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.iter().try_for_each(|b| write!(f, "{b:02x}"))
+    }
+}
+
+/// A digest that is not 64 hexadecimal digits.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0:?} is not a SHA-256 digest (64 hexadecimal digits)")]
+pub struct BadMissionDigest(pub String);
+
+impl std::str::FromStr for MissionDigest {
+    type Err = BadMissionDigest;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad = || BadMissionDigest(s.chars().take(80).collect());
+        if s.len() != 64 || !s.is_ascii() {
+            return Err(bad());
+        }
+        let mut out = [0u8; 32];
+        for (i, byte) in out.iter_mut().enumerate() {
+            *byte = u8::from_str_radix(&s[2 * i..2 * i + 2], 16).map_err(|_| bad())?;
+        }
+        Ok(Self(out))
+    }
 }
 
 /// The mission file of run `prefix` (`None` without a run folder).
@@ -63,8 +122,8 @@ pub fn mission_path(prefix: &str) -> Option<PathBuf> {
 }
 
 /// Write `scenario` as run `prefix`'s mission file (the coordinator, before any agent
-/// starts).
-pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<PathBuf, MissionFileError> {
+/// starts); returns its digest, for the processes that will read it.
+pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest, MissionFileError> {
     use std::io::Write as _;
     use std::os::unix::fs::OpenOptionsExt;
     let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
@@ -88,11 +147,15 @@ pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<PathBuf, Missi
     file.write_all(text.as_bytes()).map_err(io(&temporary))?;
     drop(file);
     std::fs::rename(&temporary, &path).map_err(io(&path))?;
-    Ok(path)
+    Ok(MissionDigest::of(text.as_bytes()))
 }
 
-/// Read and validate run `prefix`'s mission file (an agent, at start-up).
-pub fn read_mission(prefix: &str) -> Result<Scenario, MissionFileError> {
+/// Read and validate run `prefix`'s mission file (an agent, at start-up), refusing it if
+/// its digest is not `expected` (when given).
+pub fn read_mission(
+    prefix: &str,
+    expected: Option<MissionDigest>,
+) -> Result<Scenario, MissionFileError> {
     use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
     let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
     if let Some(folder) = path.parent() {
@@ -139,6 +202,16 @@ pub fn read_mission(prefix: &str) -> Result<Scenario, MissionFileError> {
             path: path.clone(),
             source,
         })?;
+    if let Some(expected) = expected {
+        let found = MissionDigest::of(text.as_bytes());
+        if found != expected {
+            return Err(MissionFileError::Changed {
+                path,
+                expected,
+                found,
+            });
+        }
+    }
     Ok(Scenario::parse(&text, &path.display().to_string())?)
 }
 
@@ -156,25 +229,32 @@ mod tests {
         }
         let mut scenario = Scenario::paper();
         scenario.agents[1].max_step_m = Some(0.25);
-        let path = write_mission(&prefix, &scenario).expect("written");
-        assert_eq!(read_mission(&prefix).expect("read"), scenario);
+        let digest = write_mission(&prefix, &scenario).expect("written");
+        let path = mission_path(&prefix).expect("a run folder");
+        assert_eq!(read_mission(&prefix, Some(digest)).expect("read"), scenario);
+        // A file of another digest is refused, naming both.
+        let other = MissionDigest::of(b"another mission");
+        assert!(matches!(
+            read_mission(&prefix, Some(other)),
+            Err(MissionFileError::Changed { expected, found, .. }) if expected == other && found == digest
+        ));
         use std::os::unix::fs::PermissionsExt;
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o644)).expect("chmod");
         assert!(matches!(
-            read_mission(&prefix),
+            read_mission(&prefix, None),
             Err(MissionFileError::Untrusted { .. })
         ));
         std::fs::remove_file(&path).expect("rm");
         std::os::unix::fs::symlink("/etc/passwd", &path).expect("symlink");
         assert!(matches!(
-            read_mission(&prefix),
+            read_mission(&prefix, None),
             Err(MissionFileError::Io { .. })
         ));
         std::fs::remove_file(&path).expect("rm");
         std::fs::write(&path, "name = 1").expect("write");
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600)).expect("chmod");
         assert!(matches!(
-            read_mission(&prefix),
+            read_mission(&prefix, None),
             Err(MissionFileError::Invalid(_))
         ));
     }
