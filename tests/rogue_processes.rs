@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use coordinator::turns::{BetweenSteps, RunOptions, run_scenario_with};
+use coordinator::turns::{BetweenSteps, RunOptions, run_scenario, run_scenario_with};
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
@@ -259,4 +259,40 @@ fn while_a_run_goes_its_files_are_private() {
     );
     assert_eq!(outcome.prefix, prefix);
     assert!(support::leftovers(&prefix).is_empty());
+}
+
+/// A process that cannot be started fails that agent alone (here every agent's: the
+/// executable cannot be run), never the run: each is recorded `failed-to-start`, saying
+/// why, frozen where it starts, and the run completes.
+#[test]
+fn an_agent_whose_process_cannot_be_started_fails_alone_and_the_run_goes_on() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().expect("tempdir");
+    let not_runnable = dir.path().join("agent");
+    std::fs::write(&not_runnable, b"not a program").expect("write");
+    std::fs::set_permissions(&not_runnable, std::fs::Permissions::from_mode(0o644)).expect("chmod");
+    let (scenario, path) = paper();
+    let options = RunOptions {
+        agent_bin: Some(not_runnable),
+        ..options(&[])
+    };
+    let outcome = run_scenario(&scenario, &path, &options).expect("the run goes on");
+    assert!(outcome.run.completed);
+    let failed: Vec<_> = outcome
+        .run
+        .faults
+        .iter()
+        .filter(|f| f.kind == shared::record::FaultKind::FailedToStart)
+        .collect();
+    assert_eq!(
+        failed.len(),
+        scenario.agents.len(),
+        "{:?}",
+        outcome.run.faults
+    );
+    for f in failed {
+        assert!(f.detail.contains("could not be started"), "{f:?}");
+        assert_eq!(f.step, 0);
+    }
+    assert!(support::leftovers(&outcome.prefix).is_empty());
 }

@@ -102,6 +102,12 @@ fn run_cgroups(prefix: &str) -> Vec<std::path::PathBuf> {
     found
 }
 
+/// What a run's stderr may hold with one attacker: the relay's cut of its agent's log and
+/// a few lines more.
+fn sandbox_log_bound() -> usize {
+    agent::sandbox::MAX_AGENT_LOG_BYTES as usize + (16 << 10)
+}
+
 /// A sandboxed run of the paper example equals the reference to the bit; while it
 /// goes, every agent is its own user (the agent's index above the first id) that may not
 /// gain privileges and holds no descriptor but its three standard ones and its socket;
@@ -161,7 +167,7 @@ fn a_sandboxed_run_equals_the_reference_and_each_agent_is_a_user_of_its_own() {
 /// Agent 3 of a sandboxed paper example attacks before it serves honestly: it writes
 /// random bytes over every file of the run it can open, sends SIGSTOP to every process
 /// of the run, rewrites the mission without its obstacles, forks until it can fork no
-/// more, hoards ports or opens another agent's channel. Each run completes with exit 0
+/// more, hoards ports or opens another agent's channel, floods its log. Each run completes with exit 0
 /// and no fault at all, its trajectory equals the honest sandboxed run's byte for byte,
 /// the attacker's own report shows what it reached (nothing, or its own limit), and no
 /// process of its user is left.
@@ -179,7 +185,7 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
     assert_nothing_left(pid);
     let honest = std::fs::read(honest_out.join("trajectory.csv")).expect("trajectory");
     let limits = wire::cgroup::Limits::default();
-    let attacks: [(&str, String); 6] = [
+    let attacks: [(&str, String); 7] = [
         ("scribble", "wrote into 0 of 0 files".to_string()),
         ("stop-others", "stopped 0 of".to_string()),
         ("rewrite-mission", "cannot read it".to_string()),
@@ -189,6 +195,7 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
             "impersonate=0",
             "attack (impersonate=0) stopped".to_string(),
         ),
+        ("log-flood", "bytes of its stderr dropped".to_string()),
     ];
     for (mode, report) in attacks {
         let out = temp.path().join(mode);
@@ -221,10 +228,12 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
                 "{mode}: {forked} children"
             );
         }
+        // The log stays bounded: a flood is cut at what the relay passes on.
+        let bound = sandbox_log_bound();
         assert!(
-            stderr.lines().count() < 50,
-            "{mode}: stderr of {} lines",
-            stderr.lines().count()
+            stderr.len() < bound,
+            "{mode}: stderr of {} bytes",
+            stderr.len()
         );
         let s = summary(&out);
         assert_eq!(s["completed"], true, "{mode}");

@@ -16,6 +16,10 @@ use wire::cgroup::{CgroupDirs, Limits, join_opened, raw_fds};
 /// The descriptor the sandboxed agent finds its socket on.
 pub const AGENT_SOCKET_FD: i32 = 3;
 
+/// How much of a sandboxed agent's stderr its relay passes on; the rest is counted and
+/// dropped, so an agent that floods its log costs the run's log no more than this.
+pub const MAX_AGENT_LOG_BYTES: u64 = 64 << 10;
+
 /// The environment variables an agent keeps (all others are dropped).
 const KEPT_ENV: [&str; 2] = ["RUST_LOG", "RUST_BACKTRACE"];
 
@@ -103,7 +107,10 @@ pub fn spawn_sandboxed(
         None => exe_file.as_raw_fd(),
     };
     let mut command = Command::new(exe);
-    command.current_dir("/").stdin(Stdio::null());
+    command
+        .current_dir("/")
+        .stdin(Stdio::null())
+        .stderr(Stdio::piped());
     // SAFETY: between fork and exec the closure makes only async-signal-safe system
     // calls (write, dup2, fcntl, setrlimit, setgroups, setresgid, setresuid, prctl,
     // close_range, fexecve) on values made before the fork; it allocates nothing.
@@ -113,9 +120,13 @@ pub fn spawn_sandboxed(
             image.exec(exe_fd)
         });
     }
-    let child = command
+    let mut child = command
         .spawn()
         .with_context(|| format!("starting the sandboxed agent as user {uid}"))?;
+    if let Some(stderr) = child.stderr.take() {
+        let pid = child.id();
+        std::thread::spawn(move || pass_on_bounded(stderr, pid, MAX_AGENT_LOG_BYTES));
+    }
     drop(socket);
     drop(procs);
     drop(exe_file);
@@ -234,4 +245,37 @@ fn enter_sandbox(
         }
     }
     Ok(())
+}
+
+/// Pass the first `limit` bytes of `from` (a sandboxed agent's stderr) on to this
+/// process's stderr, whole lines only, and count the rest; say how much was dropped once
+/// the agent closes it.
+fn pass_on_bounded(from: impl std::io::Read, pid: u32, limit: u64) {
+    use std::io::{BufRead, Read, Write};
+    let mut reader = std::io::BufReader::new(from);
+    let (mut passed, mut dropped) = (0u64, 0u64);
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        // A line is read at most 4 KiB at a time: an endless line is bounded too.
+        match Read::by_ref(&mut reader)
+            .take(4096)
+            .read_until(b'\n', &mut line)
+        {
+            Ok(0) | Err(_) => break,
+            Ok(n) => {
+                if passed + n as u64 <= limit {
+                    passed += n as u64;
+                    let _ = std::io::stderr().write_all(&line);
+                } else {
+                    dropped += n as u64;
+                }
+            }
+        }
+    }
+    if dropped > 0 {
+        tracing::warn!(
+            "sandboxed agent {pid}: {dropped} bytes of its stderr dropped (past the first {limit})"
+        );
+    }
 }

@@ -83,7 +83,7 @@ pub struct RunArgs {
     /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
     /// exit-before-ready (attacks on the protocol); deaf-to-prepare (an agent that ignores
-    /// `--wait spin`'s notice); late-some, sluggish (late agents); scribble, stop-others,
+    /// `--wait spin`'s notice); late-some, sluggish (late agents); log-flood, scribble, stop-others,
     /// rewrite-mission, fork-bomb (attacks a `--sandbox` must hold against); repeatable,
     /// e.g. `--misbehave 3=nan`.
     #[arg(long, value_name = "AGENT=MODE", value_parser = parse_misbehave)]

@@ -193,7 +193,8 @@ pub fn corrupt(
         | Misbehave::RewriteMission
         | Misbehave::ForkBomb
         | Misbehave::LateSome
-        | Misbehave::Sluggish => Some((honest, status)),
+        | Misbehave::Sluggish
+        | Misbehave::LogFlood => Some((honest, status)),
         Misbehave::Garbage => {
             // Deterministic nonsense, different at every step.
             let s = (step as f64 * 12.9898).sin() * 43_758.545;

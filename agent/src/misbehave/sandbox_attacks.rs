@@ -1,6 +1,6 @@
 //! The attacks a sandbox (`coordinator run --sandbox`) must hold against, tried before the
 //! agent starts serving honestly: [`Misbehave::Scribble`], [`Misbehave::StopOthers`],
-//! [`Misbehave::RewriteMission`], [`Misbehave::ForkBomb`]. Each says on stderr, at warn
+//! [`Misbehave::RewriteMission`], [`Misbehave::ForkBomb`], [`Misbehave::LogFlood`]. Each says on stderr, at warn
 //! level, what it reached (`scribble: wrote into 0 of 0 files`), so a test can tell an
 //! attack that was stopped from one that was never tried.
 
@@ -19,6 +19,7 @@ pub fn before_opening(prefix: &str, agent: usize, mode: Misbehave) {
         Misbehave::StopOthers => stop_others(prefix, agent),
         Misbehave::RewriteMission => rewrite_mission(prefix, agent),
         Misbehave::ForkBomb => fork_bomb(agent),
+        Misbehave::LogFlood => log_flood(agent),
         _ => {}
     }
 }
@@ -139,4 +140,17 @@ fn fork_bomb(agent: usize) {
         }
     }
     tracing::warn!("agent {agent} (fork-bomb): forked {forked} children before fork failed");
+}
+
+fn log_flood(agent: usize) {
+    use std::io::Write as _;
+    let line = format!("agent {agent} (log-flood): {}\n", "x".repeat(100));
+    let mut stderr = std::io::stderr().lock();
+    let mut written = 0usize;
+    while written < 16 << 20 {
+        if stderr.write_all(line.as_bytes()).is_err() {
+            break;
+        }
+        written += line.len();
+    }
 }

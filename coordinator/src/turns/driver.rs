@@ -99,7 +99,11 @@ impl Driver<'_, '_> {
     pub(super) fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<()> {
         let n = self.scenario.agents.len();
         for i in 0..n {
-            self.spawn(i, false)?;
+            // A spawn that fails (the machine out of processes, say) fails that agent
+            // alone: it is frozen where it starts, or replaced with `--respawn`.
+            if let Err(e) = self.spawn(i, false) {
+                self.on_failed_start(0, i, &format!("its process could not be started: {e:#}"))?;
+            }
         }
         let all: Vec<usize> = (0..n).collect();
         self.start_agents(0, &all, self.options.startup_timeout_for(n), false)?;

@@ -81,6 +81,8 @@ pub enum Misbehave {
     /// Answer every turn 200 ms after it is granted: within the default deadline, later
     /// than the default slow bound.
     Sluggish,
+    /// Before it starts, write 16 MiB of lines to stderr, then serve honestly.
+    LogFlood,
 }
 
 /// A mode name that is none of [`Misbehave::ALL`]'s.
@@ -94,7 +96,7 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 23] = [
+    pub const ALL: [Self; 24] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
@@ -118,6 +120,7 @@ impl Misbehave {
         Self::ForkBomb,
         Self::LateSome,
         Self::Sluggish,
+        Self::LogFlood,
     ];
 
     /// The mode's name on the command line, without the victim (`impersonate` and
@@ -147,6 +150,7 @@ impl Misbehave {
             Self::ForkBomb => "fork-bomb",
             Self::LateSome => "late-some",
             Self::Sluggish => "sluggish",
+            Self::LogFlood => "log-flood",
         }
     }
 
