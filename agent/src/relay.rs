@@ -19,29 +19,16 @@ use net::zenoh::pubsub::{Publisher, Subscriber};
 use net::zenoh::sample::{Sample, SampleKind};
 use net::{Down, Endpoint, Security, Up};
 
-use crate::ipc::IpcTransport;
-use crate::link::{move_of, net_turn};
-use crate::transport::{Command, Reply, Transport};
+use crate::forward::{AgentLink, RelayedChannel, forward_turns};
+use crate::transport::Transport;
 
 /// How often the relay probes for its agent until it answers.
 const PROBE_PERIOD: Duration = Duration::from_millis(50);
 
-/// How long the relay waits for a move before it goes back to the coordinator (which has
-/// long since counted the turn as missed): the next turn or a quit is then heard.
-const MOVE_WAIT: Duration = Duration::from_secs(1);
-
 /// What a relay is given.
 pub struct RelaySettings<'a> {
-    /// The run's prefix.
-    pub prefix: &'a str,
-    /// The agent's index.
-    pub agent: usize,
-    /// Its process generation.
-    pub generation: u32,
-    /// The mission file's digest, as the coordinator handed it.
-    pub mission_digest: Option<wire::MissionDigest>,
-    /// How often to check the coordinator while waiting.
-    pub liveness: Duration,
+    /// The agent's channel.
+    pub channel: RelayedChannel<'a>,
     /// The router.
     pub connect: &'a Endpoint,
     /// Plain or TLS.
@@ -106,11 +93,17 @@ impl Token {
     }
 }
 
-impl Link {
-    fn send(&self, message: &Down) -> anyhow::Result<()> {
+impl AgentLink for Link {
+    fn send(&mut self, message: &Down) -> anyhow::Result<()> {
         Ok(net::send(&self.down, message)?)
     }
 
+    fn receive(&mut self, timeout: Duration) -> anyhow::Result<Option<Up>> {
+        Link::receive(self, timeout)
+    }
+}
+
+impl Link {
     /// Fails once the agent's liveliness token, seen before, has been gone for
     /// [`REJOIN_GRACE`].
     fn check_alive(&mut self) -> anyhow::Result<()> {
@@ -145,21 +138,11 @@ impl Link {
     }
 }
 
-/// Serve agent `settings.agent` as its relay until the coordinator says quit (then the
+/// Serve agent `settings.channel.agent` as its relay until the coordinator says quit (then the
 /// agent is told too) or the agent is gone (an error: the coordinator sees the exit).
 pub fn serve_relay(settings: &RelaySettings) -> anyhow::Result<()> {
-    let agent = settings.agent;
-    let mut ipc = IpcTransport::open(
-        settings.prefix,
-        agent,
-        settings.generation,
-        settings.liveness,
-        settings.mission_digest,
-    )?;
-    let toml = wire::read_mission(settings.prefix, settings.mission_digest)
-        .context("the mission file")?
-        .to_resolved_toml("the coordinator")
-        .map_err(|e| anyhow::anyhow!("the mission as TOML: {e}"))?;
+    let agent = settings.channel.agent;
+    let (mut ipc, toml) = settings.channel.open()?;
     let session = net::open_client(settings.connect, settings.security)
         .with_context(|| format!("connecting to {}", settings.connect))?;
     let z = |e: net::zenoh::Error| anyhow::anyhow!("zenoh: {e}");
@@ -214,36 +197,7 @@ pub fn serve_relay(settings: &RelaySettings) -> anyhow::Result<()> {
         }
     }
     ipc.announce_ready()?;
-
-    loop {
-        let turn = match ipc.next_command()? {
-            Command::Quit => {
-                link.send(&Down::Quit)?;
-                return Ok(());
-            }
-            Command::Turn(turn) => turn,
-        };
-        link.send(&Down::Turn(net_turn(&turn)))?;
-        let asked = Instant::now();
-        while asked.elapsed() < MOVE_WAIT && !ipc.should_leave() {
-            let Some(Up::Move(m)) = link.receive(MOVE_WAIT - asked.elapsed().min(MOVE_WAIT))?
-            else {
-                continue;
-            };
-            if m.agent != agent_u32 || m.token != turn.token || m.seq != turn.seq {
-                continue;
-            }
-            if let Some((mv, status, compute)) = move_of(agent, m) {
-                ipc.publish_move(Reply {
-                    turn: &turn,
-                    mv: &mv,
-                    status,
-                    compute,
-                })?;
-            }
-            break;
-        }
-    }
+    forward_turns(&mut ipc, &mut link, agent)
 }
 
 fn random_nonce() -> anyhow::Result<u64> {
@@ -252,14 +206,17 @@ fn random_nonce() -> anyhow::Result<u64> {
     Ok(u64::from_le_bytes(bytes))
 }
 
-/// Start agent `settings.agent` on this host, connected to the same router.
+/// Start agent `settings.channel.agent` on this host, connected to the same router.
 fn spawn_agent(settings: &RelaySettings, extra: &[String]) -> anyhow::Result<SpawnedAgent> {
     let exe = std::env::current_exe().context("the agent executable")?;
     let mut command = ProcessCommand::new(exe);
     command
         .args(["--connect", &settings.connect.to_string()])
-        .args(["--agent", &settings.agent.to_string()])
-        .args(["--liveness-ms", &settings.liveness.as_millis().to_string()])
+        .args(["--agent", &settings.channel.agent.to_string()])
+        .args([
+            "--liveness-ms",
+            &settings.channel.liveness.as_millis().to_string(),
+        ])
         .args(extra)
         .stdin(Stdio::null());
     if let Some(dir) = settings.tls_dir {
