@@ -123,10 +123,15 @@ impl Driver<'_, '_> {
                 continue;
             }
             let slot = self.scenario.agents[agent].slot.ideal_position(centre);
+            // How late an answer is, by this process's clock alone: from the grant, or
+            // from when it began waiting for this agent if a group mate held it up
+            // longer (the answer may have waited in its queue meanwhile: an agent is
+            // never counted late for a mate's slowness).
+            let waiting_from_ns = monotonic_ns().max(turn.granted_ns);
             match self.wait_answer(step, &turn)? {
                 Answer::Move(msg) => {
                     let latency =
-                        Duration::from_nanos(monotonic_ns().saturating_sub(turn.granted_ns));
+                        Duration::from_nanos(monotonic_ns().saturating_sub(waiting_from_ns));
                     if self.on_late_answer(step, agent, slot, latency)? {
                         continue;
                     }
