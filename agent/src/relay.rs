@@ -1,6 +1,7 @@
 //! The relay: on the coordinator's host, it stands for an agent that runs elsewhere. It
-//! opens the agent's iceoryx2 channel as a local agent would ([`IpcTransport`]) and
-//! forwards each turn to the agent and its move back over Zenoh ([`net`]).
+//! opens the agent's iceoryx2 channel as a local agent would
+//! ([`IpcTransport`](crate::ipc::IpcTransport)) and forwards each turn to the agent and
+//! its move back over Zenoh ([`net`]).
 //!
 //! The coordinator's checks, deadlines and fault handling see the relay as the agent:
 //! when the agent's session ends (its process died, its link went down for longer than
