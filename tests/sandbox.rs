@@ -288,3 +288,26 @@ fn bad_sandbox_flags_are_refused_before_anything_runs() {
         assert!(!out.exists(), "{args:?}: an output folder was made");
     }
 }
+
+/// The control groups of a sandboxed run whose coordinator was killed (it could not
+/// remove them) are removed by the next coordinator's clean-up of stale runs.
+#[test]
+fn a_dead_coordinators_control_groups_are_cleaned_by_the_next_run() {
+    assert_root();
+    // A pid that no process has any more.
+    let mut gone = std::process::Command::new("true").spawn().expect("true");
+    let pid = gone.id();
+    gone.wait().expect("reaped");
+    let prefix = format!("fc{pid}x5ca1ab1e_");
+    let group = wire::cgroup::CgroupDirs::for_run(&prefix).expect("cgroups");
+    group.create().expect("the run's group");
+    group.child("agent-0-0").create().expect("an agent's group");
+    assert!(!run_cgroups(&prefix).is_empty());
+    let cleaned = coordinator::stale_runs::clean_stale_runs();
+    assert!(cleaned.contains(&prefix), "{cleaned:?}");
+    assert!(
+        run_cgroups(&prefix).is_empty(),
+        "{:?}",
+        run_cgroups(&prefix)
+    );
+}

@@ -17,7 +17,7 @@ mod procfs;
 pub mod render;
 mod run_command;
 mod simulate_command;
-mod stale_runs;
+pub mod stale_runs;
 mod stats;
 pub mod turns;
 pub mod validate;

@@ -1,6 +1,8 @@
 //! What a run leaves in shared memory when it cannot finish cleanly: its own files when
 //! its coordinator node could not be set up, and whole runs whose coordinator died.
 
+use std::time::Duration;
+
 use iceoryx2::prelude::*;
 use wire::{Role, RunPrefix};
 
@@ -74,10 +76,46 @@ pub fn clean_stale_runs() -> Vec<String> {
             std::fs::remove_file(f)
         };
     }
+    prefixes.extend(clean_stale_cgroups());
     if !prefixes.is_empty() {
         tracing::info!("cleaned stale runs {prefixes:?}");
     }
     prefixes.into_iter().collect()
+}
+
+/// Kill and remove the control groups of sandboxed runs whose coordinator is gone (one
+/// killed with SIGKILL could not remove its own); returns their prefixes.
+fn clean_stale_cgroups() -> Vec<String> {
+    let mut cleaned = Vec::new();
+    let mounts = std::fs::read_dir("/sys/fs/cgroup")
+        .into_iter()
+        .flatten()
+        .flatten();
+    let tops = std::iter::once(std::path::PathBuf::from("/sys/fs/cgroup"))
+        .chain(mounts.map(|e| e.path()).filter(|p| p.is_dir()));
+    for top in tops {
+        let Ok(entries) = std::fs::read_dir(&top) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            let Some(prefix) = name.strip_prefix("formation-").and_then(stale_prefix) else {
+                continue;
+            };
+            let prefix = prefix.to_string();
+            if cleaned.contains(&prefix) {
+                continue;
+            }
+            if let Ok(group) = wire::cgroup::CgroupDirs::for_run(&prefix) {
+                let killed = group.kill_all(Duration::from_secs(2));
+                if let Err(e) = killed.and_then(|_| group.remove(Duration::from_secs(2))) {
+                    tracing::warn!("stale run {prefix}: its control group: {e}");
+                }
+            }
+            cleaned.push(prefix);
+        }
+    }
+    cleaned
 }
 
 /// The run prefix file `name` starts with, if its coordinator process is gone.
