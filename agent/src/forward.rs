@@ -34,15 +34,14 @@ impl RelayedChannel<'_> {
     /// Open the agent's channel, and read the mission as the resolved TOML the agent is
     /// handed.
     pub fn open(&self) -> anyhow::Result<(IpcTransport, String)> {
-        let ipc = IpcTransport::open(
+        let (ipc, mission) = IpcTransport::open_with_mission(
             self.prefix,
             self.agent,
             self.generation,
             self.liveness,
             self.mission_digest,
         )?;
-        let toml = wire::read_mission(self.prefix, self.mission_digest)
-            .context("the mission file")?
+        let toml = mission
             .to_resolved_toml("the coordinator")
             .map_err(|e| anyhow::anyhow!("the mission as TOML: {e}"))?;
         Ok((ipc, toml))

@@ -165,6 +165,18 @@ impl IpcTransport {
         liveness: Duration,
         mission_digest: Option<wire::MissionDigest>,
     ) -> anyhow::Result<Self> {
+        Self::open_with_mission(prefix, agent, generation, liveness, mission_digest)
+            .map(|(transport, _)| transport)
+    }
+
+    /// [`Self::open`], handing back the mission it read too (a relay passes it on).
+    pub fn open_with_mission(
+        prefix: &str,
+        agent: usize,
+        generation: u32,
+        liveness: Duration,
+        mission_digest: Option<wire::MissionDigest>,
+    ) -> anyhow::Result<(Self, shared::scenario::Scenario)> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
         #[cfg(target_os = "linux")]
@@ -182,13 +194,7 @@ impl IpcTransport {
 
         // Read (and validated) before the handshake: the first turn does not pay for it.
         let scenario = wire::read_mission(prefix, mission_digest).context("the mission file")?;
-        let mission = MissionView {
-            field: scenario.field,
-            obstacles: scenario.static_obstacles(),
-            moving: scenario.moving,
-            agents: scenario.agents,
-            controller: scenario.controller,
-        };
+        let mission = MissionView::of(scenario.clone());
         let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
         let world = node
@@ -235,14 +241,15 @@ impl IpcTransport {
                 .context("done notifier")?,
             node,
         };
-        Ok(Self {
+        let transport = Self {
             agent,
             liveness,
             parent,
             channel,
             mission,
             woke_ns: 0,
-        })
+        };
+        Ok((transport, scenario))
     }
 }
 

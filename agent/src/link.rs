@@ -22,13 +22,7 @@ pub fn mission_view(toml: &str, agent: usize) -> anyhow::Result<MissionView> {
             scenario.agents.len()
         );
     }
-    Ok(MissionView {
-        field: scenario.field,
-        obstacles: scenario.static_obstacles(),
-        moving: scenario.moving,
-        agents: scenario.agents,
-        controller: scenario.controller,
-    })
+    Ok(MissionView::of(scenario))
 }
 
 /// A turn as the link carries it.

@@ -22,6 +22,20 @@ pub struct MissionView {
     pub controller: ControllerSpec,
 }
 
+impl MissionView {
+    /// What an agent sees of `scenario`: every obstacle with its true radius, known or
+    /// not.
+    pub fn of(scenario: shared::scenario::Scenario) -> Self {
+        Self {
+            field: scenario.field,
+            obstacles: scenario.static_obstacles(),
+            moving: scenario.moving,
+            agents: scenario.agents,
+            controller: scenario.controller,
+        }
+    }
+}
+
 /// The world at the start of this agent's turn.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TurnInput {

@@ -100,32 +100,6 @@ pub fn raise_fd_limit(agents: usize) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Reap those of `pids` that are, or become within `timeout`, children of this process:
-/// what a killed control group held, which this child subreaper adopts as their parents
-/// die. A pid gone from the system (reaped by another parent) is done with.
-pub fn reap_pids(pids: &[u32], timeout: Duration) {
-    let deadline = Instant::now() + timeout;
-    let mut left: Vec<u32> = pids.to_vec();
-    while !left.is_empty() {
-        left.retain(|&pid| {
-            let pid = Pid::from_raw(pid as i32);
-            match waitpid(pid, Some(WaitPidFlag::WNOHANG)) {
-                Ok(WaitStatus::StillAlive) => true,
-                Ok(_) => false,
-                // Not a child of this process yet (its parent is dying), or gone.
-                Err(Errno::ECHILD) => kill(pid, None) != Err(Errno::ESRCH),
-                Err(_) => false,
-            }
-        });
-        if Instant::now() >= deadline {
-            break;
-        }
-        if !left.is_empty() {
-            std::thread::sleep(Duration::from_millis(2));
-        }
-    }
-}
-
 /// Mark every open descriptor above stderr close-on-exec, so agents do not inherit the
 /// coordinator's iceoryx2 files (iceoryx2 opens them without `O_CLOEXEC`).
 ///
@@ -178,6 +152,9 @@ pub struct AgentProcesses {
     /// Other processes of the run that were signalled (members of an agent's group, or
     /// found by the sweep), by pid, with their start time: reaped by pid once dead.
     strays: BTreeMap<u32, u64>,
+    /// The run's control group, when its agents are sandboxed: the sweep kills whatever
+    /// is in it, whatever pid, session or environment it took.
+    cgroup: Option<wire::cgroup::CgroupDirs>,
 }
 
 impl AgentProcesses {
@@ -194,7 +171,14 @@ impl AgentProcesses {
             children: (0..agents).map(|_| None).collect(),
             spawned: Vec::new(),
             strays: BTreeMap::new(),
+            cgroup: None,
         }
+    }
+
+    /// The same, the sandboxed agents of the run in `cgroup`.
+    pub fn with_cgroup(mut self, cgroup: Option<wire::cgroup::CgroupDirs>) -> Self {
+        self.cgroup = cgroup;
+        self
     }
 
     /// Start agent `agent`'s process (in its own process group, so a Ctrl-C on the
@@ -367,6 +351,9 @@ impl AgentProcesses {
     /// SIGTERM, then SIGKILL whatever still runs. Every agent is reaped, and every other
     /// process of the run is killed and reaped ([`Self::sweep`]).
     pub fn stop_all(&mut self, grace: Duration) {
+        // The sandboxed agents, before their relays' exits orphan them: this process
+        // adopts them, and must know them to reap them.
+        self.note_cgroup_members();
         if !self.wait_all(grace) {
             let late = self.running();
             for &i in &late {
@@ -412,6 +399,16 @@ impl AgentProcesses {
                     found += 1;
                 }
             }
+            // What the sandboxed agents hold, found for sure: noted (to be reaped once
+            // this process adopts it), then the whole group killed at once.
+            let members = self.note_cgroup_members();
+            if members > 0
+                && let Some(group) = &self.cgroup
+                && let Err(e) = group.kill_all(SWEEP_TIMEOUT)
+            {
+                tracing::warn!("run {}: its control group: {e}", self.prefix);
+            }
+            found += members;
             self.reap_strays(me);
             if found == 0 && self.strays.is_empty() {
                 return;
@@ -426,6 +423,21 @@ impl AgentProcesses {
             }
             std::thread::sleep(Duration::from_millis(5));
         }
+    }
+
+    /// Note every process in the run's control group as a stray to reap; how many.
+    fn note_cgroup_members(&mut self) -> usize {
+        let Some(group) = &self.cgroup else {
+            return 0;
+        };
+        let mut noted = 0;
+        for pid in group.processes() {
+            if let Some(p) = ProcStat::read(pid) {
+                self.strays.insert(pid, p.start);
+                noted += 1;
+            }
+        }
+        noted
     }
 
     /// Reap every noted stray that is now a zombie child of this process (`me`); forget

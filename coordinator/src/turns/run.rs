@@ -100,7 +100,7 @@ pub fn run_scenario_with(
         .sandbox
         .as_ref()
         .and_then(|_| sandbox_cgroup(&prefix));
-    let mut procs = AgentProcesses::new(bin, &prefix, n);
+    let mut procs = AgentProcesses::new(bin, &prefix, n).with_cgroup(run_cgroup.clone());
 
     let driven = catch_unwind(AssertUnwindSafe(|| {
         Driver {
@@ -124,34 +124,18 @@ pub fn run_scenario_with(
         .drive(centre_path, started)
     }));
 
-    // Every process the sandboxed agents have now: whoever kills them, those orphaned
-    // come to this process (a child subreaper), which must reap them.
-    let members = run_cgroup
-        .as_ref()
-        .map(wire::cgroup::CgroupDirs::processes)
-        .unwrap_or_default();
     // Whatever happened, stop the agents and clean up before reporting.
     for i in procs.running() {
         let _ = ipc.notify_quit(i);
     }
     procs.stop_all(Duration::from_secs(2));
-    if let Some(group) = &run_cgroup {
-        // Whatever a sandboxed agent left, whatever pid or session it took; what was
-        // orphaned came to this process (a child subreaper), which reaps it.
-        let mut killed = match group.kill_all(Duration::from_secs(2)) {
-            Ok(killed) => killed,
-            Err(e) => {
-                tracing::warn!("the run's control group: {e}");
-                Vec::new()
-            }
-        };
-        killed.extend(members);
-        agents::reap_pids(&killed, Duration::from_secs(1));
-        if let Err(e) = group.remove(Duration::from_secs(2)) {
-            tracing::warn!("the run's control group: {e}");
-        }
-    }
+    // Its sweep kills and reaps whatever the sandboxed agents left in their groups.
     drop(procs);
+    if let Some(group) = &run_cgroup
+        && let Err(e) = group.remove(Duration::from_secs(2))
+    {
+        tracing::warn!("the run's control group: {e}");
+    }
     if let Some(router) = router {
         router.close();
     }

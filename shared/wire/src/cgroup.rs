@@ -228,24 +228,19 @@ impl CgroupDirs {
     }
 
     /// Kill every process in the group and below (SIGKILL), and wait until none is
-    /// left, at most `timeout`. Returns every process id it found there (a parent that
-    /// adopted them, as a child subreaper does, reaps them by these).
-    pub fn kill_all(&self, timeout: Duration) -> Result<Vec<u32>, CgroupError> {
+    /// left, at most `timeout`.
+    pub fn kill_all(&self, timeout: Duration) -> Result<(), CgroupError> {
         let deadline = Instant::now() + timeout;
         let kill_file = self
             .unified
             .as_ref()
             .map(|d| d.join("cgroup.kill"))
             .filter(|f| f.is_file());
-        let mut seen: Vec<u32> = Vec::new();
         loop {
             let left = self.processes();
             if left.is_empty() {
-                seen.sort_unstable();
-                seen.dedup();
-                return Ok(seen);
+                return Ok(());
             }
-            seen.extend(&left);
             if Instant::now() >= deadline {
                 return Err(CgroupError::Survivors {
                     left: left.len(),
