@@ -246,7 +246,7 @@ fn a_remote_agent_restarted_by_its_user_is_readmitted_with_respawn() {
 #[test]
 fn bad_network_flags_are_refused_before_anything_runs() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 8] = [
         (
             &["--transport", "zenoh", "--listen", "udp/127.0.0.1:7447"],
             "tcp/HOST:PORT",
@@ -257,10 +257,23 @@ fn bad_network_flags_are_refused_before_anything_runs() {
         ),
         (
             &["--transport", "zenoh", "--listen", "tcp/10.1.2.3:7447"],
-            "plain TCP beyond the loopback",
+            "--allow-plain-tcp",
         ),
+        // Plain TCP on the loopback too: another user of this machine could join.
         (
-            &["--transport", "zenoh", "--listen", "tls/127.0.0.1:7447"],
+            &["--transport", "zenoh", "--listen", "tcp/127.0.0.1:7447"],
+            "any other user of this machine",
+        ),
+        // The run's own authority cannot reach agents started elsewhere.
+        (
+            &[
+                "--transport",
+                "zenoh",
+                "--listen",
+                "tls/127.0.0.1:7447",
+                "--remote",
+                "3",
+            ],
             "--tls-dir",
         ),
         (
@@ -384,6 +397,7 @@ fn agents_leave_when_the_coordinator_is_killed() {
         &listen,
         "--remote",
         "4,5",
+        "--allow-plain-tcp",
     ];
     let mut coordinator = support::coordinator(&args, &out)
         .spawn()
@@ -394,6 +408,7 @@ fn agents_leave_when_the_coordinator_is_killed() {
     let watcher = Watcher::open(&endpoint, 5);
     let mut agent = std::process::Command::new(support::agent_bin())
         .args(["--connect", &listen, "--agent", "5", "--liveness-ms", "100"])
+        .arg("--allow-plain-tcp")
         .stdin(std::process::Stdio::null())
         .spawn()
         .expect("start agent 5");

@@ -40,7 +40,14 @@ fn no_stranger_joins_a_run_over_tls() {
             .expect("start a stranger")
     };
     // No certificate at all: plain TCP to the TLS port.
-    let mut plain = stranger(4, &["--connect".into(), format!("tcp/127.0.0.1:{port}")]);
+    let mut plain = stranger(
+        4,
+        &[
+            "--connect".into(),
+            format!("tcp/127.0.0.1:{port}"),
+            "--allow-plain-tcp".into(),
+        ],
+    );
     // A certificate of another authority.
     let mut forged = stranger(
         5,
@@ -92,8 +99,9 @@ fn no_stranger_joins_a_run_over_tls() {
 }
 
 /// A misbehaving agent over Zenoh, as a user runs it (`coordinator run --transport
-/// zenoh --misbehave 3=MODE`): what it sends crosses the network and its relay, and is
-/// refused like a local agent's; extra and stale moves never reach the coordinator.
+/// zenoh --misbehave 3=MODE`, TLS with the run's own authority): what it sends crosses
+/// the network and its relay, and is refused like a local agent's; extra and stale moves
+/// never reach the coordinator.
 #[test]
 fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
     for (mode, kind) in [
@@ -108,7 +116,7 @@ fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
     ] {
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
-        let listen = format!("tcp/127.0.0.1:{}", free_port(Ipv4Addr::LOCALHOST));
+        let listen = format!("tls/127.0.0.1:{}", free_port(Ipv4Addr::LOCALHOST));
         let misbehave = format!("3={mode}");
         let args = [
             "--transport",
@@ -168,7 +176,7 @@ fn spy_on_a_run(tls: bool) -> usize {
         let files = net::TlsFiles::in_dir(&ours, net::Role::Agent(5));
         (listen, network, net::Security::Tls(files))
     } else {
-        let network = loopback();
+        let network = loopback_plain();
         (network.listen.clone(), network, net::Security::Plain)
     };
     let scenario = Scenario::paper();
@@ -238,4 +246,130 @@ fn a_certified_agent_can_neither_read_nor_answer_another_agents_turns() {
         spy_on_a_run(false) > 0,
         "over plain TCP the spy heard nothing"
     );
+}
+
+/// The network attacks of another user of this machine (`nobody`) on a run in its default
+/// configuration (`--transport zenoh`: TLS with the run's own authority, made in the run's
+/// private folder): an agent started with the run's own TLS folder cannot read it, an
+/// agent over plain TCP is refused by the TLS port, and 500 connections of random bytes
+/// to the router while the agents take their turns change nothing. The run equals the
+/// reference to the bit with no fault, and the strangers leave with an error.
+#[test]
+fn another_user_can_neither_join_nor_disturb_a_run_in_its_default_configuration() {
+    use std::io::Write;
+    use std::os::unix::process::CommandExt;
+    // SAFETY: geteuid(2) cannot fail.
+    let euid = unsafe { libc::geteuid() };
+    assert_eq!(euid, 0, "needs root to start processes as nobody");
+    const NOBODY: u32 = 65534;
+    let temp = tempfile::tempdir().expect("tempdir");
+    let agent_bin = binary_for_another_user(&support::agent_bin(), temp.path());
+    let network = loopback();
+    let listen = network.listen.clone();
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference");
+    let mut strangers: Vec<(&str, std::process::Child)> = Vec::new();
+    let mut junk_sent = 0;
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    let outcome = run_scenario_with(&scenario, &path, &options(network), &mut |between| {
+        if between.step == 1 {
+            let tls = wire::run_root(between.prefix)
+                .expect("the run's folder")
+                .join("tls");
+            assert!(tls.join("ca.pem").is_file(), "no run authority in {tls:?}");
+            let as_nobody = |args: &[String]| {
+                std::process::Command::new(&agent_bin)
+                    .args(args)
+                    .uid(NOBODY)
+                    .gid(NOBODY)
+                    .stdin(std::process::Stdio::null())
+                    .stdout(std::process::Stdio::null())
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .expect("start a stranger as nobody")
+            };
+            let agent_two = ["--agent".to_string(), "2".to_string()];
+            strangers.push((
+                "with the run's TLS folder",
+                as_nobody(
+                    &[
+                        vec!["--connect".into(), listen.to_string(), "--tls-dir".into()],
+                        vec![tls.display().to_string()],
+                        agent_two.to_vec(),
+                    ]
+                    .concat(),
+                ),
+            ));
+            strangers.push((
+                "over plain TCP",
+                as_nobody(
+                    &[
+                        vec![
+                            "--connect".into(),
+                            format!("tcp/127.0.0.1:{}", listen.port),
+                            "--allow-plain-tcp".into(),
+                        ],
+                        agent_two.to_vec(),
+                    ]
+                    .concat(),
+                ),
+            ));
+        }
+        // Junk while the agents take their turns: 25 connections a step for 20 steps.
+        if (1..=20).contains(&between.step) {
+            for _ in 0..25 {
+                let mut junk = [0u8; 4096];
+                for byte in &mut junk {
+                    seed ^= seed << 13;
+                    seed ^= seed >> 7;
+                    seed ^= seed << 17;
+                    *byte = seed as u8;
+                }
+                if let Ok(mut stream) = std::net::TcpStream::connect(("127.0.0.1", listen.port)) {
+                    let _ = stream.write_all(&junk);
+                    junk_sent += 1;
+                }
+            }
+        }
+        Ok(())
+    });
+    let outcome = outcome.unwrap_or_else(|f| panic!("{:#}", f.error));
+    assert_eq!(junk_sent, 500, "the router refused connections");
+    assert_equal_runs(&outcome.run, &reference, "paper under attack");
+    assert!(outcome.run.faults.is_empty(), "{:?}", outcome.run.faults);
+    for (how, mut stranger) in strangers {
+        assert!(
+            reap(&mut stranger, Duration::from_secs(20)),
+            "the stranger {how} was still running"
+        );
+        let status = stranger.wait().expect("status");
+        let mut stderr = String::new();
+        if let Some(mut pipe) = stranger.stderr.take() {
+            use std::io::Read;
+            let _ = pipe.read_to_string(&mut stderr);
+        }
+        assert!(!status.success(), "the stranger {how} succeeded: {stderr}");
+        if how == "with the run's TLS folder" {
+            assert!(stderr.contains("Permission denied"), "{how}: {stderr}");
+        }
+    }
+    assert_clean(&outcome.prefix, &listen);
+}
+
+/// `binary`, or a copy of it in `dir` where another user cannot reach it (a folder on
+/// its path not open to others).
+fn binary_for_another_user(binary: &std::path::Path, dir: &std::path::Path) -> std::path::PathBuf {
+    use std::os::unix::fs::PermissionsExt;
+    let open_to_others = binary
+        .ancestors()
+        .skip(1)
+        .all(|folder| std::fs::metadata(folder).is_ok_and(|m| m.permissions().mode() & 0o001 != 0));
+    if open_to_others {
+        return binary.to_path_buf();
+    }
+    std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    let copy = dir.join("agent");
+    std::fs::copy(binary, &copy).expect("copy the agent binary");
+    copy
 }

@@ -36,18 +36,12 @@ use wire::misbehave::Misbehave;
 pub use args::Args;
 pub use transport::{Command, Reply, Transport, TurnInput};
 
-/// Install the stderr logger (`RUST_LOG`, default `warn`) and route iceoryx2's own log
-/// through it.
+/// Install the stderr logger (`RUST_LOG`, default `warn`; other crates' lines within a
+/// budget, [`wire::logging`]) and set iceoryx2's own log level.
 pub fn init_logging() {
     use iceoryx2::prelude::{LogLevel, set_log_level_from_env_or};
     set_log_level_from_env_or(LogLevel::Warn);
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_target(false)
-        .try_init();
+    wire::logging::init("warn");
 }
 
 /// What an agent built without Zenoh says when asked to use it.

@@ -204,8 +204,9 @@ pub struct NetworkArgs {
     #[arg(long, value_enum, default_value_t = TransportKind::Ipc)]
     pub transport: TransportKind,
     /// With `--transport zenoh`: where the coordinator's Zenoh router listens,
-    /// `tcp/HOST:PORT` or `tls/HOST:PORT`.
-    #[arg(long, value_name = "ENDPOINT", default_value = "tcp/127.0.0.1:7447")]
+    /// `tls/HOST:PORT` (TLS with client certificates) or `tcp/HOST:PORT` (plain, with
+    /// `--allow-plain-tcp` only).
+    #[arg(long, value_name = "ENDPOINT", default_value = "tls/127.0.0.1:7447")]
     pub listen: net::Endpoint,
     /// With `--transport zenoh`: the agents the user starts elsewhere with
     /// `agent --connect ENDPOINT --agent I` (comma-separated); the coordinator starts the
@@ -214,10 +215,12 @@ pub struct NetworkArgs {
     pub remote: Vec<usize>,
     /// With a `tls/` endpoint: the folder of TLS files, `ca.pem`, `coordinator.pem`,
     /// `relay.pem` and `agent-I.pem` for each agent started here, each with its
-    /// `-key.pem` (`scripts/make-tls-dir --agents N DIR ADDRESS...`).
+    /// `-key.pem` (`scripts/make-tls-dir --agents N DIR ADDRESS...`). Without it the run
+    /// makes its own authority in its private folder (not with `--remote`).
     #[arg(long, value_name = "DIR")]
     pub tls_dir: Option<PathBuf>,
-    /// Allow plain TCP beyond the loopback: anyone who reaches the port could join.
+    /// Allow plain TCP (a `tcp/` endpoint), on the loopback too: anyone who reaches the
+    /// port, another user of this machine included, could join and answer for an agent.
     #[arg(long)]
     pub allow_plain_tcp: bool,
 }

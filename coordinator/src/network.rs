@@ -15,15 +15,18 @@ pub struct NetworkOptions {
     pub remote: Vec<usize>,
     /// The folder of TLS files for a `tls/` endpoint: `ca.pem`, `coordinator.pem`,
     /// `relay.pem`, `agent-I.pem` for every agent started here, each with its `-key.pem`
-    /// (`scripts/make-tls-dir`).
+    /// (`scripts/make-tls-dir`). Without it the run makes its own authority
+    /// ([`NetworkOptions::with_run_authority`]).
     pub tls_dir: Option<PathBuf>,
-    /// Allow plain TCP beyond the loopback.
+    /// Allow plain TCP (a `tcp/` endpoint), on the loopback too: anyone who reaches the
+    /// port could join.
     pub allow_plain_tcp: bool,
 }
 
 impl NetworkOptions {
-    /// Plain TCP on `listen`, every agent started by the coordinator.
-    pub fn plain(listen: Endpoint) -> Self {
+    /// The default: TLS on `listen` (a `tls/` endpoint) with the run's own authority,
+    /// every agent started by the coordinator.
+    pub fn new(listen: Endpoint) -> Self {
         Self {
             listen,
             remote: Vec::new(),
@@ -32,18 +35,31 @@ impl NetworkOptions {
         }
     }
 
+    /// Plain TCP on `listen` (a `tcp/` endpoint), consented to, every agent started by
+    /// the coordinator.
+    pub fn plain(listen: Endpoint) -> Self {
+        Self {
+            allow_plain_tcp: true,
+            ..Self::new(listen)
+        }
+    }
+
     /// Check the options before anything runs: the endpoint against the security (TLS
-    /// needs `tls/` and `--tls-dir`, plain TCP the loopback or `--allow-plain-tcp`) and
-    /// that every TLS file is there.
+    /// needs `tls/`, plain TCP `--allow-plain-tcp`), that agents the user starts elsewhere
+    /// have an authority they can get files of before the run (`--tls-dir`), and that every
+    /// TLS file the user named is there.
     pub fn check(&self, agents: usize) -> Result<(), String> {
+        if self.tls_dir.is_none() && self.listen.protocol == net::LinkProtocol::Tls {
+            if !self.remote.is_empty() {
+                return Err(
+                    "--remote: agents started elsewhere need their certificates before the run: make them with scripts/make-tls-dir and pass --tls-dir".into(),
+                );
+            }
+            // The run makes its own authority for exactly the roles it starts.
+            return Ok(());
+        }
         // The agents started here need their own files; remote ones bring theirs.
-        let local_agents = (0..agents)
-            .filter(|i| !self.remote.contains(i))
-            .map(Role::Agent);
-        for role in [Role::Coordinator, Role::Relay]
-            .into_iter()
-            .chain(local_agents)
-        {
+        for role in self.local_roles(agents) {
             let security = self.security(role);
             net::check_security(&self.listen, &security, self.allow_plain_tcp)
                 .map_err(|e| e.to_string())?;
@@ -59,6 +75,39 @@ impl NetworkOptions {
             }
         }
         Ok(())
+    }
+
+    /// The roles that take part from this host: the coordinator, the relays, and every
+    /// agent the coordinator starts.
+    fn local_roles(&self, agents: usize) -> Vec<Role> {
+        let local_agents = (0..agents)
+            .filter(|i| !self.remote.contains(i))
+            .map(Role::Agent);
+        [Role::Coordinator, Role::Relay]
+            .into_iter()
+            .chain(local_agents)
+            .collect()
+    }
+
+    /// These options for a run of `agents` agents whose private folder is `run_folder`:
+    /// with a `tls/` endpoint and no `--tls-dir`, the run's own authority is made in
+    /// `run_folder/tls` (certificates for the coordinator, the relays and the agents it
+    /// starts; the authority's key is never written) and named as the TLS folder.
+    #[cfg(feature = "zenoh")]
+    pub fn with_run_authority(
+        &self,
+        run_folder: &std::path::Path,
+        agents: usize,
+    ) -> Result<Self, net::AuthorityError> {
+        if self.tls_dir.is_some() || self.listen.protocol != net::LinkProtocol::Tls {
+            return Ok(self.clone());
+        }
+        let dir = run_folder.join("tls");
+        net::make_run_authority(&dir, &self.listen, &self.local_roles(agents))?;
+        Ok(Self {
+            tls_dir: Some(dir),
+            ..self.clone()
+        })
     }
 
     fn security(&self, role: Role) -> Security {
@@ -92,14 +141,24 @@ impl NetworkOptions {
 pub struct Router {
     _token: net::zenoh::liveliness::LivelinessToken,
     session: net::zenoh::Session,
+    options: NetworkOptions,
 }
 
 #[cfg(feature = "zenoh")]
 impl Router {
-    /// Open the router on `options.listen` for a run of `agents` agents.
-    pub fn open(options: &NetworkOptions, agents: usize) -> anyhow::Result<Self> {
+    /// Open the router on `options.listen` for a run of `agents` agents whose private
+    /// folder is `run_folder` (where the run's own authority is made, if it needs one).
+    pub fn open(
+        options: &NetworkOptions,
+        agents: usize,
+        run_folder: Option<&std::path::Path>,
+    ) -> anyhow::Result<Self> {
         use anyhow::Context;
         use net::zenoh::Wait;
+        let options = match run_folder {
+            Some(folder) => options.with_run_authority(folder, agents)?,
+            None => options.clone(),
+        };
         let security = options.security(Role::Coordinator);
         net::check_security(&options.listen, &security, options.allow_plain_tcp)?;
         let session = net::open_router(&options.listen, &security, agents)
@@ -112,7 +171,13 @@ impl Router {
         Ok(Self {
             _token: token,
             session,
+            options,
         })
+    }
+
+    /// The options the run goes on with: the TLS folder of its own authority named.
+    pub fn options(&self) -> &NetworkOptions {
+        &self.options
     }
 
     /// Close the router: agents still connected see the coordinator go.
@@ -132,8 +197,17 @@ pub struct Router;
 #[cfg(not(feature = "zenoh"))]
 impl Router {
     /// Refuse: this coordinator was built without Zenoh.
-    pub fn open(_options: &NetworkOptions, _agents: usize) -> anyhow::Result<Self> {
+    pub fn open(
+        _options: &NetworkOptions,
+        _agents: usize,
+        _run_folder: Option<&std::path::Path>,
+    ) -> anyhow::Result<Self> {
         anyhow::bail!("{NO_ZENOH}")
+    }
+
+    /// Never reached: there is no router.
+    pub fn options(&self) -> &NetworkOptions {
+        unreachable!("{NO_ZENOH}")
     }
 
     /// Nothing to close.

@@ -35,9 +35,6 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         )));
     }
     let network = args.network.options().map_err(CliError::Usage)?;
-    if let Some(n) = &network {
-        n.check(scenario.agents.len()).map_err(CliError::Usage)?;
-    }
     if let Some(a) = network.as_ref().and_then(|n| {
         n.remote
             .iter()
@@ -48,6 +45,9 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
             "--remote {a}: the scenario has {n} agents (0 to {})",
             n - 1
         )));
+    }
+    if let Some(n) = &network {
+        n.check(scenario.agents.len()).map_err(CliError::Usage)?;
     }
     let sandbox = args
         .sandbox

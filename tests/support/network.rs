@@ -20,7 +20,14 @@ pub fn free_port(ip: Ipv4Addr) -> u16 {
         .port()
 }
 
+/// The default on the loopback: TLS with the run's own authority.
 pub fn loopback() -> NetworkOptions {
+    let port = free_port(Ipv4Addr::LOCALHOST);
+    NetworkOptions::new(Endpoint::parse(&format!("tls/127.0.0.1:{port}")).expect("endpoint"))
+}
+
+/// Plain TCP on the loopback, consented to (`--allow-plain-tcp`).
+pub fn loopback_plain() -> NetworkOptions {
     let port = free_port(Ipv4Addr::LOCALHOST);
     NetworkOptions::plain(Endpoint::parse(&format!("tcp/127.0.0.1:{port}")).expect("endpoint"))
 }

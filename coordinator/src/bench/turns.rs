@@ -290,9 +290,9 @@ fn run_over(
     let free_port = |ip: std::net::Ipv4Addr| -> anyhow::Result<u16> {
         Ok(std::net::TcpListener::bind((ip, 0))?.local_addr()?.port())
     };
-    let endpoint = |ip: std::net::Ipv4Addr| -> anyhow::Result<net::Endpoint> {
+    let endpoint = |protocol: &str, ip: std::net::Ipv4Addr| -> anyhow::Result<net::Endpoint> {
         Ok(net::Endpoint::parse(&format!(
-            "tcp/{ip}:{}",
+            "{protocol}/{ip}:{}",
             free_port(ip)?
         ))?)
     };
@@ -301,11 +301,13 @@ fn run_over(
     match (link, host) {
         (Link::Iceoryx2, _) => {}
         (Link::ZenohLoopback, _) => {
-            let listen = endpoint(std::net::Ipv4Addr::LOCALHOST)?;
-            options.network = Some(NetworkOptions::plain(listen));
+            // What a user runs by default: TLS with the run's own authority.
+            let listen = endpoint("tls", std::net::Ipv4Addr::LOCALHOST)?;
+            options.network = Some(NetworkOptions::new(listen));
         }
         (Link::ZenohVeth, Some(host)) => {
-            let listen = endpoint(host.local_ip)?;
+            // Plain TCP: the agents started in the second host bring no certificates.
+            let listen = endpoint("tcp", host.local_ip)?;
             let n = scenario.agents.len();
             for i in 0..n {
                 let args = [
@@ -319,7 +321,6 @@ fn run_over(
             }
             options.network = Some(NetworkOptions {
                 remote: (0..n).collect(),
-                allow_plain_tcp: true,
                 ..NetworkOptions::plain(listen)
             });
         }

@@ -67,6 +67,7 @@ pub fn write_run(
         summary: &summary,
         timing,
         last_step: run.steps.last().map_or(0, |s| s.step),
+        log_lines_suppressed: wire::logging::suppressed_log_lines(),
     };
     let mut json = serde_json::to_vec_pretty(&file).context("formatting summary.json")?;
     json.push(b'\n');

@@ -42,6 +42,9 @@ pub struct SummaryFile<'a> {
     pub timing: &'a Timing,
     /// The step the run stopped after (the last one when it completed).
     pub last_step: usize,
+    /// Log lines of other crates (Zenoh's, say, under a flood of junk connections) this
+    /// process dropped beyond their budget ([`wire::logging`]).
+    pub log_lines_suppressed: u64,
 }
 
 /// The keys of `summary.json` that `coordinator render` reads (named as [`Summary`]
@@ -103,6 +106,7 @@ mod tests {
             summary: &summary,
             timing: &Timing::default(),
             last_step: 17,
+            log_lines_suppressed: 3,
         };
         let json = serde_json::to_string_pretty(&file).expect("json");
         let read: SummaryRead = serde_json::from_str(&json).expect("read back");

@@ -20,6 +20,7 @@ use super::outcome::Progress;
 use crate::agents::{AgentProcesses, Exit};
 use crate::ipc::CoordinatorIpc;
 use crate::monitor::SafetyMonitor;
+use crate::network::NetworkOptions;
 use crate::procfs::{self, IdleCpu};
 
 /// The `tracing` target of the line logged when a step is done (`step N done`):
@@ -57,6 +58,8 @@ pub(super) struct Driver<'a, 's> {
     pub(super) senses: bool,
     /// Whether the run has a control group for its sandboxed agents.
     pub(super) run_cgroup: bool,
+    /// How agents reach the router, as it was opened (the run's own TLS folder named).
+    pub(super) network: Option<&'a NetworkOptions>,
     /// The mission file's digest, handed to every process started.
     pub(super) mission_digest: wire::MissionDigest,
     /// Called after every step.
@@ -78,7 +81,7 @@ impl Driver<'_, '_> {
         {
             extra.extend(["--misbehave".to_string(), mode.to_string()]);
         }
-        if let Some(network) = &self.options.network {
+        if let Some(network) = self.network {
             extra.extend(network.relay_args(agent));
         }
         if let Some(sandbox) = &self.options.sandbox {

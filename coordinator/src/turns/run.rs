@@ -67,7 +67,7 @@ pub fn run_scenario_with(
     };
     // The run's private folder, made before anything else of the run (a folder already
     // there is refused); dropped last: after the agents and the node.
-    let _root = match RunRoot::create(&prefix) {
+    let root = match RunRoot::create(&prefix) {
         Ok(root) => root,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
@@ -86,7 +86,7 @@ pub fn run_scenario_with(
     let router = match options
         .network
         .as_ref()
-        .map(|network| Router::open(network, n))
+        .map(|network| Router::open(network, n, root.path()))
         .transpose()
     {
         Ok(router) => router,
@@ -118,6 +118,7 @@ pub fn run_scenario_with(
             hand_over: HandOver::new(options.wait.spins(), n),
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             run_cgroup: run_cgroup.is_some(),
+            network: router.as_ref().map(Router::options),
             mission_digest,
             between_steps,
         }

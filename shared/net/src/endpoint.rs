@@ -81,14 +81,18 @@ impl Endpoint {
         })
     }
 
-    /// The host as an address, if it is one.
-    fn address(&self) -> Option<IpAddr> {
-        let bare = self
-            .host
+    /// The host without the brackets of an IPv6 address (`::1` for `[::1]`): the name a
+    /// certificate gives it.
+    pub fn bare_host(&self) -> &str {
+        self.host
             .strip_prefix('[')
             .and_then(|h| h.strip_suffix(']'))
-            .unwrap_or(&self.host);
-        bare.parse().ok()
+            .unwrap_or(&self.host)
+    }
+
+    /// The host as an address, if it is one.
+    fn address(&self) -> Option<IpAddr> {
+        self.bare_host().parse().ok()
     }
 
     /// Whether the host is this machine's loopback (`127.0.0.0/8`, `::1` or

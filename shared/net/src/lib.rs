@@ -20,12 +20,16 @@
 //! - `port`: sending and receiving them on Zenoh ports (`send`, `receive`; feature `zenoh`);
 //! - `keys`: the key expressions;
 //! - `security`: plain or TLS, the files and names of each side ([`Security`], [`Role`]);
-//! - `session`: opening the router and the clients (feature `zenoh`).
+//! - `session`: opening the router and the clients (feature `zenoh`);
+//! - `authority`: a run's own TLS authority, made on the fly ([`make_run_authority`];
+//!   feature `zenoh`).
 //!
 //! Without the feature `zenoh` only the parts that need no Zenoh are built (endpoints,
 //! messages, security): enough for the coordinator's and the agent's command lines.
 #![warn(missing_docs)]
 
+#[cfg(feature = "zenoh")]
+mod authority;
 mod endpoint;
 mod keys;
 mod message;
@@ -35,6 +39,8 @@ mod security;
 #[cfg(feature = "zenoh")]
 mod session;
 
+#[cfg(feature = "zenoh")]
+pub use authority::{AuthorityError, make_run_authority};
 pub use endpoint::{Endpoint, EndpointError, LinkProtocol};
 pub use keys::{COORDINATOR_ALIVE_KEY, agent_alive_key, agent_down_key, agent_up_key};
 pub use message::{Down, MAX_MESSAGE_BYTES, MessageError, NetMove, NetTurn, Up, decode, encode};

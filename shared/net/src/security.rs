@@ -9,8 +9,8 @@ use crate::endpoint::{Endpoint, LinkProtocol};
 /// Who may talk to whom.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Security {
-    /// Plain TCP: anyone who reaches the port may join. Loopback only, unless the user
-    /// says otherwise ([`check_security`]).
+    /// Plain TCP: anyone who reaches the port may join, another user of this machine
+    /// too. Only with the user's explicit consent ([`check_security`]).
     Plain,
     /// TLS with certificates on both sides, signed by one certificate authority.
     Tls(TlsFiles),
@@ -68,11 +68,11 @@ impl TlsFiles {
 /// Why a session cannot be opened.
 #[derive(Debug, thiserror::Error)]
 pub enum SessionError {
-    /// Plain TCP on an endpoint beyond the loopback without the user's consent.
+    /// Plain TCP without the user's consent (`--allow-plain-tcp`), on the loopback too.
     #[error(
-        "{0}: plain TCP beyond the loopback lets anyone on the network join; use tls/ with --tls-dir, or pass --allow-plain-tcp"
+        "{0}: plain TCP lets anyone who reaches the port join (on the loopback, any other user of this machine); use tls/ (with no --tls-dir the run makes its own authority), or pass --allow-plain-tcp"
     )]
-    PlainBeyondLoopback(Endpoint),
+    PlainWithoutConsent(Endpoint),
     /// The endpoint's protocol and the security disagree.
     #[error("{0}: {1}")]
     Mismatch(Endpoint, &'static str),
@@ -90,11 +90,18 @@ pub enum SessionError {
 }
 
 /// Check that `endpoint` may be used with `security`: TLS needs `tls/`, plain needs
-/// `tcp/` and, unless `allow_plain_beyond_loopback`, a loopback host.
+/// `tcp/` and the user's consent (`allow_plain_tcp`), wherever the host is.
+///
+/// ```
+/// use net::{Endpoint, Security, check_security};
+/// let loopback = Endpoint::parse("tcp/127.0.0.1:7447").unwrap();
+/// assert!(check_security(&loopback, &Security::Plain, false).is_err());
+/// assert!(check_security(&loopback, &Security::Plain, true).is_ok());
+/// ```
 pub fn check_security(
     endpoint: &Endpoint,
     security: &Security,
-    allow_plain_beyond_loopback: bool,
+    allow_plain_tcp: bool,
 ) -> Result<(), SessionError> {
     match (security, endpoint.protocol) {
         (Security::Tls(_), LinkProtocol::Tls) => Ok(()),
@@ -107,10 +114,10 @@ pub fn check_security(
             "a tls/ endpoint needs certificates (--tls-dir)",
         )),
         (Security::Plain, LinkProtocol::Tcp) => {
-            if endpoint.is_loopback() || allow_plain_beyond_loopback {
+            if allow_plain_tcp {
                 Ok(())
             } else {
-                Err(SessionError::PlainBeyondLoopback(endpoint.clone()))
+                Err(SessionError::PlainWithoutConsent(endpoint.clone()))
             }
         }
     }

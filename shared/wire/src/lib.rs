@@ -30,6 +30,7 @@
 //! - `clock`: the machine's monotonic clock ([`monotonic_ns`]);
 //! - `bench`: the latency floor's services and sample ([`BenchPing`]);
 //! - [`cgroup`]: the run's control groups, one per sandboxed agent;
+//! - [`logging`]: the stderr log, other crates' lines within a budget;
 //! - [`misbehave`]: the agents' test modes.
 #![warn(missing_docs)]
 
@@ -38,6 +39,7 @@ pub mod cgroup;
 mod clock;
 mod config;
 mod loan;
+pub mod logging;
 mod message;
 pub mod misbehave;
 mod mission_file;
