@@ -147,8 +147,7 @@ impl SandboxArgs {
     /// `--sandbox` asked for, or implied by running as root; without root and without
     /// `--trusted-agents`, a warning says the agents are trusted.
     pub fn options(&self, agents: usize, zenoh: bool) -> Result<Option<SandboxOptions>, String> {
-        // SAFETY: geteuid(2) reads this process's effective user id; it cannot fail.
-        let root = unsafe { libc::geteuid() } == 0;
+        let root = crate::turns::running_as_root();
         if self.sandbox && zenoh {
             return Err("--sandbox: not with --transport zenoh (a remote agent is sandboxed by its own host)".into());
         }
@@ -413,6 +412,11 @@ pub struct BenchArgs {
     /// root and iproute2).
     #[arg(long)]
     pub zenoh_netns: bool,
+    /// With `--turns-scenario`: also run each mode with every agent sandboxed (its own
+    /// user and control group behind a relay; needs root), beside the trusted agents, and
+    /// report what the sandbox costs.
+    #[arg(long)]
+    pub sandboxed: bool,
     /// The agent executable (default: `agent` beside this program).
     #[arg(long)]
     pub agent_bin: Option<PathBuf>,

@@ -116,12 +116,25 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             "--zenoh-netns needs --transport zenoh".into(),
         ));
     }
+    if args.sandboxed && args.turns_scenario.is_none() {
+        return Err(CliError::Usage(
+            "--sandboxed: measured on a --turns-scenario FILE (beside trusted agents)".into(),
+        ));
+    }
+    if args.sandboxed && !crate::turns::running_as_root() {
+        return Err(CliError::Usage(
+            "--sandboxed needs root (each agent runs as a user of its own)".into(),
+        ));
+    }
     let mut links = vec![turns::Link::Iceoryx2];
     if zenoh {
         links.push(turns::Link::ZenohLoopback);
     }
     if args.zenoh_netns {
         links.push(turns::Link::ZenohVeth);
+    }
+    if args.sandboxed {
+        links.push(turns::Link::Sandboxed);
     }
     let turns_bench = args
         .turns_scenario

@@ -49,6 +49,26 @@ pub struct TurnsReport {
     /// and across a veth pair to a network namespace (`--zenoh-netns`); each mode of each.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub over_zenoh: Vec<ModeReport>,
+    /// The same runs with every agent sandboxed (`--sandboxed`, as root): sequential, then
+    /// parallel.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sandboxed: Vec<ModeReport>,
+    /// Sandboxed against trusted (iceoryx2) in each mode, `[sequential, parallel]`:
+    /// turn latency p50, steps per second and start-up, each as sandboxed / trusted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sandboxed_vs_trusted: Option<SandboxCost>,
+}
+
+/// What the sandbox costs, each figure sandboxed / trusted in the same bench run,
+/// `[sequential, parallel]`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SandboxCost {
+    /// Turn latency p50.
+    pub turn_p50: [f64; 2],
+    /// Steps per second (the median run).
+    pub steps_per_s: [f64; 2],
+    /// Start-up (the median run).
+    pub startup_s: [f64; 2],
 }
 
 /// How the agents of a run talk to the coordinator.
@@ -60,6 +80,9 @@ pub enum Link {
     ZenohLoopback,
     /// Zenoh across a veth pair: every agent in a network namespace of its own host.
     ZenohVeth,
+    /// iceoryx2 through a relay per agent, the agent sandboxed behind it (its own user and
+    /// control group, a socket pair to its relay; needs root).
+    Sandboxed,
 }
 
 impl Link {
@@ -69,6 +92,7 @@ impl Link {
             Self::Iceoryx2 => "iceoryx2",
             Self::ZenohLoopback => "zenoh loopback",
             Self::ZenohVeth => "zenoh veth",
+            Self::Sandboxed => "iceoryx2 sandboxed",
         }
     }
 }
@@ -102,6 +126,8 @@ pub struct ModeReport {
     pub completed: bool,
     /// Wall time of each run, start-up included, seconds.
     pub wall_s: Vec<f64>,
+    /// Start-up (first spawn to the last ready handshake): the median of the runs, seconds.
+    pub startup_s: f64,
 }
 
 /// What the bench asked for: the file, the runs of each mode, the steps.
@@ -248,9 +274,32 @@ pub fn measure(
     let over_zenoh: Vec<ModeReport> = b
         .links
         .iter()
-        .filter(|&&l| l != Link::Iceoryx2)
+        .filter(|&&l| matches!(l, Link::ZenohLoopback | Link::ZenohVeth))
         .flat_map(|&l| [TurnMode::Sequential, TurnMode::Parallel].map(|m| report_of(m, l)))
         .collect();
+    let sandboxed: Vec<ModeReport> = if b.links.contains(&Link::Sandboxed) {
+        [TurnMode::Sequential, TurnMode::Parallel]
+            .map(|m| report_of(m, Link::Sandboxed))
+            .to_vec()
+    } else {
+        Vec::new()
+    };
+    let sandboxed_vs_trusted = match sandboxed.as_slice() {
+        [s, p] => {
+            let of = |f: fn(&ModeReport) -> f64| {
+                [
+                    super::ratio(f(s), f(&sequential)),
+                    super::ratio(f(p), f(&parallel)),
+                ]
+            };
+            Some(SandboxCost {
+                turn_p50: of(|m| m.turn_us.p50),
+                steps_per_s: of(|m| m.steps_per_s),
+                startup_s: of(|m| m.startup_s),
+            })
+        }
+        _ => None,
+    };
     let speeds: Vec<f64> = seq.agents.iter().filter_map(|a| a.max_step_m).collect();
     Ok(TurnsReport {
         scenario: seq.name.clone(),
@@ -272,6 +321,8 @@ pub fn measure(
         sequential,
         parallel,
         over_zenoh,
+        sandboxed,
+        sandboxed_vs_trusted,
     })
 }
 
@@ -300,6 +351,7 @@ fn run_over(
     let mut remote_agents = Vec::new();
     match (link, host) {
         (Link::Iceoryx2, _) => {}
+        (Link::Sandboxed, _) => options.sandbox = Some(crate::turns::SandboxOptions::new()),
         (Link::ZenohLoopback, _) => {
             // What a user runs by default: TLS with the run's own authority.
             let listen = endpoint("tls", std::net::Ipv4Addr::LOCALHOST)?;
@@ -386,6 +438,7 @@ pub fn table(t: &TurnsReport) -> String {
     for m in [&t.sequential, &t.parallel]
         .into_iter()
         .chain(&t.over_zenoh)
+        .chain(&t.sandboxed)
     {
         let _ = writeln!(
             s,
@@ -409,6 +462,18 @@ pub fn table(t: &TurnsReport) -> String {
         runs_list(&t.sequential.steps_per_s_runs),
         runs_list(&t.parallel.steps_per_s_runs)
     );
+    if let Some(c) = &t.sandboxed_vs_trusted {
+        let _ = writeln!(
+            s,
+            "  sandboxed / trusted (sequential, parallel): turn latency p50 {:.2}x, {:.2}x; steps/s {:.2}x, {:.2}x; start-up {:.2}x, {:.2}x",
+            c.turn_p50[0],
+            c.turn_p50[1],
+            c.steps_per_s[0],
+            c.steps_per_s[1],
+            c.startup_s[0],
+            c.startup_s[1]
+        );
+    }
     s
 }
 
@@ -449,6 +514,7 @@ fn mode_report(mode: TurnMode, link: Link, runs: &[RunOutcome]) -> ModeReport {
         faults: summaries.iter().map(|s| s.faults.len()).sum(),
         completed: summaries.iter().all(|s| s.completed),
         wall_s: runs.iter().map(|o| o.timing.wall_s).collect(),
+        startup_s: median(&runs.iter().map(|o| o.timing.startup_s).collect::<Vec<_>>()),
         steps_per_s_runs,
     }
 }

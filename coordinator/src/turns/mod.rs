@@ -38,7 +38,9 @@ mod startup;
 mod turn;
 
 pub use driver::{BetweenSteps, PROGRESS_TARGET};
-pub use options::{RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode};
+pub use options::{
+    RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode, running_as_root,
+};
 pub(crate) use outcome::TurnSample;
 pub use outcome::{RunFailure, RunOutcome};
 pub use run::{run_scenario, run_scenario_with};

@@ -109,6 +109,12 @@ impl RunOptions {
     }
 }
 
+/// Whether this process runs as root (effective user id 0): the sandbox needs it.
+pub fn running_as_root() -> bool {
+    // SAFETY: geteuid(2) reads this process's effective user id; it cannot fail.
+    unsafe { libc::geteuid() == 0 }
+}
+
 impl SandboxOptions {
     /// The default first user id: high, so that it names no account of a usual system.
     pub const DEFAULT_FIRST_UID: u32 = 200_000;
