@@ -92,6 +92,11 @@ pub struct RunArgs {
     /// later).
     #[arg(long)]
     pub no_plots: bool,
+    /// Sync the run log (`run.mcap`) to the disk every N steps; by default at most once a
+    /// second. Every step is in the file when it ends either way: this bounds what a
+    /// power cut, not a crash, can cost.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub sync_every_steps: Option<u32>,
     /// In the animation, draw each live agent's sensing radius as a faint circle (when
     /// the scenario has `formation.sensing_radius_m`).
     #[arg(long)]

@@ -16,6 +16,7 @@ mod plan;
 mod procfs;
 pub mod render;
 mod run_command;
+pub mod run_log;
 mod simulate_command;
 pub mod stale_runs;
 mod stats;

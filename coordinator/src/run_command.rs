@@ -61,6 +61,9 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
             .unwrap_or_else(|| output::default_run_dir(&scenario.name)),
         args.force,
     )?;
+    // The folder is made now: the run writes its log into it as it goes.
+    let dir = out.create_in_place()?;
+    let log_path = dir.join(crate::run_log::RUN_LOG_FILE);
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
         turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
@@ -72,6 +75,14 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         wait: args.wait,
         network,
         sandbox,
+        log: Some(crate::run_log::LogOptions {
+            path: log_path.clone(),
+            source: loaded.source.clone(),
+            sync: args.sync_every_steps.map_or(
+                crate::run_log::SyncPolicy::EverySecond,
+                crate::run_log::SyncPolicy::EverySteps,
+            ),
+        }),
         ..RunOptions::default()
     };
     // A failed run still writes what it recorded, marked not completed.
@@ -79,13 +90,28 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         Ok(outcome) => (outcome, None),
         Err(failure) => (*failure.partial, Some(failure.error)),
     };
-    // Everything is written into a fresh sibling folder, then swapped in whole.
-    let staging = out.begin()?;
+    // Every other output is made from the log, read back.
+    let run = match crate::output::run_from_log(&log_path, scenario) {
+        Ok(run) => {
+            if run != outcome.run {
+                tracing::error!(
+                    "{}: the log read back differs from the run's own record; the outputs follow the log",
+                    log_path.display()
+                );
+            }
+            run
+        }
+        // A run that failed before its log was made.
+        Err(e) => {
+            tracing::warn!("{e:#}: the outputs follow the run's own record");
+            outcome.run.clone()
+        }
+    };
     output::write_run(
-        staging.path(),
+        &dir,
         scenario,
         &loaded.source,
-        &outcome.run,
+        &run,
         centre_path,
         &outcome.timing,
     )?;
@@ -94,13 +120,12 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     } else {
         // The data files are complete already; a failed drawing costs only the pictures.
         Some(crate::render::render_run_dir_with(
-            staging.path(),
+            &dir,
             crate::render::RenderOptions {
                 sensing_circles: args.sensing_circles,
             },
         ))
     };
-    let dir = staging.commit()?;
     match plots {
         Some(Ok(files)) => tracing::info!(
             "{} plot files in {}",

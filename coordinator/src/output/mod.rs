@@ -15,6 +15,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+
+use crate::stats::Distribution;
 use shared::geometry::Pose;
 use shared::record::Run;
 use shared::scenario::Scenario;
@@ -41,6 +43,40 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
     std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))?;
     Ok(())
+}
+
+/// The record of the run logged in `log` (`run.mcap`) of `scenario`: every step in the
+/// log, complete only if the log says the run ended complete.
+pub fn run_from_log(log: &Path, scenario: &Scenario) -> anyhow::Result<Run> {
+    let logged = crate::run_log::read_run_log(log)?;
+    Ok(logged.to_run(&scenario.name, scenario.unknown.len()))
+}
+
+/// Make the outputs of a run that was killed (or whose outputs were lost) from its log:
+/// when `dir` holds `run.mcap` but no `summary.json`, every complete step of the log is
+/// written out as a run would write it, marked not completed (`"completed": false`,
+/// `last_step`). Returns the last step recovered, or `None` when there was nothing to
+/// recover.
+pub fn recover_run_dir(dir: &Path) -> anyhow::Result<Option<usize>> {
+    let log_path = dir.join(crate::run_log::RUN_LOG_FILE);
+    if dir.join("summary.json").exists() || !log_path.is_file() {
+        return Ok(None);
+    }
+    let logged = crate::run_log::read_run_log(&log_path)?;
+    let source = log_path.display().to_string();
+    let scenario = Scenario::parse(&logged.scenario_toml, &source)
+        .with_context(|| format!("{source}: the scenario logged"))?;
+    let run = logged.to_run(&scenario.name, scenario.unknown.len());
+    let Some(last) = run.steps.last().map(|s| s.step) else {
+        anyhow::bail!("{source}: no step logged");
+    };
+    let timing = Timing {
+        turn_latency_us: Distribution::of_iter(logged.turns.iter().map(|t| t.latency_us)),
+        compute_us: Distribution::of_iter(logged.turns.iter().map(|t| t.compute_us)),
+        ..Timing::default()
+    };
+    write_run(dir, &scenario, &source, &run, &logged.first_plan, &timing)?;
+    Ok(Some(last))
 }
 
 /// Create `dir` and write every output file of `run` into it, with the scenario as run in

@@ -84,6 +84,19 @@ impl OutDir {
         &self.dir
     }
 
+    /// Create the folder itself, for a run that writes into it as it goes (its log): a
+    /// folder that holds something (allowed by `--force`) is removed first, so the new
+    /// run's files never stand beside an older run's. A folder without `summary.json` is
+    /// then a run under way, or one that was killed.
+    pub fn create_in_place(&self) -> anyhow::Result<PathBuf> {
+        if self.force && std::fs::symlink_metadata(&self.dir).is_ok() {
+            remove_any(&self.dir)?;
+        }
+        std::fs::create_dir_all(&self.dir)
+            .with_context(|| format!("creating {}", self.dir.display()))?;
+        Ok(self.dir.clone())
+    }
+
     /// Create the fresh temporary sibling folder (and any missing parent) to write the
     /// outputs into.
     pub fn begin(&self) -> anyhow::Result<Staging> {

@@ -121,6 +121,15 @@ pub fn render_data_with(
 /// `coordinator render`: a bad run directory is a usage error (exit code 2) naming the
 /// file; a failure to draw or write is exit code 1.
 pub fn execute(args: &RenderArgs) -> Result<(), CliError> {
+    // A killed run: its outputs made from its log first.
+    if let Some(last) = crate::output::recover_run_dir(&args.run_dir)
+        .map_err(|e| CliError::Usage(format!("{e:#}")))?
+    {
+        eprintln!(
+            "recovered steps 0 to {last} from {} (the run did not end: marked not completed)",
+            args.run_dir.join(crate::run_log::RUN_LOG_FILE).display()
+        );
+    }
     let data = RunData::load(&args.run_dir).map_err(|e| CliError::Usage(e.to_string()))?;
     let out = args.run_dir.join(PLOTS_DIR);
     let options = RenderOptions {

@@ -60,6 +60,10 @@ pub(super) struct Driver<'a, 's> {
     pub(super) run_cgroup: bool,
     /// How agents reach the router, as it was opened (the run's own TLS folder named).
     pub(super) network: Option<&'a NetworkOptions>,
+    /// The run's log, written at the end of every step.
+    pub(super) log: Option<&'a mut crate::run_log::RunLogWriter>,
+    /// How many of the turn samples are in the log.
+    pub(super) turns_logged: usize,
     /// The mission file's digest, handed to every process started.
     pub(super) mission_digest: wire::MissionDigest,
     /// Called after every step.
@@ -91,6 +95,27 @@ impl Driver<'_, '_> {
         Ok(())
     }
 
+    /// Log the step just recorded, with what happened since the last one.
+    fn log_step(&mut self, course: Option<&Course<'_>>) -> anyhow::Result<()> {
+        let Some(log) = self.log.as_deref_mut() else {
+            return Ok(());
+        };
+        let Some(step) = self.recorder.steps().last() else {
+            return Ok(());
+        };
+        let turns = self.progress.turn_samples[self.turns_logged..]
+            .iter()
+            .map(|t| crate::run_log::TurnMessage {
+                step: t.step,
+                agent: t.agent,
+                latency_us: t.latency_us,
+                compute_us: t.compute_us,
+            });
+        log.log_step(step, self.recorder.faults(), course, turns)?;
+        self.turns_logged = self.progress.turn_samples.len();
+        Ok(())
+    }
+
     /// Each agent's process id, if it has a process.
     pub(super) fn pids(&self) -> Vec<Option<u32>> {
         (0..self.scenario.agents.len())
@@ -101,6 +126,7 @@ impl Driver<'_, '_> {
     /// Start every agent, then run every step of `centre_path`.
     pub(super) fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<()> {
         let n = self.scenario.agents.len();
+        self.log_step(None)?;
         for i in 0..n {
             // A spawn that fails (the machine out of processes, say) fails that agent
             // alone: it is frozen where it starts, or replaced with `--respawn`.
@@ -168,6 +194,7 @@ impl Driver<'_, '_> {
                 }
             }
             self.recorder.end_step(step);
+            self.log_step(Some(&course))?;
             self.hand_over.end_step(self.ipc);
             bar.inc(1);
             // For whoever follows the run from outside (tests time their kills by it).

@@ -89,6 +89,8 @@ pub struct RunOptions {
     /// Each agent in a sandbox behind a relay ([`SandboxOptions`]); `None`: every agent
     /// as this process's user, on the run's channels itself (it is trusted).
     pub sandbox: Option<SandboxOptions>,
+    /// Where the run writes its log as it goes (`run.mcap`), if anywhere.
+    pub log: Option<crate::run_log::LogOptions>,
 }
 
 /// How agents are sandboxed: agent `i` runs as user and group `first_uid + i`, in a
@@ -184,6 +186,7 @@ impl Default for RunOptions {
             idle_probe: None,
             network: None,
             sandbox: None,
+            log: None,
         }
     }
 }

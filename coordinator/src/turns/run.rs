@@ -96,6 +96,24 @@ pub fn run_scenario_with(
             return Err(fail(e, &recorder, progress));
         }
     };
+    // The log, from step 0 on: a run killed from here leaves every step before the one
+    // under way.
+    let mut log = match options
+        .log
+        .as_ref()
+        .map(|log| crate::run_log::RunLogWriter::create(log, scenario, centre_path))
+        .transpose()
+    {
+        Ok(log) => log,
+        Err(e) => {
+            if let Some(router) = router {
+                router.close();
+            }
+            drop(ipc);
+            crate::stale_runs::remove_run_files(&prefix);
+            return Err(fail(e.into(), &recorder, progress));
+        }
+    };
     let run_cgroup = options
         .sandbox
         .as_ref()
@@ -119,6 +137,8 @@ pub fn run_scenario_with(
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             run_cgroup: run_cgroup.is_some(),
             network: router.as_ref().map(Router::options),
+            log: log.as_mut(),
+            turns_logged: 0,
             mission_digest,
             between_steps,
         }
@@ -153,7 +173,12 @@ pub fn run_scenario_with(
             Some(anyhow::anyhow!("the coordinator panicked: {what}"))
         }
     };
-    let run = if progress.completed && !progress.gave_up && error.is_none() {
+    let completed = progress.completed && !progress.gave_up && error.is_none();
+    let error = match log.map(|log| log.finish(completed, progress.gave_up)) {
+        Some(Err(e)) if error.is_none() => Some(e.into()),
+        _ => error,
+    };
+    let run = if completed {
         recorder.finish(true)
     } else {
         recorder.snapshot()

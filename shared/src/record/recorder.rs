@@ -158,6 +158,11 @@ impl<'a> Recorder<'a> {
         &self.run.steps
     }
 
+    /// The faults recorded so far, in order.
+    pub fn faults(&self) -> &[Fault] {
+        &self.run.faults
+    }
+
     /// Record that this step's turns are taken in `groups` groups.
     pub fn note_groups(&mut self, groups: usize) {
         self.groups = groups;

@@ -1,0 +1,260 @@
+//! Foxglove's well-known schemas in `run.mcap` (JSON-encoded, with JSON schemas), so the
+//! log opens in Foxglove as a scene: `foxglove.SceneUpdate` (`/scene`: obstacles,
+//! moving obstacles, agents, their slots, best points, moves and sensing circles),
+//! `foxglove.PosesInFrame` (`/centre/plan`: the centre path planned, then each replan;
+//! `/centre/path`: the path followed so far) and `foxglove.FrameTransform` (`/tf`: the
+//! formation frame in the field frame). Everything lies in the plane `z = 0` of the frame
+//! `field`.
+
+use serde_json::{Value, json};
+use shared::geometry::{Point, Pose};
+use shared::record::Step;
+use shared::scenario::Scenario;
+
+/// The frame every position is in.
+pub const FIELD_FRAME: &str = "field";
+
+/// The formation's frame: at the centre, turned by its heading.
+pub const FORMATION_FRAME: &str = "formation";
+
+/// Height of the discs drawn for bodies, metres (they are flat in the model).
+const DISC_HEIGHT_M: f64 = 0.05;
+
+fn number() -> Value {
+    json!({"type": "number"})
+}
+
+fn integer() -> Value {
+    json!({"type": "integer", "minimum": 0})
+}
+
+fn string() -> Value {
+    json!({"type": "string"})
+}
+
+fn object(properties: Value) -> Value {
+    let required: Vec<String> = properties
+        .as_object()
+        .map(|p| p.keys().cloned().collect())
+        .unwrap_or_default();
+    json!({"type": "object", "properties": properties, "required": required})
+}
+
+fn array(items: Value) -> Value {
+    json!({"type": "array", "items": items})
+}
+
+fn time() -> Value {
+    object(json!({"sec": integer(), "nsec": integer()}))
+}
+
+fn vector3() -> Value {
+    object(json!({"x": number(), "y": number(), "z": number()}))
+}
+
+fn quaternion() -> Value {
+    object(json!({"x": number(), "y": number(), "z": number(), "w": number()}))
+}
+
+fn color() -> Value {
+    object(json!({"r": number(), "g": number(), "b": number(), "a": number()}))
+}
+
+fn pose_schema() -> Value {
+    object(json!({"position": vector3(), "orientation": quaternion()}))
+}
+
+/// The JSON schema of `foxglove.SceneUpdate`, as far as this log uses it (entities of
+/// cylinders and line strips; every other primitive list present and empty).
+pub fn scene_update_schema() -> Value {
+    let cylinder = object(json!({
+        "pose": pose_schema(), "size": vector3(), "bottom_scale": number(),
+        "top_scale": number(), "color": color()
+    }));
+    let line = object(json!({
+        "type": integer(), "pose": pose_schema(), "thickness": number(),
+        "scale_invariant": {"type": "boolean"}, "points": array(vector3()),
+        "color": color(), "colors": array(color()), "indices": array(integer())
+    }));
+    let entity = object(json!({
+        "timestamp": time(), "frame_id": string(), "id": string(), "lifetime": time(),
+        "frame_locked": {"type": "boolean"}, "metadata": array(object(json!({"key": string(), "value": string()}))),
+        "arrows": array(json!({})), "cubes": array(json!({})), "spheres": array(json!({})),
+        "cylinders": array(cylinder), "lines": array(line), "triangles": array(json!({})),
+        "texts": array(json!({})), "models": array(json!({}))
+    }));
+    let deletion = object(json!({"timestamp": time(), "type": integer(), "id": string()}));
+    let mut schema = object(json!({"deletions": array(deletion), "entities": array(entity)}));
+    schema["title"] = json!("foxglove.SceneUpdate");
+    schema
+}
+
+/// The JSON schema of `foxglove.PosesInFrame`.
+pub fn poses_in_frame_schema() -> Value {
+    let mut schema = object(json!({
+        "timestamp": time(), "frame_id": string(), "poses": array(pose_schema())
+    }));
+    schema["title"] = json!("foxglove.PosesInFrame");
+    schema
+}
+
+/// The JSON schema of `foxglove.FrameTransform`.
+pub fn frame_transform_schema() -> Value {
+    let mut schema = object(json!({
+        "timestamp": time(), "parent_frame_id": string(), "child_frame_id": string(),
+        "translation": vector3(), "rotation": quaternion()
+    }));
+    schema["title"] = json!("foxglove.FrameTransform");
+    schema
+}
+
+/// A log time in nanoseconds as Foxglove's `{sec, nsec}`.
+fn stamp(log_time_ns: u64) -> Value {
+    json!({"sec": log_time_ns / 1_000_000_000, "nsec": log_time_ns % 1_000_000_000})
+}
+
+/// The rotation by `heading_rad` about `z`.
+fn rotation(heading_rad: f64) -> Value {
+    let half = heading_rad / 2.0;
+    json!({"x": 0.0, "y": 0.0, "z": half.sin(), "w": half.cos()})
+}
+
+fn pose_at(p: &Point, heading_rad: f64) -> Value {
+    json!({"position": {"x": p.x, "y": p.y, "z": 0.0}, "orientation": rotation(heading_rad)})
+}
+
+fn rgba(r: f64, g: f64, b: f64, a: f64) -> Value {
+    json!({"r": r, "g": g, "b": b, "a": a})
+}
+
+fn disc(centre: &Point, radius_m: f64, color: Value) -> Value {
+    let d = 2.0 * radius_m;
+    json!({
+        "pose": pose_at(centre, 0.0), "size": {"x": d, "y": d, "z": DISC_HEIGHT_M},
+        "bottom_scale": 1.0, "top_scale": 1.0, "color": color
+    })
+}
+
+fn line_strip(points: &[Point], thickness_m: f64, color: Value) -> Value {
+    json!({
+        "type": 0, "pose": pose_at(&Point::origin(), 0.0), "thickness": thickness_m,
+        "scale_invariant": false,
+        "points": points.iter().map(|p| json!({"x": p.x, "y": p.y, "z": 0.0})).collect::<Vec<_>>(),
+        "color": color, "colors": [], "indices": []
+    })
+}
+
+fn entity(id: &str, log_time_ns: u64, cylinders: Vec<Value>, lines: Vec<Value>) -> Value {
+    json!({
+        "timestamp": stamp(log_time_ns), "frame_id": FIELD_FRAME, "id": id,
+        "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
+        "arrows": [], "cubes": [], "spheres": [], "cylinders": cylinders, "lines": lines,
+        "triangles": [], "texts": [], "models": []
+    })
+}
+
+/// The scene at the end of `step`: each entity replaces the one of the same id before it.
+/// `known_unknown[i]`: whether unknown obstacle `i` is known by now (drawn only then);
+/// `with_obstacles`: whether to send the static obstacles (at step 0 and when one is
+/// found: they persist in between).
+pub fn scene_update(
+    scenario: &Scenario,
+    step: &Step,
+    known_unknown: &[bool],
+    with_obstacles: bool,
+    log_time_ns: u64,
+) -> Value {
+    let grey = || rgba(0.45, 0.45, 0.45, 1.0);
+    let mut obstacles: Vec<Value> = scenario
+        .obstacles
+        .iter()
+        .filter(|_| with_obstacles)
+        .map(|o| disc(&o.centre, o.radius_m, grey()))
+        .collect();
+    obstacles.extend(
+        scenario
+            .unknown
+            .iter()
+            .zip(known_unknown)
+            .filter(|(_, known)| with_obstacles && **known)
+            .map(|(o, _)| disc(&o.centre, o.radius_m, rgba(0.6, 0.35, 0.2, 1.0))),
+    );
+    let moving: Vec<Value> = scenario
+        .moving
+        .iter()
+        .zip(&step.moving)
+        .map(|(m, at)| disc(at, m.radius_m, rgba(0.8, 0.5, 0.1, 1.0)))
+        .collect();
+    let agents: Vec<Value> = scenario
+        .agents
+        .iter()
+        .zip(&step.agents)
+        .map(|(spec, a)| {
+            let color = if a.alive {
+                rgba(0.12, 0.47, 0.71, 1.0)
+            } else {
+                rgba(0.2, 0.2, 0.2, 1.0)
+            };
+            disc(&a.position, spec.radius_m, color)
+        })
+        .collect();
+    let slots: Vec<Value> = step
+        .agents
+        .iter()
+        .map(|a| disc(&a.slot, 0.05, rgba(0.2, 0.63, 0.17, 0.8)))
+        .collect();
+    let best: Vec<Value> = step
+        .agents
+        .iter()
+        .map(|a| disc(&a.best, 0.04, rgba(0.89, 0.1, 0.11, 0.8)))
+        .collect();
+    let sensing: Vec<Value> = scenario
+        .agents
+        .iter()
+        .zip(&step.agents)
+        .filter_map(|(spec, a)| {
+            spec.sensing_radius_m
+                .map(|r| disc(&a.position, r, rgba(0.12, 0.47, 0.71, 0.08)))
+        })
+        .collect();
+    let moves: Vec<Value> = step
+        .agents
+        .iter()
+        .filter(|a| a.waypoints.len() > 1)
+        .map(|a| line_strip(&a.waypoints, 0.03, rgba(0.12, 0.47, 0.71, 0.9)))
+        .collect();
+    let mut entities = Vec::with_capacity(7);
+    if with_obstacles {
+        entities.push(entity("obstacles", log_time_ns, obstacles, vec![]));
+    }
+    entities.extend([
+        entity("moving", log_time_ns, moving, vec![]),
+        entity("agents", log_time_ns, agents, vec![]),
+        entity("slots", log_time_ns, slots, vec![]),
+        entity("best_points", log_time_ns, best, vec![]),
+        entity("sensing", log_time_ns, sensing, vec![]),
+        entity("moves", log_time_ns, vec![], moves),
+    ]);
+    json!({"deletions": [], "entities": entities})
+}
+
+/// Poses in the field frame at `log_time_ns`.
+pub fn poses_in_frame(poses: &[Pose], log_time_ns: u64) -> Value {
+    json!({
+        "timestamp": stamp(log_time_ns), "frame_id": FIELD_FRAME,
+        "poses": poses
+            .iter()
+            .map(|p| pose_at(&Point::new(p.x_m, p.y_m), p.heading_rad))
+            .collect::<Vec<_>>()
+    })
+}
+
+/// The formation frame at the centre `centre`.
+pub fn frame_transform(centre: &Pose, log_time_ns: u64) -> Value {
+    json!({
+        "timestamp": stamp(log_time_ns), "parent_frame_id": FIELD_FRAME,
+        "child_frame_id": FORMATION_FRAME,
+        "translation": {"x": centre.x_m, "y": centre.y_m, "z": 0.0},
+        "rotation": rotation(centre.heading_rad)
+    })
+}

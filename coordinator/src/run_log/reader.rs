@@ -1,0 +1,247 @@
+//! Reading `run.mcap` back ([`read_run_log`]): every complete chunk, each checked against
+//! its CRC before any of its messages is used; a last chunk cut short (the run was
+//! killed while writing it) is dropped whole.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use mcap::read::{ChunkReader, LinearReader, Options};
+use mcap::records::Record;
+use shared::course::{Replan, Wait};
+use shared::geometry::Pose;
+use shared::record::{CourseRecord, Fault, Run, Step};
+
+use super::Topic;
+use super::records::{
+    EndMessage, FaultMessage, FoundMessage, PlanMessage, RecordError, ReplanMessage, StepMessage,
+    TurnMessage, WaitMessage,
+};
+
+/// What a run's log holds, read back.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoggedRun {
+    /// The scenario as run (its resolved TOML).
+    pub scenario_toml: String,
+    /// The centre path planned before the run.
+    pub first_plan: Vec<Pose>,
+    /// Every step logged, from step 0, in order.
+    pub steps: Vec<Step>,
+    /// Every fault, in order.
+    pub faults: Vec<Fault>,
+    /// Every replanning.
+    pub replans: Vec<Replan>,
+    /// Every wait.
+    pub waits: Vec<Wait>,
+    /// `(obstacle, step)` for each unknown obstacle found.
+    pub found: Vec<(usize, usize)>,
+    /// Every answered turn's timing.
+    pub turns: Vec<TurnMessage>,
+    /// How the run ended; `None` when it was killed (or is still under way).
+    pub end: Option<EndMessage>,
+    /// Whether an incomplete last chunk was dropped.
+    pub truncated: bool,
+}
+
+/// Why a log cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadLogError {
+    /// The file cannot be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+    /// The file is not an MCAP file at all.
+    #[error("{}: not an MCAP file (no magic bytes at the start)", .0.display())]
+    NotMcap(PathBuf),
+    /// A complete chunk whose bytes do not match its CRC.
+    #[error("{}: the chunk at byte {offset} is corrupted (CRC {found:08x}, expected {expected:08x})", path.display())]
+    BadCrc {
+        /// The file.
+        path: PathBuf,
+        /// Where the chunk's data starts in the file (approximately: the record).
+        offset: usize,
+        /// The CRC of the bytes.
+        found: u32,
+        /// The CRC the chunk names.
+        expected: u32,
+    },
+    /// A chunk compressed (this program writes none).
+    #[error("{}: a chunk compressed with `{compression}` (this program writes uncompressed chunks)", path.display())]
+    Compressed {
+        /// The file.
+        path: PathBuf,
+        /// The compression.
+        compression: String,
+    },
+    /// A record or message that is not what this program writes.
+    #[error("{}: {what}", path.display())]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
+}
+
+/// Read the log at `path`: every message of every complete chunk, the last chunk dropped
+/// if it was cut short.
+pub fn read_run_log(path: &Path) -> Result<LoggedRun, ReadLogError> {
+    let bytes = std::fs::read(path).map_err(|source| ReadLogError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if !bytes.starts_with(mcap::MAGIC) {
+        return Err(ReadLogError::NotMcap(path.to_path_buf()));
+    }
+    let malformed = |what: String| ReadLogError::Malformed {
+        path: path.to_path_buf(),
+        what,
+    };
+    let mut log = LoggedRun::default();
+    let mut channels: BTreeMap<u16, Topic> = BTreeMap::new();
+    let reader = LinearReader::new_with_options(&bytes, Options::IgnoreEndMagic.into())
+        .map_err(|e| malformed(e.to_string()))?;
+    let mut offset = mcap::MAGIC.len();
+    for record in reader {
+        let record = match record {
+            Ok(record) => record,
+            // Cut short: what follows the last complete record is dropped.
+            Err(_) => {
+                log.truncated = true;
+                break;
+            }
+        };
+        match record {
+            Record::Channel(channel) => note_channel(&mut channels, &channel)?,
+            Record::Chunk { header, data } => {
+                if !header.compression.is_empty() {
+                    return Err(ReadLogError::Compressed {
+                        path: path.to_path_buf(),
+                        compression: header.compression.clone(),
+                    });
+                }
+                let found = crc32fast::hash(&data);
+                if header.uncompressed_crc != 0 && found != header.uncompressed_crc {
+                    return Err(ReadLogError::BadCrc {
+                        path: path.to_path_buf(),
+                        offset,
+                        found,
+                        expected: header.uncompressed_crc,
+                    });
+                }
+                offset += data.len();
+                let inner =
+                    ChunkReader::new(header, &data).map_err(|e| malformed(e.to_string()))?;
+                for record in inner {
+                    match record.map_err(|e| malformed(e.to_string()))? {
+                        Record::Channel(channel) => note_channel(&mut channels, &channel)?,
+                        Record::Message { header, data } => {
+                            let topic =
+                                channels.get(&header.channel_id).copied().ok_or_else(|| {
+                                    malformed(format!(
+                                        "a message on unknown channel {}",
+                                        header.channel_id
+                                    ))
+                                })?;
+                            take_message(&mut log, topic, &data).map_err(&malformed)?;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    for (i, step) in log.steps.iter().enumerate() {
+        if step.step != i {
+            return Err(malformed(format!(
+                "step {} logged where step {i} was expected",
+                step.step
+            )));
+        }
+    }
+    Ok(log)
+}
+
+fn note_channel(
+    channels: &mut BTreeMap<u16, Topic>,
+    channel: &mcap::records::Channel,
+) -> Result<(), ReadLogError> {
+    // A channel of another program's is ignored: its messages are then refused.
+    if let Some(topic) = Topic::from_name(&channel.topic) {
+        channels.insert(channel.id, topic);
+    }
+    Ok(())
+}
+
+fn take_message(log: &mut LoggedRun, topic: Topic, data: &[u8]) -> Result<(), String> {
+    fn parse<'a, T: serde::Deserialize<'a>>(topic: Topic, data: &'a [u8]) -> Result<T, String> {
+        serde_json::from_slice(data).map_err(|e| format!("{}: {e}", topic.name()))
+    }
+    let record = |e: RecordError| format!("{}: {e}", topic.name());
+    match topic {
+        Topic::Scenario => {
+            #[derive(serde::Deserialize)]
+            struct ScenarioMessage {
+                toml: String,
+            }
+            log.scenario_toml = parse::<ScenarioMessage>(topic, data)?.toml;
+        }
+        Topic::Plan => log.first_plan = parse::<PlanMessage>(topic, data)?.to_path(),
+        Topic::Step => log.steps.push(
+            parse::<StepMessage>(topic, data)?
+                .to_step()
+                .map_err(record)?,
+        ),
+        Topic::Fault => log
+            .faults
+            .push(parse::<FaultMessage>(topic, data)?.to_fault()),
+        Topic::Replan => log.replans.push(
+            parse::<ReplanMessage>(topic, data)?
+                .to_replan()
+                .map_err(record)?,
+        ),
+        Topic::Wait => log.waits.push(
+            parse::<WaitMessage>(topic, data)?
+                .to_wait()
+                .map_err(record)?,
+        ),
+        Topic::Found => {
+            let found = parse::<FoundMessage>(topic, data)?;
+            log.found.push((found.obstacle, found.step));
+        }
+        Topic::Turn => log.turns.push(parse(topic, data)?),
+        Topic::End => log.end = Some(parse(topic, data)?),
+        Topic::Scene | Topic::CentrePlan | Topic::Tf => {}
+    }
+    Ok(())
+}
+
+impl LoggedRun {
+    /// The run's record as far as the log goes, for a scenario of `unknown` unknown
+    /// obstacles: complete only if the log says the run ended complete.
+    pub fn to_run(&self, scenario_name: &str, unknown: usize) -> Run {
+        let mut found_at = vec![None; unknown];
+        for &(obstacle, step) in &self.found {
+            if let Some(slot) = found_at.get_mut(obstacle) {
+                *slot = Some(step);
+            }
+        }
+        Run {
+            scenario: scenario_name.to_string(),
+            centre_path: self.steps.iter().map(|s| s.centre).collect(),
+            steps: self.steps.clone(),
+            faults: self.faults.clone(),
+            completed: self.end.as_ref().is_some_and(|e| e.completed),
+            course: CourseRecord {
+                replans: self.replans.clone(),
+                waits: self.waits.clone(),
+                found_at,
+                gave_up: self.end.as_ref().is_some_and(|e| e.gave_up),
+            },
+        }
+    }
+}

@@ -1,0 +1,326 @@
+//! The project's own messages in `run.mcap` (JSON, one per message): a step, a fault, a
+//! replanning, a wait, an obstacle found, a turn, each lossless, so that the record read
+//! back from the log is the record the run kept, to the bit (`serde_json` writes every
+//! `f64` in its shortest exact form and reads it back exactly).
+
+use serde::{Deserialize, Serialize};
+use shared::course::{Replan, ReplanReason, Wait, WaitReason};
+use shared::geometry::{Point, Pose};
+use shared::record::{AgentStep, Fault, FaultKind, Step};
+use shared::vocabulary::MoveStatus;
+
+/// A position, `[x_m, y_m]`.
+pub type XyM = [f64; 2];
+
+/// A pose, `[x_m, y_m, heading_rad]`.
+pub type PoseM = [f64; 3];
+
+fn xy(p: &Point) -> XyM {
+    [p.x, p.y]
+}
+
+fn point(p: XyM) -> Point {
+    Point::new(p[0], p[1])
+}
+
+fn pose_of(p: &Pose) -> PoseM {
+    [p.x_m, p.y_m, p.heading_rad]
+}
+
+fn pose(p: PoseM) -> Pose {
+    Pose::new(p[0], p[1], p[2])
+}
+
+/// `/formation/step`: every agent at the end of one step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepMessage {
+    /// The step.
+    pub step: usize,
+    /// The formation centre.
+    pub centre: PoseM,
+    /// Each agent, in agent order.
+    pub agents: Vec<AgentMessage>,
+    /// Groups of turns the step took.
+    pub groups: usize,
+    /// Each moving obstacle's position during the step's turns.
+    pub moving: Vec<XyM>,
+    /// `(moving obstacle, agent, distance in metres)` for each agent a moving obstacle
+    /// came within reach of.
+    pub struck: Vec<(usize, usize, f64)>,
+}
+
+/// One agent in a [`StepMessage`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AgentMessage {
+    /// Where it stands.
+    pub position: XyM,
+    /// Its ideal slot.
+    pub slot: XyM,
+    /// Its best point.
+    pub best: XyM,
+    /// Distance to the slot, metres.
+    pub deviation_m: f64,
+    /// Clearance to the nearest other body, metres; `null` when there is none (infinite).
+    pub clearance_m: Option<f64>,
+    /// What it did (`at_slot`, `deviated`, ...).
+    pub status: String,
+    /// Whether it still belongs to the formation.
+    pub alive: bool,
+    /// The polyline it followed this step.
+    pub waypoints: Vec<XyM>,
+}
+
+/// Why a message of the log cannot be turned back into the record.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    /// A name no value of its kind has.
+    #[error("unknown {what} `{name}`")]
+    UnknownName {
+        /// What kind of name (`move status`, ...).
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// A clearance that is neither a number nor null, or a null one that is not infinite.
+    #[error("clearance of agent {agent}: {value}")]
+    Clearance {
+        /// The agent.
+        agent: usize,
+        /// What was there.
+        value: String,
+    },
+}
+
+impl StepMessage {
+    /// The message of `step`.
+    pub fn of(step: &Step) -> Self {
+        Self {
+            step: step.step,
+            centre: pose_of(&step.centre),
+            agents: step
+                .agents
+                .iter()
+                .map(|a| AgentMessage {
+                    position: xy(&a.position),
+                    slot: xy(&a.slot),
+                    best: xy(&a.best),
+                    deviation_m: a.deviation_m,
+                    clearance_m: a.clearance_m.is_finite().then_some(a.clearance_m),
+                    status: a.status.name().to_string(),
+                    alive: a.alive,
+                    waypoints: a.waypoints.iter().map(xy).collect(),
+                })
+                .collect(),
+            groups: step.groups,
+            moving: step.moving.iter().map(xy).collect(),
+            struck: step.struck.clone(),
+        }
+    }
+
+    /// The step this message records.
+    pub fn to_step(&self) -> Result<Step, RecordError> {
+        let agents = self
+            .agents
+            .iter()
+            .map(|a| {
+                let status = MoveStatus::ALL
+                    .iter()
+                    .copied()
+                    .find(|s| s.name() == a.status)
+                    .ok_or_else(|| RecordError::UnknownName {
+                        what: "move status",
+                        name: a.status.clone(),
+                    })?;
+                Ok(AgentStep {
+                    position: point(a.position),
+                    slot: point(a.slot),
+                    best: point(a.best),
+                    deviation_m: a.deviation_m,
+                    clearance_m: a.clearance_m.unwrap_or(f64::INFINITY),
+                    status,
+                    alive: a.alive,
+                    waypoints: a.waypoints.iter().copied().map(point).collect(),
+                })
+            })
+            .collect::<Result<Vec<_>, RecordError>>()?;
+        Ok(Step {
+            step: self.step,
+            centre: pose(self.centre),
+            agents,
+            groups: self.groups,
+            moving: self.moving.iter().copied().map(point).collect(),
+            struck: self.struck.clone(),
+        })
+    }
+}
+
+/// `/formation/fault`: a fault, as the run recorded it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FaultMessage {
+    /// The agent.
+    pub agent: usize,
+    /// The step.
+    pub step: usize,
+    /// What happened.
+    pub kind: FaultKind,
+    /// Details for people.
+    pub detail: String,
+    /// Time to detect it, milliseconds.
+    pub detection_ms: Option<f64>,
+}
+
+impl FaultMessage {
+    /// The message of `fault`.
+    pub fn of(fault: &Fault) -> Self {
+        Self {
+            agent: fault.agent,
+            step: fault.step,
+            kind: fault.kind,
+            detail: fault.detail.clone(),
+            detection_ms: fault.detection_ms,
+        }
+    }
+
+    /// The fault.
+    pub fn to_fault(&self) -> Fault {
+        Fault {
+            agent: self.agent,
+            step: self.step,
+            kind: self.kind,
+            detail: self.detail.clone(),
+            detection_ms: self.detection_ms,
+        }
+    }
+}
+
+/// `/formation/replan`: a replanning of the centre's path, found or not.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReplanMessage {
+    /// The step it was made at.
+    pub step: usize,
+    /// Why (`found-obstacle`, `moving-obstacle`).
+    pub reason: String,
+    /// Planning time, milliseconds.
+    pub planning_ms: f64,
+    /// Whether a path was found.
+    pub found: bool,
+    /// The new path (empty when none was found).
+    pub path: Vec<PoseM>,
+}
+
+impl ReplanMessage {
+    /// The message of `replan`.
+    pub fn of(replan: &Replan) -> Self {
+        Self {
+            step: replan.step,
+            reason: replan.reason.name().to_string(),
+            planning_ms: replan.planning_ms,
+            found: replan.found,
+            path: replan.path.iter().map(pose_of).collect(),
+        }
+    }
+
+    /// The replanning.
+    pub fn to_replan(&self) -> Result<Replan, RecordError> {
+        let reason = [ReplanReason::FoundObstacle, ReplanReason::MovingObstacle]
+            .into_iter()
+            .find(|r| r.name() == self.reason)
+            .ok_or_else(|| RecordError::UnknownName {
+                what: "replan reason",
+                name: self.reason.clone(),
+            })?;
+        Ok(Replan {
+            step: self.step,
+            reason,
+            planning_ms: self.planning_ms,
+            found: self.found,
+            path: self.path.iter().copied().map(pose).collect(),
+        })
+    }
+}
+
+/// `/formation/wait`: a step the centre held its pose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WaitMessage {
+    /// The step.
+    pub step: usize,
+    /// Why (`lag`, `blocked`).
+    pub reason: String,
+}
+
+impl WaitMessage {
+    /// The message of `wait`.
+    pub fn of(wait: &Wait) -> Self {
+        Self {
+            step: wait.step,
+            reason: wait.reason.name().to_string(),
+        }
+    }
+
+    /// The wait.
+    pub fn to_wait(&self) -> Result<Wait, RecordError> {
+        let reason = [WaitReason::Lag, WaitReason::Blocked]
+            .into_iter()
+            .find(|r| r.name() == self.reason)
+            .ok_or_else(|| RecordError::UnknownName {
+                what: "wait reason",
+                name: self.reason.clone(),
+            })?;
+        Ok(Wait {
+            step: self.step,
+            reason,
+        })
+    }
+}
+
+/// `/formation/found`: an unknown obstacle became known.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FoundMessage {
+    /// The obstacle (its index among `[[obstacles.unknown]]`).
+    pub obstacle: usize,
+    /// The step.
+    pub step: usize,
+}
+
+/// `/formation/turn`: one answered turn's timing.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TurnMessage {
+    /// The step.
+    pub step: usize,
+    /// The agent.
+    pub agent: usize,
+    /// From ringing the turn to holding the move, microseconds.
+    pub latency_us: f64,
+    /// The agent's own compute time, as it reported it, microseconds.
+    pub compute_us: f64,
+}
+
+/// `/formation/plan`: the centre path planned before the run (plan 0).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanMessage {
+    /// The poses, one per step.
+    pub path: Vec<PoseM>,
+}
+
+impl PlanMessage {
+    /// The message of `path`.
+    pub fn of(path: &[Pose]) -> Self {
+        Self {
+            path: path.iter().map(pose_of).collect(),
+        }
+    }
+
+    /// The path.
+    pub fn to_path(&self) -> Vec<Pose> {
+        self.path.iter().copied().map(pose).collect()
+    }
+}
+
+/// `/formation/end`: the run ended (written last, before the summary section).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EndMessage {
+    /// Whether the run went through the whole centre path.
+    pub completed: bool,
+    /// Whether the course gave up (no way through for too long).
+    pub gave_up: bool,
+}

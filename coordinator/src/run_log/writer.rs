@@ -1,0 +1,304 @@
+//! Writing `run.mcap` as the run goes ([`RunLogWriter`]): one chunk per step, closed and
+//! flushed to the file when the step ends, synced to the disk at most once a second (or
+//! every N steps), the summary section at the end.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+use shared::course::Course;
+use shared::geometry::Pose;
+use shared::record::{Fault, Step};
+use shared::scenario::Scenario;
+
+use super::foxglove;
+use super::records::{
+    EndMessage, FaultMessage, FoundMessage, PlanMessage, ReplanMessage, StepMessage, TurnMessage,
+    WaitMessage,
+};
+use super::{Topic, log_time_ns};
+
+/// When the log is synced to the disk (`fsync`), besides at the end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SyncPolicy {
+    /// At the end of a step when a second or more has passed since the last sync.
+    EverySecond,
+    /// At the end of every N-th step (`--sync-every-steps N`).
+    EverySteps(u32),
+}
+
+/// Where and how a run writes its log.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LogOptions {
+    /// The file (`DIR/run.mcap`).
+    pub path: PathBuf,
+    /// The scenario file as given, named in the log's copy of the scenario.
+    pub source: String,
+    /// When it is synced to the disk.
+    pub sync: SyncPolicy,
+}
+
+/// Why the log cannot be written.
+#[derive(Debug, thiserror::Error)]
+pub enum RunLogError {
+    /// The file cannot be created or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        source: std::io::Error,
+    },
+    /// The MCAP writer refused a record.
+    #[error("{}: {source}", path.display())]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// What it refused.
+        source: mcap::McapError,
+    },
+    /// The scenario has no resolved form to keep in the log.
+    #[error("the scenario as run: {0}")]
+    Scenario(String),
+}
+
+/// A run's log, open for writing.
+pub struct RunLogWriter {
+    path: PathBuf,
+    writer: mcap::Writer<BufWriter<File>>,
+    /// The same file, to sync.
+    file: File,
+    channels: BTreeMap<Topic, u16>,
+    sequence: u32,
+    sync: SyncPolicy,
+    last_sync: Instant,
+    steps_since_sync: u32,
+    scenario: Scenario,
+    /// How much of each growing list is in the log already.
+    faults: usize,
+    replans: usize,
+    waits: usize,
+    found: Vec<bool>,
+    /// The last step logged.
+    last_step: usize,
+}
+
+impl RunLogWriter {
+    /// Create the log at `options.path` (a file there is replaced) and write what is known
+    /// before the first step: the scenario as run and the first centre plan.
+    pub fn create(
+        options: &LogOptions,
+        scenario: &Scenario,
+        first_plan: &[Pose],
+    ) -> Result<Self, RunLogError> {
+        let path = options.path.clone();
+        let io = |source| RunLogError::Io {
+            path: path.clone(),
+            source,
+        };
+        let file = File::create(&path).map_err(io)?;
+        let sync_file = file.try_clone().map_err(io)?;
+        let writer = mcap::WriteOptions::new()
+            .profile("")
+            .library(concat!("formation coordinator ", env!("CARGO_PKG_VERSION")))
+            .compression(None)
+            // Chunks are closed by hand, one a step.
+            .chunk_size(None)
+            .create(BufWriter::new(file))
+            .map_err(|source| RunLogError::Mcap {
+                path: path.clone(),
+                source,
+            })?;
+        let mut log = Self {
+            path,
+            writer,
+            file: sync_file,
+            channels: BTreeMap::new(),
+            sequence: 0,
+            sync: options.sync,
+            last_sync: Instant::now(),
+            steps_since_sync: 0,
+            scenario: scenario.clone(),
+            faults: 0,
+            replans: 0,
+            waits: 0,
+            found: vec![false; scenario.unknown.len()],
+            last_step: 0,
+        };
+        for topic in Topic::ALL {
+            let schema = topic.schema();
+            let data = serde_json::to_vec(&schema).map_err(|e| RunLogError::Io {
+                path: log.path.clone(),
+                source: e.into(),
+            })?;
+            let schema_id = log
+                .writer
+                .add_schema(topic.schema_name(), "jsonschema", &data)
+                .map_err(|source| log.mcap_error(source))?;
+            let channel = log
+                .writer
+                .add_channel(schema_id, topic.name(), "json", &BTreeMap::new())
+                .map_err(|source| log.mcap_error(source))?;
+            log.channels.insert(topic, channel);
+        }
+        let toml = scenario
+            .to_resolved_toml(&options.source)
+            .map_err(|e| RunLogError::Scenario(e.to_string()))?;
+        log.write(Topic::Scenario, 0, &serde_json::json!({ "toml": toml }))?;
+        log.write(Topic::Plan, 0, &PlanMessage::of(first_plan))?;
+        log.write(
+            Topic::CentrePlan,
+            0,
+            &foxglove::poses_in_frame(first_plan, 0),
+        )?;
+        log.end_chunk(true)?;
+        Ok(log)
+    }
+
+    fn mcap_error(&self, source: mcap::McapError) -> RunLogError {
+        RunLogError::Mcap {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    fn write(
+        &mut self,
+        topic: Topic,
+        step: usize,
+        message: &impl Serialize,
+    ) -> Result<(), RunLogError> {
+        let data = serde_json::to_vec(message).map_err(|e| RunLogError::Io {
+            path: self.path.clone(),
+            source: e.into(),
+        })?;
+        let header = mcap::records::MessageHeader {
+            channel_id: self.channels[&topic],
+            sequence: self.sequence,
+            log_time: log_time_ns(step),
+            publish_time: log_time_ns(step),
+        };
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer
+            .write_to_known_channel(&header, &data)
+            .map_err(|source| self.mcap_error(source))
+    }
+
+    /// Close the chunk under way and hand it to the file; sync if `sync`.
+    fn end_chunk(&mut self, sync: bool) -> Result<(), RunLogError> {
+        self.writer
+            .flush()
+            .map_err(|source| self.mcap_error(source))?;
+        if sync {
+            self.file.sync_data().map_err(|source| RunLogError::Io {
+                path: self.path.clone(),
+                source,
+            })?;
+            self.last_sync = Instant::now();
+            self.steps_since_sync = 0;
+        }
+        Ok(())
+    }
+
+    /// Log the end of `step`, with what the run recorded since the last step: the faults
+    /// (`faults`: every fault so far), the course's replans, waits and obstacles found,
+    /// and the turns answered since the last step (`turns`). The step's chunk is closed and
+    /// in the file when this returns.
+    pub fn log_step(
+        &mut self,
+        step: &Step,
+        faults: &[Fault],
+        course: Option<&Course<'_>>,
+        turns: impl IntoIterator<Item = TurnMessage>,
+    ) -> Result<(), RunLogError> {
+        let at = step.step;
+        self.last_step = at;
+        for fault in faults.iter().skip(self.faults) {
+            self.write(Topic::Fault, at, &FaultMessage::of(fault))?;
+        }
+        self.faults = self.faults.max(faults.len());
+        let found_before = self.found.iter().filter(|f| **f).count();
+        if let Some(course) = course {
+            for replan in course.replans().iter().skip(self.replans) {
+                self.write(Topic::Replan, at, &ReplanMessage::of(replan))?;
+                if replan.found {
+                    self.write(
+                        Topic::CentrePlan,
+                        at,
+                        &foxglove::poses_in_frame(&replan.path, log_time_ns(at)),
+                    )?;
+                }
+            }
+            self.replans = self.replans.max(course.replans().len());
+            for wait in course.waits().iter().skip(self.waits) {
+                self.write(Topic::Wait, at, &WaitMessage::of(wait))?;
+            }
+            self.waits = self.waits.max(course.waits().len());
+            for (obstacle, found_at) in course.found_at().iter().enumerate() {
+                if let (Some(found_step), Some(logged)) = (found_at, self.found.get(obstacle))
+                    && !logged
+                {
+                    self.write(
+                        Topic::Found,
+                        at,
+                        &FoundMessage {
+                            obstacle,
+                            step: *found_step,
+                        },
+                    )?;
+                    self.found[obstacle] = true;
+                }
+            }
+        }
+        for turn in turns {
+            self.write(Topic::Turn, at, &turn)?;
+        }
+        self.write(Topic::Step, at, &StepMessage::of(step))?;
+        let found_now = self.found.iter().filter(|f| **f).count();
+        let with_obstacles = at == 0 || found_now != found_before;
+        let scene = foxglove::scene_update(
+            &self.scenario,
+            step,
+            &self.found,
+            with_obstacles,
+            log_time_ns(at),
+        );
+        self.write(Topic::Scene, at, &scene)?;
+        self.write(
+            Topic::Tf,
+            at,
+            &foxglove::frame_transform(&step.centre, log_time_ns(at)),
+        )?;
+        self.steps_since_sync += 1;
+        let sync = match self.sync {
+            SyncPolicy::EverySecond => self.last_sync.elapsed() >= Duration::from_secs(1),
+            SyncPolicy::EverySteps(n) => self.steps_since_sync >= n.max(1),
+        };
+        self.end_chunk(sync)
+    }
+
+    /// End the log: the end message, the summary section, synced.
+    pub fn finish(mut self, completed: bool, gave_up: bool) -> Result<PathBuf, RunLogError> {
+        let end = EndMessage { completed, gave_up };
+        // Stamped with the last step's time.
+        self.write(Topic::End, self.last_step, &end)?;
+        self.writer
+            .finish()
+            .map_err(|source| self.mcap_error(source))?;
+        // The summary section is written (and the buffer flushed) by `finish`; no chunk
+        // may be closed after it.
+        self.file.sync_data().map_err(|source| RunLogError::Io {
+            path: self.path.clone(),
+            source,
+        })?;
+        Ok(self.path)
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
