@@ -186,12 +186,31 @@ impl AgentProcesses {
     /// a signal to the agent reaches whatever it started in its group too).
     pub fn spawn(&mut self, agent: usize, extra_args: &[String]) -> anyhow::Result<u32> {
         set_cloexec_on_all_fds();
-        let child = Command::new(&self.bin)
+        let mut command = Command::new(&self.bin);
+        command
             .args(["--prefix", &self.prefix, "--agent", &agent.to_string()])
             .args(extra_args)
             .env(wire::RUN_ENV, &self.prefix)
             .stdin(Stdio::null())
-            .process_group(0)
+            .process_group(0);
+        let coordinator = std::process::id();
+        // SAFETY: between fork and exec the child makes only async-signal-safe calls
+        // (prctl, getppid, _exit) and touches no memory of the parent's.
+        unsafe {
+            command.pre_exec(move || {
+                // Killed with the coordinator, from before the agent's first instruction
+                // (the agent sets its own later); a coordinator already gone (killed
+                // between the fork and here) is not waited for.
+                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                if libc::getppid() as u32 != coordinator {
+                    libc::_exit(1);
+                }
+                Ok(())
+            });
+        }
+        let child = command
             .spawn()
             .with_context(|| format!("starting {} for agent {agent}", self.bin.display()))?;
         let pid = child.id();

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
+pub mod json_schema;
 pub mod progress;
 
 /// `target/<profile>/` of this test build.

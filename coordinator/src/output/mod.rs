@@ -55,9 +55,9 @@ pub fn run_from_log(log: &Path, scenario: &Scenario) -> anyhow::Result<Run> {
 /// Make the outputs of a run that was killed (or whose outputs were lost) from its log:
 /// when `dir` holds `run.mcap` but no `summary.json`, every complete step of the log is
 /// written out as a run would write it, marked not completed (`"completed": false`,
-/// `last_step`). Returns the last step recovered, or `None` when there was nothing to
-/// recover.
-pub fn recover_run_dir(dir: &Path) -> anyhow::Result<Option<usize>> {
+/// `last_step`). Returns the last step recovered and whether the log says the run ended
+/// complete, or `None` when there was nothing to recover.
+pub fn recover_run_dir(dir: &Path) -> anyhow::Result<Option<(usize, bool)>> {
     let log_path = dir.join(crate::run_log::RUN_LOG_FILE);
     if dir.join("summary.json").exists() || !log_path.is_file() {
         return Ok(None);
@@ -76,7 +76,7 @@ pub fn recover_run_dir(dir: &Path) -> anyhow::Result<Option<usize>> {
         ..Timing::default()
     };
     write_run(dir, &scenario, &source, &run, &logged.first_plan, &timing)?;
-    Ok(Some(last))
+    Ok(Some((last, run.completed)))
 }
 
 /// Create `dir` and write every output file of `run` into it, with the scenario as run in

@@ -122,11 +122,16 @@ pub fn render_data_with(
 /// file; a failure to draw or write is exit code 1.
 pub fn execute(args: &RenderArgs) -> Result<(), CliError> {
     // A killed run: its outputs made from its log first.
-    if let Some(last) = crate::output::recover_run_dir(&args.run_dir)
+    if let Some((last, completed)) = crate::output::recover_run_dir(&args.run_dir)
         .map_err(|e| CliError::Usage(format!("{e:#}")))?
     {
+        let how = if completed {
+            "the run ended complete; its other outputs were missing"
+        } else {
+            "the run did not end: marked not completed"
+        };
         eprintln!(
-            "recovered steps 0 to {last} from {} (the run did not end: marked not completed)",
+            "recovered steps 0 to {last} from {} ({how})",
             args.run_dir.join(crate::run_log::RUN_LOG_FILE).display()
         );
     }

@@ -1,0 +1,269 @@
+//! The run's log (`run.mcap`, written as the run goes): read back by the mcap crate's own
+//! reader with every Foxglove message fitting its schema, the outputs equal to what the
+//! log holds, and a coordinator killed with SIGKILL at seeded random moments (during
+//! start-up and between steps) leaving a folder from which `render` recovers every step
+//! before the kill, equal to the reference's first steps byte for byte.
+
+mod support;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use coordinator::output::{moves_csv, trajectory_csv};
+use coordinator::run_log::{RUN_LOG_FILE, read_run_log};
+use nix::sys::signal::{Signal, kill};
+use nix::unistd::Pid;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::Value;
+use shared::record::Run;
+use shared::scenario::Scenario;
+use shared::simulate::{plan_centre_path, simulate_along};
+use support::progress::{self, Watched};
+use support::{assert_nothing_left, coordinator, json_schema, run_to_end, summary};
+
+#[test]
+fn the_schema_check_can_fail() {
+    let schema = serde_json::json!({
+        "type": "object", "required": ["a"],
+        "properties": {"a": {"type": "array", "items": {"type": "integer", "minimum": 0}}}
+    });
+    assert!(json_schema::check(&schema, &serde_json::json!({"a": [1, 2]})).is_ok());
+    for bad in [
+        serde_json::json!({"a": [1, -2]}),
+        serde_json::json!({"a": [1.5]}),
+        serde_json::json!({"b": []}),
+        serde_json::json!([]),
+    ] {
+        assert!(json_schema::check(&schema, &bad).is_err(), "{bad}");
+    }
+}
+
+/// `discovered-wall.toml` (unknown obstacles found on the way, the centre replanned): the
+/// finished log is a complete MCAP file for the mcap crate's strict reader; every message
+/// is JSON on a channel with a JSON schema, every Foxglove message fits its schema; one
+/// step, scene and frame message per step, one plan per plan found; and the log read back
+/// gives exactly the CSV files the run wrote.
+#[test]
+fn the_log_is_read_by_the_mcap_reader_and_every_foxglove_message_fits_its_schema() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let scenario_file = support::repo_root().join("scenarios/discovered-wall.toml");
+    let (output, pid) = run_to_end(&[scenario_file.to_str().expect("utf-8")], &out);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let s = summary(&out);
+    let bytes = std::fs::read(out.join(RUN_LOG_FILE)).expect("run.mcap");
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for message in mcap::MessageStream::new(&bytes).expect("a complete MCAP file") {
+        let message = message.expect("a message");
+        let channel = &message.channel;
+        assert_eq!(channel.message_encoding, "json", "{}", channel.topic);
+        let schema = channel.schema.as_ref().expect("every channel has a schema");
+        assert_eq!(schema.encoding, "jsonschema", "{}", channel.topic);
+        let value: Value = serde_json::from_slice(&message.data).expect("JSON");
+        let schema_json: Value = serde_json::from_slice(&schema.data).expect("JSON schema");
+        if schema.name.starts_with("foxglove.") {
+            json_schema::check(&schema_json, &value)
+                .unwrap_or_else(|e| panic!("{} ({}): {e}", channel.topic, schema.name));
+        }
+        *counts.entry(channel.topic.clone()).or_default() += 1;
+    }
+    let steps = s["steps"].as_u64().expect("steps") as usize;
+    for topic in ["/formation/step", "/scene", "/tf"] {
+        assert_eq!(counts.get(topic), Some(&(steps + 1)), "{topic}: {counts:?}");
+    }
+    let found_plans = s["replans"]
+        .as_array()
+        .expect("replans")
+        .iter()
+        .filter(|r| r["found"] == true)
+        .count();
+    assert!(found_plans > 0, "discovered-wall replans: {s:#}");
+    assert_eq!(counts.get("/centre/plan"), Some(&(1 + found_plans)));
+    assert_eq!(counts.get("/formation/end"), Some(&1));
+    assert_eq!(counts.get("/formation/scenario"), Some(&1));
+    let summary_section = mcap::Summary::read(&bytes)
+        .expect("the summary section")
+        .expect("a summary");
+    // A chunk for what comes before the run, one per step (step 0 too), one for the end.
+    assert_eq!(summary_section.chunk_indexes.len(), steps + 3);
+    // The outputs are the log's.
+    let logged = read_run_log(&out.join(RUN_LOG_FILE)).expect("read back");
+    assert!(!logged.truncated);
+    let scenario = Scenario::load(&scenario_file).expect("scenario");
+    let run = logged.to_run(&scenario.name, scenario.unknown.len());
+    assert!(run.completed);
+    for (name, bytes) in [
+        ("trajectory.csv", trajectory_csv(&run).expect("csv")),
+        ("moves.csv", moves_csv(&run).expect("csv")),
+    ] {
+        assert!(
+            std::fs::read(out.join(name)).expect(name) == bytes,
+            "{name} differs from the log's"
+        );
+    }
+    assert_nothing_left(pid);
+}
+
+/// The shipped scenario `name` with four times as many steps (`step_m` a quarter), in
+/// `dir`: long enough for kills timed by the run's progress.
+fn lengthened(dir: &Path, name: &str) -> PathBuf {
+    let text = std::fs::read_to_string(support::repo_root().join(format!("scenarios/{name}.toml")))
+        .expect("scenario");
+    assert!(text.contains("\nstep_m = 0.25"), "{name}: its step changed");
+    let path = dir.join(format!("{name}-long.toml"));
+    std::fs::write(&path, text.replace("\nstep_m = 0.25", "\nstep_m = 0.0625")).expect("write");
+    path
+}
+
+/// The first `last + 1` steps of `run`, as a run that ended there.
+fn first_steps(run: &Run, last: usize) -> Run {
+    let mut cut = run.clone();
+    cut.steps.truncate(last + 1);
+    cut
+}
+
+/// Wait until the log in `out` holds step 0 (a kill from then on is during start-up).
+fn wait_for_step_zero(out: &Path) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        if read_run_log(&out.join(RUN_LOG_FILE)).is_ok_and(|log| !log.steps.is_empty()) {
+            return;
+        }
+        assert!(Instant::now() < deadline, "step 0 never logged");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// 20 kills (SIGKILL of the coordinator) in runs of two shipped scenarios made longer:
+/// the first of each scenario during start-up, the others at a seeded random step while
+/// steps are still to come. Each time the folder has no `summary.json`; `render` recovers
+/// it (exit 0): `completed` false, every step up to the kill (at least the step the run
+/// had reported), and `trajectory.csv` and `moves.csv` equal to the reference's first
+/// steps byte for byte. Nothing is left once the next run has cleaned up.
+#[test]
+fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_kill() {
+    let mut rng = ChaCha8Rng::seed_from_u64(26);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut killed = Vec::new();
+    for name in ["paper", "discovered-wall"] {
+        let file = lengthened(dir.path(), name);
+        let scenario = Scenario::load(&file).expect("scenario");
+        let path = plan_centre_path(&scenario).expect("centre path");
+        let reference = simulate_along(&scenario, &path).expect("reference");
+        let latest = progress::latest_hold_step(path.len() - 1);
+        for kill_number in 0..10 {
+            let out = dir.path().join(format!("{name}-{kill_number}"));
+            let args = [file.to_str().expect("utf-8")];
+            let reported = if kill_number == 0 {
+                let mut child = coordinator(&args, &out).spawn().expect("start");
+                wait_for_step_zero(&out);
+                kill(Pid::from_raw(child.id() as i32), Signal::SIGKILL).expect("kill");
+                let _ = child.wait();
+                killed.push(child.id());
+                0
+            } else {
+                let step = rng.random_range(1..=latest);
+                let mut run = Watched::spawn(coordinator(&args, &out), &[step]);
+                let held = run.hold();
+                kill(Pid::from_raw(run.id() as i32), Signal::SIGKILL).expect("kill");
+                drop(held);
+                killed.push(run.id());
+                let _ = run.wait_with_output();
+                step
+            };
+            let what = format!("{name}, kill {kill_number} (step {reported})");
+            assert!(
+                !out.join("summary.json").exists(),
+                "{what}: the run finished"
+            );
+            let rendered = Command::new(support::coordinator_bin())
+                .arg("render")
+                .arg(&out)
+                .output()
+                .expect("render");
+            let stderr = String::from_utf8_lossy(&rendered.stderr);
+            assert!(rendered.status.success(), "{what}: {stderr}");
+            assert!(stderr.contains("recovered steps 0 to"), "{what}: {stderr}");
+            let s = summary(&out);
+            assert_eq!(s["completed"], false, "{what}");
+            let last = s["last_step"].as_u64().expect("last_step") as usize;
+            assert!(last >= reported, "{what}: recovered only up to step {last}");
+            assert!(last < path.len() - 1, "{what}: recovered past the kill");
+            let want = first_steps(&reference, last);
+            for (file_name, bytes) in [
+                ("trajectory.csv", trajectory_csv(&want).expect("csv")),
+                ("moves.csv", moves_csv(&want).expect("csv")),
+            ] {
+                assert!(
+                    std::fs::read(out.join(file_name)).expect(file_name) == bytes,
+                    "{what}: {file_name} differs from the reference's first {} steps",
+                    last + 1
+                );
+            }
+        }
+    }
+    // The killed coordinators' agents went with them; their files go with the next run.
+    let (next, next_pid) = run_to_end(&[], &dir.path().join("next"));
+    assert!(next.status.success());
+    for pid in killed.into_iter().chain([next_pid]) {
+        assert_nothing_left(pid);
+    }
+}
+
+/// A log cut at any byte (a run killed while the kernel wrote it) reads back as its
+/// first steps, never a step half-read; a byte flipped inside a complete chunk is
+/// refused as corrupted, naming the file.
+#[test]
+fn a_cut_log_reads_as_its_first_steps_and_a_corrupted_chunk_is_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("out");
+    let (output, pid) = run_to_end(&[], &out);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let log_path = out.join(RUN_LOG_FILE);
+    let full = read_run_log(&log_path).expect("the whole log");
+    let bytes = std::fs::read(&log_path).expect("run.mcap");
+    let cut_path = dir.path().join("cut.mcap");
+    let mut rng = ChaCha8Rng::seed_from_u64(2026);
+    let mut cuts: Vec<usize> = (0..60).map(|_| rng.random_range(8..bytes.len())).collect();
+    cuts.sort_unstable();
+    let mut seen_steps = Vec::new();
+    for cut in cuts {
+        std::fs::write(&cut_path, &bytes[..cut]).expect("write");
+        let log = read_run_log(&cut_path).unwrap_or_else(|e| panic!("cut at {cut}: {e}"));
+        assert!(log.steps.len() <= full.steps.len(), "cut at {cut}");
+        assert_eq!(log.steps[..], full.steps[..log.steps.len()], "cut at {cut}");
+        assert!(
+            log.end.is_none() || cut + 1_000 > bytes.len(),
+            "cut at {cut}"
+        );
+        seen_steps.push(log.steps.len());
+    }
+    // The cuts fell all over the run: some early, some late.
+    assert!(seen_steps.first() < seen_steps.last(), "{seen_steps:?}");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("summary")
+        .expect("a summary");
+    let chunk = &summary.chunk_indexes[summary.chunk_indexes.len() / 2];
+    let mut bad = bytes.clone();
+    let at = (chunk.chunk_start_offset + chunk.chunk_length - 8) as usize;
+    bad[at] ^= 0x20;
+    std::fs::write(&cut_path, &bad).expect("write");
+    let err = read_run_log(&cut_path).expect_err("a corrupted chunk is refused");
+    let text = err.to_string();
+    assert!(
+        text.contains("cut.mcap") && text.contains("corrupted"),
+        "{text}"
+    );
+    assert_nothing_left(pid);
+}
