@@ -372,3 +372,51 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
     assert_eq!(bad.status.code(), Some(2));
     assert!(bad.stdout.is_empty());
 }
+
+/// `--log-scenario`: the step loop with the run log and without, alternating; the report
+/// names the kept log, whose size it gives per agent and step.
+#[test]
+fn bench_measures_what_the_run_log_costs() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let out_file = dir.path().join("log.json");
+    let scenario = support::repo_root().join("scenarios").join("paper.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("bench")
+        .arg("--log-scenario")
+        .arg(&scenario)
+        .args(["--log-rounds", "2", "--json", "--out"])
+        .arg(&out_file)
+        .arg("--agent-bin")
+        .arg(support::agent_bin())
+        .output()
+        .expect("running coordinator bench");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "bench failed: {stderr}");
+    let report: Value = serde_json::from_slice(&output.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    let l = &report["log_cost"];
+    assert_eq!(
+        l["order"],
+        serde_json::json!(["log", "none", "none", "log"])
+    );
+    let with: Vec<f64> = serde_json::from_value(l["with_log_steps_per_s"].clone()).expect("with");
+    let without: Vec<f64> =
+        serde_json::from_value(l["without_log_steps_per_s"].clone()).expect("without");
+    assert_eq!((with.len(), without.len()), (2, 2));
+    let median = |v: &[f64]| (v[0] + v[1]) / 2.0;
+    let ratio = number(l, "with_vs_without_steps_per_s");
+    let expected = median(&with) / median(&without);
+    assert!(
+        (ratio - expected).abs() <= 1e-9 * expected,
+        "{ratio} vs {expected}"
+    );
+    let log = std::path::PathBuf::from(l["log_file"].as_str().expect("log_file"));
+    assert_eq!(log, out_file.with_extension("mcap"));
+    let bytes = std::fs::metadata(&log).expect("the kept log").len();
+    assert_eq!(l["log_bytes"], bytes);
+    let agent_steps =
+        l["agents"].as_u64().expect("agents") * (l["steps"].as_u64().expect("steps") + 1);
+    assert!(
+        (number(l, "log_bytes_per_agent_step") - bytes as f64 / agent_steps as f64).abs() < 1e-9
+    );
+}

@@ -408,6 +408,14 @@ pub struct BenchArgs {
     /// Rounds with --loop-scenario (each: simulate(), a blocking run, a spinning run).
     #[arg(long, value_name = "N", default_value_t = 2)]
     pub loop_rounds: usize,
+    /// Also measure what the run log (`run.mcap`) costs on this scenario: the step loop
+    /// with the log and without, alternating; the last log is kept beside the report
+    /// (`--out` with the extension `.mcap`).
+    #[arg(long, value_name = "SCENARIO")]
+    pub log_scenario: Option<PathBuf>,
+    /// Runs of each kind with --log-scenario.
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub log_rounds: usize,
     /// With `--turns-scenario`: also run each mode with every agent over Zenoh on the
     /// loopback (`zenoh`), beside iceoryx2 (`ipc`, always).
     #[arg(long, value_enum, default_value_t = TransportKind::Ipc)]

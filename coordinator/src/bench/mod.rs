@@ -20,13 +20,15 @@
 //!
 //! With `--turns-scenario FILE`, the same bench also runs that scenario with sequential
 //! and with parallel turns, alternating ([`turns`]), and reports both modes' steps per
-//! second, turn groups per step and turn latency side by side.
+//! second, turn groups per step and turn latency side by side. With `--log-scenario
+//! FILE`, the step loop with the run log and without ([`log_cost`]).
 //!
 //! The compute side alone is measured by the Criterion benchmarks in `shared/benches`.
 //! JSON goes to stdout (and `--out`), the table to stderr, the histogram to an SVG file.
 //! Speed is reported, never asserted.
 
 pub mod floor;
+pub mod log_cost;
 pub mod loops;
 pub mod plot;
 pub mod report;
@@ -78,7 +80,9 @@ pub const DEFAULT_AGENTS: [usize; 2] = [6, 200];
 
 /// Carry out `bench`.
 pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
-    let scenario_only = args.turns_scenario.is_some() || args.loop_scenario.is_some();
+    let scenario_only = args.turns_scenario.is_some()
+        || args.loop_scenario.is_some()
+        || args.log_scenario.is_some();
     let agents: Vec<usize> = match (scenario_only, args.agents.is_empty()) {
         (true, true) => Vec::new(),
         (false, true) => DEFAULT_AGENTS.to_vec(),
@@ -152,6 +156,11 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         .as_deref()
         .map(|file| loops::prepare(file, args.loop_rounds))
         .transpose()?;
+    let log_prepared = args
+        .log_scenario
+        .as_deref()
+        .map(|file| log_cost::prepare(file, args.log_rounds))
+        .transpose()?;
     let bin = locate_agent_binary(args.agent_bin.as_deref())?;
     let out = args.out.clone().unwrap_or_else(default_out);
     let svg_path = out.with_extension("svg");
@@ -169,6 +178,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         histogram_svg: None,
         turns: None,
         loops: None,
+        log_cost: None,
     };
     let mut samples = Vec::new();
     for &n in &agents {
@@ -203,6 +213,21 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             );
         }
         report.loops = Some(loops::measure(loaded, args.loop_rounds, &bin, !args.json)?);
+    }
+    if let Some(loaded) = &log_prepared {
+        if !args.json {
+            eprintln!(
+                "bench: {}: the step loop with the run log and without, {} round(s) ...",
+                loaded.source, args.log_rounds
+            );
+        }
+        report.log_cost = Some(log_cost::measure(
+            loaded,
+            args.log_rounds,
+            &bin,
+            &out.with_extension("mcap"),
+            !args.json,
+        )?);
     }
 
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

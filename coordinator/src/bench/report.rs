@@ -32,6 +32,9 @@ pub struct Report {
     /// absent without it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub loops: Option<super::loops::LoopsReport>,
+    /// The step loop with the run log and without (`--log-scenario`); absent without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub log_cost: Option<super::log_cost::LogCostReport>,
 }
 
 /// The figures of one formation size.
@@ -238,6 +241,9 @@ pub fn table(report: &Report) -> String {
     }
     if let Some(t) = &report.turns {
         s.push_str(&super::turns::table(t));
+    }
+    if let Some(l) = &report.log_cost {
+        s.push_str(&super::log_cost::table(l));
     }
     if let Some(l) = &report.loops {
         s.push_str(&super::loops::table(l));

@@ -6,6 +6,7 @@
 //! formation frame in the field frame). Everything lies in the plane `z = 0` of the frame
 //! `field`.
 
+use serde::Serialize;
 use serde_json::{Value, json};
 use shared::geometry::{Point, Pose};
 use shared::record::Step;
@@ -108,49 +109,198 @@ pub fn frame_transform_schema() -> Value {
     schema
 }
 
+/// Foxglove's `Time`.
+#[derive(Clone, Copy, Serialize)]
+struct Time {
+    sec: u64,
+    nsec: u64,
+}
+
 /// A log time in nanoseconds as Foxglove's `{sec, nsec}`.
-fn stamp(log_time_ns: u64) -> Value {
-    json!({"sec": log_time_ns / 1_000_000_000, "nsec": log_time_ns % 1_000_000_000})
+fn stamp(log_time_ns: u64) -> Time {
+    Time {
+        sec: log_time_ns / 1_000_000_000,
+        nsec: log_time_ns % 1_000_000_000,
+    }
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct Vector3 {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct Quaternion {
+    x: f64,
+    y: f64,
+    z: f64,
+    w: f64,
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct FoxPose {
+    position: Vector3,
+    orientation: Quaternion,
+}
+
+#[derive(Clone, Copy, Serialize)]
+struct Color {
+    r: f64,
+    g: f64,
+    b: f64,
+    a: f64,
+}
+
+#[derive(Serialize)]
+struct Cylinder {
+    pose: FoxPose,
+    size: Vector3,
+    bottom_scale: f64,
+    top_scale: f64,
+    color: Color,
+}
+
+#[derive(Serialize)]
+struct LineStrip {
+    #[serde(rename = "type")]
+    kind: u8,
+    pose: FoxPose,
+    thickness: f64,
+    scale_invariant: bool,
+    points: Vec<Vector3>,
+    color: Color,
+    colors: [Color; 0],
+    indices: [u32; 0],
+}
+
+/// An empty list of a primitive this log does not use.
+type None0 = [(); 0];
+
+#[derive(Serialize)]
+struct Entity {
+    timestamp: Time,
+    frame_id: &'static str,
+    id: &'static str,
+    lifetime: Time,
+    frame_locked: bool,
+    metadata: None0,
+    arrows: None0,
+    cubes: None0,
+    spheres: None0,
+    cylinders: Vec<Cylinder>,
+    lines: Vec<LineStrip>,
+    triangles: None0,
+    texts: None0,
+    models: None0,
+}
+
+/// `foxglove.SceneUpdate`.
+#[derive(Serialize)]
+pub struct SceneUpdate {
+    deletions: None0,
+    entities: Vec<Entity>,
+}
+
+/// `foxglove.PosesInFrame`.
+#[derive(Serialize)]
+pub struct PosesInFrame {
+    timestamp: Time,
+    frame_id: &'static str,
+    poses: Vec<FoxPose>,
+}
+
+/// `foxglove.FrameTransform`.
+#[derive(Serialize)]
+pub struct FrameTransform {
+    timestamp: Time,
+    parent_frame_id: &'static str,
+    child_frame_id: &'static str,
+    translation: Vector3,
+    rotation: Quaternion,
 }
 
 /// The rotation by `heading_rad` about `z`.
-fn rotation(heading_rad: f64) -> Value {
+fn rotation(heading_rad: f64) -> Quaternion {
     let half = heading_rad / 2.0;
-    json!({"x": 0.0, "y": 0.0, "z": half.sin(), "w": half.cos()})
+    Quaternion {
+        x: 0.0,
+        y: 0.0,
+        z: half.sin(),
+        w: half.cos(),
+    }
 }
 
-fn pose_at(p: &Point, heading_rad: f64) -> Value {
-    json!({"position": {"x": p.x, "y": p.y, "z": 0.0}, "orientation": rotation(heading_rad)})
+fn flat(p: &Point) -> Vector3 {
+    Vector3 {
+        x: p.x,
+        y: p.y,
+        z: 0.0,
+    }
 }
 
-fn rgba(r: f64, g: f64, b: f64, a: f64) -> Value {
-    json!({"r": r, "g": g, "b": b, "a": a})
+fn pose_at(p: &Point, heading_rad: f64) -> FoxPose {
+    FoxPose {
+        position: flat(p),
+        orientation: rotation(heading_rad),
+    }
 }
 
-fn disc(centre: &Point, radius_m: f64, color: Value) -> Value {
+fn rgba(r: f64, g: f64, b: f64, a: f64) -> Color {
+    Color { r, g, b, a }
+}
+
+fn disc(centre: &Point, radius_m: f64, color: Color) -> Cylinder {
     let d = 2.0 * radius_m;
-    json!({
-        "pose": pose_at(centre, 0.0), "size": {"x": d, "y": d, "z": DISC_HEIGHT_M},
-        "bottom_scale": 1.0, "top_scale": 1.0, "color": color
-    })
+    Cylinder {
+        pose: pose_at(centre, 0.0),
+        size: Vector3 {
+            x: d,
+            y: d,
+            z: DISC_HEIGHT_M,
+        },
+        bottom_scale: 1.0,
+        top_scale: 1.0,
+        color,
+    }
 }
 
-fn line_strip(points: &[Point], thickness_m: f64, color: Value) -> Value {
-    json!({
-        "type": 0, "pose": pose_at(&Point::origin(), 0.0), "thickness": thickness_m,
-        "scale_invariant": false,
-        "points": points.iter().map(|p| json!({"x": p.x, "y": p.y, "z": 0.0})).collect::<Vec<_>>(),
-        "color": color, "colors": [], "indices": []
-    })
+fn line_strip(points: &[Point], thickness_m: f64, color: Color) -> LineStrip {
+    LineStrip {
+        kind: 0,
+        pose: pose_at(&Point::origin(), 0.0),
+        thickness: thickness_m,
+        scale_invariant: false,
+        points: points.iter().map(flat).collect(),
+        color,
+        colors: [],
+        indices: [],
+    }
 }
 
-fn entity(id: &str, log_time_ns: u64, cylinders: Vec<Value>, lines: Vec<Value>) -> Value {
-    json!({
-        "timestamp": stamp(log_time_ns), "frame_id": FIELD_FRAME, "id": id,
-        "lifetime": {"sec": 0, "nsec": 0}, "frame_locked": false, "metadata": [],
-        "arrows": [], "cubes": [], "spheres": [], "cylinders": cylinders, "lines": lines,
-        "triangles": [], "texts": [], "models": []
-    })
+fn entity(
+    id: &'static str,
+    log_time_ns: u64,
+    cylinders: Vec<Cylinder>,
+    lines: Vec<LineStrip>,
+) -> Entity {
+    Entity {
+        timestamp: stamp(log_time_ns),
+        frame_id: FIELD_FRAME,
+        id,
+        lifetime: Time { sec: 0, nsec: 0 },
+        frame_locked: false,
+        metadata: [],
+        arrows: [],
+        cubes: [],
+        spheres: [],
+        cylinders,
+        lines,
+        triangles: [],
+        texts: [],
+        models: [],
+    }
 }
 
 /// The scene at the end of `step`: each entity replaces the one of the same id before it.
@@ -163,29 +313,32 @@ pub fn scene_update(
     known_unknown: &[bool],
     with_obstacles: bool,
     log_time_ns: u64,
-) -> Value {
+) -> SceneUpdate {
     let grey = || rgba(0.45, 0.45, 0.45, 1.0);
-    let mut obstacles: Vec<Value> = scenario
-        .obstacles
-        .iter()
-        .filter(|_| with_obstacles)
-        .map(|o| disc(&o.centre, o.radius_m, grey()))
-        .collect();
-    obstacles.extend(
-        scenario
-            .unknown
+    let mut entities = Vec::with_capacity(7);
+    if with_obstacles {
+        let mut obstacles: Vec<Cylinder> = scenario
+            .obstacles
             .iter()
-            .zip(known_unknown)
-            .filter(|(_, known)| with_obstacles && **known)
-            .map(|(o, _)| disc(&o.centre, o.radius_m, rgba(0.6, 0.35, 0.2, 1.0))),
-    );
-    let moving: Vec<Value> = scenario
+            .map(|o| disc(&o.centre, o.radius_m, grey()))
+            .collect();
+        obstacles.extend(
+            scenario
+                .unknown
+                .iter()
+                .zip(known_unknown)
+                .filter(|(_, known)| **known)
+                .map(|(o, _)| disc(&o.centre, o.radius_m, rgba(0.6, 0.35, 0.2, 1.0))),
+        );
+        entities.push(entity("obstacles", log_time_ns, obstacles, vec![]));
+    }
+    let moving = scenario
         .moving
         .iter()
         .zip(&step.moving)
         .map(|(m, at)| disc(at, m.radius_m, rgba(0.8, 0.5, 0.1, 1.0)))
         .collect();
-    let agents: Vec<Value> = scenario
+    let agents = scenario
         .agents
         .iter()
         .zip(&step.agents)
@@ -198,17 +351,17 @@ pub fn scene_update(
             disc(&a.position, spec.radius_m, color)
         })
         .collect();
-    let slots: Vec<Value> = step
+    let slots = step
         .agents
         .iter()
         .map(|a| disc(&a.slot, 0.05, rgba(0.2, 0.63, 0.17, 0.8)))
         .collect();
-    let best: Vec<Value> = step
+    let best = step
         .agents
         .iter()
         .map(|a| disc(&a.best, 0.04, rgba(0.89, 0.1, 0.11, 0.8)))
         .collect();
-    let sensing: Vec<Value> = scenario
+    let sensing = scenario
         .agents
         .iter()
         .zip(&step.agents)
@@ -217,16 +370,12 @@ pub fn scene_update(
                 .map(|r| disc(&a.position, r, rgba(0.12, 0.47, 0.71, 0.08)))
         })
         .collect();
-    let moves: Vec<Value> = step
+    let moves = step
         .agents
         .iter()
         .filter(|a| a.waypoints.len() > 1)
         .map(|a| line_strip(&a.waypoints, 0.03, rgba(0.12, 0.47, 0.71, 0.9)))
         .collect();
-    let mut entities = Vec::with_capacity(7);
-    if with_obstacles {
-        entities.push(entity("obstacles", log_time_ns, obstacles, vec![]));
-    }
     entities.extend([
         entity("moving", log_time_ns, moving, vec![]),
         entity("agents", log_time_ns, agents, vec![]),
@@ -235,26 +384,35 @@ pub fn scene_update(
         entity("sensing", log_time_ns, sensing, vec![]),
         entity("moves", log_time_ns, vec![], moves),
     ]);
-    json!({"deletions": [], "entities": entities})
+    SceneUpdate {
+        deletions: [],
+        entities,
+    }
 }
 
 /// Poses in the field frame at `log_time_ns`.
-pub fn poses_in_frame(poses: &[Pose], log_time_ns: u64) -> Value {
-    json!({
-        "timestamp": stamp(log_time_ns), "frame_id": FIELD_FRAME,
-        "poses": poses
+pub fn poses_in_frame(poses: &[Pose], log_time_ns: u64) -> PosesInFrame {
+    PosesInFrame {
+        timestamp: stamp(log_time_ns),
+        frame_id: FIELD_FRAME,
+        poses: poses
             .iter()
             .map(|p| pose_at(&Point::new(p.x_m, p.y_m), p.heading_rad))
-            .collect::<Vec<_>>()
-    })
+            .collect(),
+    }
 }
 
 /// The formation frame at the centre `centre`.
-pub fn frame_transform(centre: &Pose, log_time_ns: u64) -> Value {
-    json!({
-        "timestamp": stamp(log_time_ns), "parent_frame_id": FIELD_FRAME,
-        "child_frame_id": FORMATION_FRAME,
-        "translation": {"x": centre.x_m, "y": centre.y_m, "z": 0.0},
-        "rotation": rotation(centre.heading_rad)
-    })
+pub fn frame_transform(centre: &Pose, log_time_ns: u64) -> FrameTransform {
+    FrameTransform {
+        timestamp: stamp(log_time_ns),
+        parent_frame_id: FIELD_FRAME,
+        child_frame_id: FORMATION_FRAME,
+        translation: Vector3 {
+            x: centre.x_m,
+            y: centre.y_m,
+            z: 0.0,
+        },
+        rotation: rotation(centre.heading_rad),
+    }
 }
