@@ -18,6 +18,31 @@ const DISTRIBUTIONS: [&str; 7] = [
     "agent_rss_kib",
 ];
 
+/// `coordinator bench` on the scenario `flag FILE` with `args`, `--json --out OUT` and
+/// the agents built for the tests: the JSON report on stdout (the bench must succeed).
+fn bench_report(
+    flag: &str,
+    scenario: &std::path::Path,
+    args: &[&str],
+    out: &std::path::Path,
+) -> Value {
+    let output = Command::new(support::coordinator_bin())
+        .arg("bench")
+        .arg(flag)
+        .arg(scenario)
+        .args(args)
+        .args(["--json", "--out"])
+        .arg(out)
+        .arg("--agent-bin")
+        .arg(support::agent_bin())
+        .output()
+        .expect("running coordinator bench");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "bench failed: {stderr}");
+    serde_json::from_slice(&output.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"))
+}
+
 fn number(v: &Value, key: &str) -> f64 {
     v[key]
         .as_f64()
@@ -285,20 +310,12 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let out_file = dir.path().join("loops.json");
     let scenario = support::repo_root().join("tests/data/swarm16-parallel.toml");
-    let output = Command::new(support::coordinator_bin())
-        .arg("bench")
-        .arg("--loop-scenario")
-        .arg(&scenario)
-        .args(["--loop-rounds", "1", "--json", "--out"])
-        .arg(&out_file)
-        .arg("--agent-bin")
-        .arg(support::agent_bin())
-        .output()
-        .expect("running coordinator bench");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "bench failed: {stderr}");
-    let report: Value = serde_json::from_slice(&output.stdout)
-        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    let report = bench_report(
+        "--loop-scenario",
+        &scenario,
+        &["--loop-rounds", "1"],
+        &out_file,
+    );
     assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
     let l = &report["loops"];
     assert_eq!(l["agents"], 16);
@@ -380,20 +397,12 @@ fn bench_measures_what_the_run_log_costs() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let out_file = dir.path().join("log.json");
     let scenario = support::repo_root().join("scenarios").join("paper.toml");
-    let output = Command::new(support::coordinator_bin())
-        .arg("bench")
-        .arg("--log-scenario")
-        .arg(&scenario)
-        .args(["--log-rounds", "2", "--json", "--out"])
-        .arg(&out_file)
-        .arg("--agent-bin")
-        .arg(support::agent_bin())
-        .output()
-        .expect("running coordinator bench");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "bench failed: {stderr}");
-    let report: Value = serde_json::from_slice(&output.stdout)
-        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    let report = bench_report(
+        "--log-scenario",
+        &scenario,
+        &["--log-rounds", "2"],
+        &out_file,
+    );
     let l = &report["log_cost"];
     assert_eq!(
         l["order"],

@@ -270,9 +270,15 @@ fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_
     );
     // Every agent gone, the coordinator's stderr is closed.
     run.wait_with_output();
+    // A killed run leaves its log, and nothing else half-written.
+    let killed_dir = dir.path().join("a");
     assert!(
-        !dir.path().join("a").exists(),
-        "a killed run writes nothing half-way"
+        killed_dir.join("run.mcap").is_file(),
+        "no log of the killed run"
+    );
+    assert!(
+        !killed_dir.join("summary.json").exists(),
+        "a killed run wrote a summary"
     );
     // The dead coordinator's files are still there; the next run cleans them.
     assert!(!support::leftovers(&prefix_stem(pid)).is_empty());

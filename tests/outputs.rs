@@ -103,6 +103,7 @@ fn a_folder_holding_a_run_is_refused_without_force_and_replaced_whole_with_it() 
             "obstacles.csv",
             "path.csv",
             "plans.csv",
+            "run.mcap",
             "scenario.toml",
             "summary.json",
             "trajectory.csv"

@@ -282,10 +282,12 @@ fn docs_outputs_md_names_every_summary_key_and_every_csv_column() {
         .iter()
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
-    // The run folder's table lists the files in the order written, summary.json last.
+    // The run folder's table lists the log the run writes as it goes, then the files
+    // made from it in the order written, summary.json last, then the plots.
     let mut listed = documented_names(&doc, "## `coordinator run`: the run folder");
     assert_eq!(listed.pop().as_deref(), Some("plots/"));
-    assert_eq!(listed, names);
+    assert_eq!(listed.first().map(String::as_str), Some("run.mcap"));
+    assert_eq!(listed[1..], names[..]);
 
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("summary.json")).expect("summary"))

@@ -31,6 +31,21 @@ fn pose(p: PoseM) -> Pose {
     Pose::new(p[0], p[1], p[2])
 }
 
+/// The value of `all` called `name` (by `name_of`), or an error naming `what`.
+fn by_name<T: Copy, const N: usize>(
+    all: [T; N],
+    name_of: impl Fn(T) -> &'static str,
+    name: &str,
+    what: &'static str,
+) -> Result<T, RecordError> {
+    all.into_iter()
+        .find(|v| name_of(*v) == name)
+        .ok_or_else(|| RecordError::UnknownName {
+            what,
+            name: name.to_string(),
+        })
+}
+
 /// `/formation/step`: every agent at the end of one step.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StepMessage {
@@ -123,14 +138,7 @@ impl StepMessage {
             .agents
             .iter()
             .map(|a| {
-                let status = MoveStatus::ALL
-                    .iter()
-                    .copied()
-                    .find(|s| s.name() == a.status)
-                    .ok_or_else(|| RecordError::UnknownName {
-                        what: "move status",
-                        name: a.status.clone(),
-                    })?;
+                let status = by_name(MoveStatus::ALL, |s| s.name(), &a.status, "move status")?;
                 Ok(AgentStep {
                     position: point(a.position),
                     slot: point(a.slot),
@@ -222,13 +230,12 @@ impl ReplanMessage {
 
     /// The replanning.
     pub fn to_replan(&self) -> Result<Replan, RecordError> {
-        let reason = [ReplanReason::FoundObstacle, ReplanReason::MovingObstacle]
-            .into_iter()
-            .find(|r| r.name() == self.reason)
-            .ok_or_else(|| RecordError::UnknownName {
-                what: "replan reason",
-                name: self.reason.clone(),
-            })?;
+        let reason = by_name(
+            [ReplanReason::FoundObstacle, ReplanReason::MovingObstacle],
+            ReplanReason::name,
+            &self.reason,
+            "replan reason",
+        )?;
         Ok(Replan {
             step: self.step,
             reason,
@@ -259,13 +266,12 @@ impl WaitMessage {
 
     /// The wait.
     pub fn to_wait(&self) -> Result<Wait, RecordError> {
-        let reason = [WaitReason::Lag, WaitReason::Blocked]
-            .into_iter()
-            .find(|r| r.name() == self.reason)
-            .ok_or_else(|| RecordError::UnknownName {
-                what: "wait reason",
-                name: self.reason.clone(),
-            })?;
+        let reason = by_name(
+            [WaitReason::Lag, WaitReason::Blocked],
+            WaitReason::name,
+            &self.reason,
+            "wait reason",
+        )?;
         Ok(Wait {
             step: self.step,
             reason,
