@@ -18,18 +18,20 @@ const DISTRIBUTIONS: [&str; 7] = [
     "agent_rss_kib",
 ];
 
-/// `coordinator bench` on the scenario `flag FILE` with `args`, `--json --out OUT` and
-/// the agents built for the tests: the JSON report on stdout (the bench must succeed).
+/// `coordinator bench` with `args`, on the scenario `FLAG FILE` if one is given, with
+/// `--json --out OUT` and the agents built for the tests: the JSON report on stdout (the
+/// bench must succeed).
 fn bench_report(
-    flag: &str,
-    scenario: &std::path::Path,
     args: &[&str],
+    scenario: Option<(&str, &std::path::Path)>,
     out: &std::path::Path,
 ) -> Value {
-    let output = Command::new(support::coordinator_bin())
-        .arg("bench")
-        .arg(flag)
-        .arg(scenario)
+    let mut command = Command::new(support::coordinator_bin());
+    command.arg("bench");
+    if let Some((flag, file)) = scenario {
+        command.arg(flag).arg(file);
+    }
+    let output = command
         .args(args)
         .args(["--json", "--out"])
         .arg(out)
@@ -41,6 +43,20 @@ fn bench_report(
     assert!(output.status.success(), "bench failed: {stderr}");
     serde_json::from_slice(&output.stdout)
         .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"))
+}
+
+/// `coordinator bench` with `args`, which it must refuse before running: exit 2, nothing
+/// on stdout; its stderr.
+fn bench_refusal(args: &[&std::ffi::OsStr]) -> String {
+    let output = Command::new(support::coordinator_bin())
+        .arg("bench")
+        .args(args)
+        .output()
+        .expect("running coordinator bench");
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+    assert!(output.stdout.is_empty(), "{args:?}");
+    stderr
 }
 
 fn number(v: &Value, key: &str) -> f64 {
@@ -63,17 +79,7 @@ fn check_distribution(run: &Value, key: &str) -> [f64; 5] {
 fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let out_file = dir.path().join("bench.json");
-    let output = Command::new(support::coordinator_bin())
-        .args(["bench", "--agents", "3", "--steps", "20", "--json", "--out"])
-        .arg(&out_file)
-        .arg("--agent-bin")
-        .arg(support::agent_bin())
-        .output()
-        .expect("running coordinator bench");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "bench failed: {stderr}");
-    let report: Value = serde_json::from_slice(&output.stdout)
-        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    let report = bench_report(&["--agents", "3", "--steps", "20"], None, &out_file);
     // --out holds the same report; the histogram is beside it.
     let saved: Value =
         serde_json::from_slice(&std::fs::read(&out_file).expect("--out file")).expect("JSON");
@@ -178,13 +184,7 @@ fn bench_refuses_bad_arguments_with_exit_code_2() {
         ["--steps", "1"],
         ["--round-trips", "0"],
     ] {
-        let output = Command::new(support::coordinator_bin())
-            .arg("bench")
-            .args(args)
-            .output()
-            .expect("running coordinator bench");
-        assert_eq!(output.status.code(), Some(2), "{args:?}");
-        assert!(output.stdout.is_empty(), "{args:?}");
+        bench_refusal(&args.map(std::ffi::OsStr::new));
     }
 }
 
@@ -195,29 +195,12 @@ fn bench_compares_sequential_and_parallel_turns_on_one_scenario() {
     let scenario = support::repo_root()
         .join("scenarios")
         .join("paper-top-speed.toml");
-    let output = Command::new(support::coordinator_bin())
-        .arg("bench")
-        .arg("--turns-scenario")
-        .arg(&scenario)
-        .args([
-            "--turns-steps",
-            "6",
-            "--turns-rounds",
-            "2",
-            // As root (CI is): the same runs with sandboxed agents beside.
-            "--sandboxed",
-            "--json",
-            "--out",
-        ])
-        .arg(&out_file)
-        .arg("--agent-bin")
-        .arg(support::agent_bin())
-        .output()
-        .expect("running coordinator bench");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "bench failed: {stderr}");
-    let report: Value = serde_json::from_slice(&output.stdout)
-        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {stderr}"));
+    let report = bench_report(
+        // As root (CI is): the same runs with sandboxed agents beside.
+        &["--turns-steps", "6", "--turns-rounds", "2", "--sandboxed"],
+        Some(("--turns-scenario", &scenario)),
+        &out_file,
+    );
     // Only the turns were asked for: no latency runs, no histogram.
     assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
     assert!(report["histogram_svg"].is_null());
@@ -291,16 +274,9 @@ fn bench_compares_sequential_and_parallel_turns_on_one_scenario() {
 fn bench_refuses_a_turns_scenario_without_a_top_speed_before_running() {
     let paper = support::repo_root().join("scenarios").join("paper.toml");
     for extra in [&["--turns-rounds", "1"][..], &["--turns-rounds", "0"][..]] {
-        let output = Command::new(support::coordinator_bin())
-            .arg("bench")
-            .arg("--turns-scenario")
-            .arg(&paper)
-            .args(extra)
-            .output()
-            .expect("running coordinator bench");
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert_eq!(output.status.code(), Some(2), "{stderr}");
-        assert!(output.stdout.is_empty(), "{extra:?}");
+        let mut args = vec![std::ffi::OsStr::new("--turns-scenario"), paper.as_os_str()];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        let stderr = bench_refusal(&args);
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
 }
@@ -311,9 +287,8 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
     let out_file = dir.path().join("loops.json");
     let scenario = support::repo_root().join("tests/data/swarm16-parallel.toml");
     let report = bench_report(
-        "--loop-scenario",
-        &scenario,
         &["--loop-rounds", "1"],
+        Some(("--loop-scenario", &scenario)),
         &out_file,
     );
     assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
@@ -362,18 +337,14 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
         }
     }
     // With sequential turns, the coordinator's time between turns is told.
-    let sequential = Command::new(support::coordinator_bin())
-        .arg("bench")
-        .arg("--loop-scenario")
-        .arg(support::repo_root().join("scenarios/paper.toml"))
-        .args(["--loop-rounds", "1", "--json", "--out"])
-        .arg(dir.path().join("sequential.json"))
-        .arg("--agent-bin")
-        .arg(support::agent_bin())
-        .output()
-        .expect("running coordinator bench");
-    assert!(sequential.status.success());
-    let report: Value = serde_json::from_slice(&sequential.stdout).expect("JSON");
+    let report = bench_report(
+        &["--loop-rounds", "1"],
+        Some((
+            "--loop-scenario",
+            &support::repo_root().join("scenarios/paper.toml"),
+        )),
+        &dir.path().join("sequential.json"),
+    );
     for wait in ["block", "spin"] {
         let between = report["loops"][wait]["between_turns_us"].as_f64();
         assert!(
@@ -382,12 +353,7 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
         );
     }
     // A bad scenario is refused before anything runs.
-    let bad = Command::new(support::coordinator_bin())
-        .args(["bench", "--loop-scenario", "no-such-file.toml"])
-        .output()
-        .expect("running coordinator bench");
-    assert_eq!(bad.status.code(), Some(2));
-    assert!(bad.stdout.is_empty());
+    bench_refusal(&["--loop-scenario", "no-such-file.toml"].map(std::ffi::OsStr::new));
 }
 
 /// `--log-scenario`: the step loop with the run log and without, alternating; the report
@@ -398,9 +364,8 @@ fn bench_measures_what_the_run_log_costs() {
     let out_file = dir.path().join("log.json");
     let scenario = support::repo_root().join("scenarios").join("paper.toml");
     let report = bench_report(
-        "--log-scenario",
-        &scenario,
         &["--log-rounds", "2"],
+        Some(("--log-scenario", &scenario)),
         &out_file,
     );
     let l = &report["log_cost"];

@@ -175,15 +175,6 @@ fn random_agents_killed_at_random_steps_over_twenty_seeds() {
     assert!(detections.iter().all(|&d| d >= 0.0), "{detections:?}");
 }
 
-/// Wait until `count` agent processes of coordinator `pid` run.
-fn wait_for_agents(pid: u32, count: usize) {
-    let deadline = Instant::now() + Duration::from_secs(30);
-    while support::processes_mentioning(&format!("--prefix {}", prefix_stem(pid))).len() < count {
-        assert!(Instant::now() < deadline, "agents did not start");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
 /// The 64-agent block of `scenarios/large.toml` with four times as many steps, written
 /// into `dir`: long enough that a kill or a signal timed by the run's progress
 /// ([`progress::latest_hold_step`]) has hundreds of steps to land in.
@@ -213,7 +204,7 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
             &[step],
         );
         let pid = run.id();
-        wait_for_agents(pid, 64);
+        support::wait_for_agents(pid, 64);
         let held = run.hold();
         let victims = support::processes_mentioning(&format!("--prefix {}", prefix_stem(pid)));
         let victim = victims[rng.random_range(0..victims.len())];
@@ -250,20 +241,18 @@ fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_
         &[step],
     );
     let pid = run.id();
-    wait_for_agents(pid, 64);
+    support::wait_for_agents(pid, 64);
     let held = run.hold();
     kill(Pid::from_raw(pid as i32), Signal::SIGKILL).expect("kill coordinator");
     let killed = Instant::now();
     drop(held);
     assert_eq!(run.wait().signal(), Some(Signal::SIGKILL as i32));
     let needle = format!("--prefix {}", prefix_stem(pid));
-    while !support::processes_mentioning(&needle).is_empty() {
-        assert!(
-            killed.elapsed() < Duration::from_secs(1),
-            "agents still running 1 s after the coordinator died"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    support::wait_until(
+        Duration::from_secs(1).saturating_sub(killed.elapsed()),
+        "agents still running 1 s after the coordinator died",
+        || support::processes_mentioning(&needle).is_empty(),
+    );
     eprintln!(
         "agents gone {:.0} ms after the coordinator was killed",
         killed.elapsed().as_secs_f64() * 1e3
@@ -307,7 +296,7 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
         std::os::unix::process::CommandExt::process_group(&mut command, 0);
         let mut run = Watched::spawn(command, &[step]);
         let pid = run.id();
-        wait_for_agents(pid, 64);
+        support::wait_for_agents(pid, 64);
         let held = run.hold();
         kill(Pid::from_raw(-(pid as i32)), signal).expect("signal the group");
         drop(held);

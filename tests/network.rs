@@ -427,14 +427,7 @@ fn agents_leave_when_the_coordinator_is_killed() {
         reap(&mut agent, net::LINK_LEASE * 2 + Duration::from_secs(3)),
         "agent 5 did not leave after the coordinator was killed"
     );
-    let until = Instant::now() + Duration::from_secs(3);
-    while !support::processes_mentioning(&listen).is_empty() {
-        assert!(
-            Instant::now() < until,
-            "relays or their agents left running"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    support::wait_for_no_process_mentioning(&listen, Duration::from_secs(3));
     // The dead coordinator's files are cleaned by the next run.
     let (output, next) = support::run_to_end(&[], &dir.path().join("next"));
     assert!(output.status.success());

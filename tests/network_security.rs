@@ -9,7 +9,7 @@ mod network_support;
 mod support;
 
 use std::net::Ipv4Addr;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use coordinator::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
@@ -150,11 +150,7 @@ fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
         }
         support::assert_nothing_left(pid);
         let endpoint = Endpoint::parse(&listen).expect("endpoint");
-        let until = Instant::now() + Duration::from_secs(2);
-        while !support::processes_mentioning(&endpoint.to_string()).is_empty() {
-            assert!(Instant::now() < until, "{mode}: agents left running");
-            std::thread::sleep(Duration::from_millis(20));
-        }
+        support::wait_for_no_process_mentioning(&endpoint.to_string(), Duration::from_secs(2));
     }
 }
 

@@ -11,7 +11,6 @@ mod support;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
@@ -24,8 +23,7 @@ use shared::scenario::Scenario;
 use shared::vocabulary::{Body, TurnMode};
 use support::progress::{self, Watched};
 use support::{
-    agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, prefix_stem, run_to_end,
-    summary,
+    agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, run_to_end, summary,
 };
 
 /// The attacker: inside the 4 x 4 block (row 1, column 1), so it has neighbours on
@@ -422,19 +420,6 @@ fn agent_of(pid: u32) -> Option<usize> {
     args.get(at + 1)?.parse().ok()
 }
 
-/// The agent processes of coordinator `pid`, once all `count` of them run.
-fn wait_for_agents(pid: u32, count: usize) -> Vec<u32> {
-    let deadline = Instant::now() + Duration::from_secs(30);
-    loop {
-        let found = support::processes_mentioning(&format!("--prefix {}", prefix_stem(pid)));
-        if found.len() >= count {
-            return found;
-        }
-        assert!(Instant::now() < deadline, "agents did not start");
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
 /// Agents SIGKILLed from outside at random moments of a parallel run with sensing (one to
 /// three a run, each once the run reports a step drawn at random, so they may die in one
 /// group, mid-turn or between turns): the run completes, nobody collides, every death is
@@ -459,7 +444,7 @@ fn agents_killed_from_outside_at_random_moments_of_a_parallel_run_are_survived()
         at.sort_unstable();
         let mut run = Watched::spawn(coordinator(&args, &out), &at);
         let pid = run.id();
-        let agents = wait_for_agents(pid, AGENTS);
+        let agents = support::wait_for_agents(pid, AGENTS);
         let mut killed: Vec<usize> = Vec::new();
         for _ in &at {
             let victims: Vec<(u32, usize)> = agents

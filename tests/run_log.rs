@@ -9,7 +9,7 @@ mod support;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use coordinator::output::{moves_csv, trajectory_csv};
 use coordinator::run_log::{RUN_LOG_FILE, read_run_log};
@@ -131,14 +131,9 @@ fn first_steps(run: &Run, last: usize) -> Run {
 
 /// Wait until the log in `out` holds step 0 (a kill from then on is during start-up).
 fn wait_for_step_zero(out: &Path) {
-    let deadline = Instant::now() + Duration::from_secs(60);
-    loop {
-        if read_run_log(&out.join(RUN_LOG_FILE)).is_ok_and(|log| !log.steps.is_empty()) {
-            return;
-        }
-        assert!(Instant::now() < deadline, "step 0 never logged");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    support::wait_until(Duration::from_secs(60), "step 0 never logged", || {
+        read_run_log(&out.join(RUN_LOG_FILE)).is_ok_and(|log| !log.steps.is_empty())
+    });
 }
 
 /// 20 kills (SIGKILL of the coordinator) in runs of two shipped scenarios made longer:

@@ -217,12 +217,7 @@ fn enter_sandbox(
         }
         // Every other descriptor closes at exec (ENOSYS on an old kernel: the coordinator
         // already marked its own close-on-exec).
-        let _ = libc::syscall(
-            libc::SYS_close_range,
-            AGENT_SOCKET_FD as libc::c_uint + 1,
-            libc::c_uint::MAX,
-            libc::CLOSE_RANGE_CLOEXEC as libc::c_uint,
-        );
+        let _ = wire::mark_cloexec_from(AGENT_SOCKET_FD + 1);
         let limit = libc::rlimit {
             rlim_cur: nproc,
             rlim_max: nproc,

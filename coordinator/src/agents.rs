@@ -110,16 +110,7 @@ pub fn raise_fd_limit(agents: usize) -> anyhow::Result<()> {
 /// 780 agents are spawned and ready in 7 s). Older kernels fall back to one `fcntl` per
 /// descriptor listed in `/proc/self/fd`.
 fn set_cloexec_on_all_fds() {
-    // SAFETY: a plain system call on descriptor numbers; it changes only their flags.
-    let marked = unsafe {
-        libc::syscall(
-            libc::SYS_close_range,
-            3 as libc::c_uint,
-            libc::c_uint::MAX,
-            libc::CLOSE_RANGE_CLOEXEC as libc::c_uint,
-        )
-    };
-    if marked == 0 {
+    if wire::mark_cloexec_from(3) {
         return;
     }
     for fd in procfs::open_fds().into_iter().filter(|fd| *fd > 2) {

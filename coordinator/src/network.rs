@@ -49,7 +49,7 @@ impl NetworkOptions {
     /// have an authority they can get files of before the run (`--tls-dir`), and that every
     /// TLS file the user named is there.
     pub fn check(&self, agents: usize) -> Result<(), String> {
-        if self.tls_dir.is_none() && self.listen.protocol == net::LinkProtocol::Tls {
+        if self.makes_own_authority() {
             if !self.remote.is_empty() {
                 return Err(
                     "--remote: agents started elsewhere need their certificates before the run: make them with scripts/make-tls-dir and pass --tls-dir".into(),
@@ -77,6 +77,11 @@ impl NetworkOptions {
         Ok(())
     }
 
+    /// Whether the run makes its own authority: a `tls/` endpoint and no `--tls-dir`.
+    fn makes_own_authority(&self) -> bool {
+        self.tls_dir.is_none() && self.listen.protocol == net::LinkProtocol::Tls
+    }
+
     /// The roles that take part from this host: the coordinator, the relays, and every
     /// agent the coordinator starts.
     fn local_roles(&self, agents: usize) -> Vec<Role> {
@@ -99,7 +104,7 @@ impl NetworkOptions {
         run_folder: &std::path::Path,
         agents: usize,
     ) -> Result<Self, net::AuthorityError> {
-        if self.tls_dir.is_some() || self.listen.protocol != net::LinkProtocol::Tls {
+        if !self.makes_own_authority() {
             return Ok(self.clone());
         }
         let dir = run_folder.join("tls");

@@ -153,17 +153,40 @@ pub fn summary(out: &Path) -> Value {
     serde_json::from_str(&text).expect("summary.json parses")
 }
 
+/// Polls `done` every few milliseconds until it holds; panics with `what` if it still
+/// does not after `timeout`. A test waits for a state this way, never for a fixed time.
+pub fn wait_until(timeout: Duration, what: &str, mut done: impl FnMut() -> bool) {
+    let deadline = Instant::now() + timeout;
+    while !done() {
+        assert!(Instant::now() < deadline, "{what} (after {timeout:?})");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Waits until no process's command line mentions `needle` (at most `timeout`).
+pub fn wait_for_no_process_mentioning(needle: &str, timeout: Duration) {
+    wait_until(
+        timeout,
+        &format!("processes of {needle} left running"),
+        || processes_mentioning(needle).is_empty(),
+    );
+}
+
+/// Waits until at least `count` agent processes of coordinator `pid` run; their pids.
+pub fn wait_for_agents(pid: u32, count: usize) -> Vec<u32> {
+    let needle = format!("--prefix {}", prefix_stem(pid));
+    let mut found = Vec::new();
+    wait_until(Duration::from_secs(30), "agents did not start", || {
+        found = processes_mentioning(&needle);
+        found.len() >= count
+    });
+    found
+}
+
 /// Nothing of the coordinator process `pid` is left: no agent process, no iceoryx2 file.
 pub fn assert_nothing_left(pid: u32) {
     let stem = prefix_stem(pid);
-    let deadline = Instant::now() + Duration::from_secs(2);
-    while !processes_mentioning(&format!("--prefix {stem}")).is_empty() {
-        assert!(
-            Instant::now() < deadline,
-            "agent processes of {stem} left running"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_no_process_mentioning(&format!("--prefix {stem}"), Duration::from_secs(2));
     let left = leftovers(&stem);
     assert!(left.is_empty(), "iceoryx2 files left: {left:?}");
 }

@@ -70,11 +70,7 @@ pub fn assert_clean(prefix: &str, listen: &Endpoint) {
         "relays left running"
     );
     let endpoint = listen.local_connect().to_string();
-    let until = Instant::now() + Duration::from_secs(2);
-    while !support::processes_mentioning(&endpoint).is_empty() {
-        assert!(Instant::now() < until, "agents of {endpoint} left running");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    support::wait_for_no_process_mentioning(&endpoint, Duration::from_secs(2));
 }
 
 /// Wait for a process the test started, killing it if it has not left in `timeout`.

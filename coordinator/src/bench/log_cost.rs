@@ -4,10 +4,10 @@
 //! busier or quieter weighs on both alike; and the log's size per agent and step.
 
 use std::path::Path;
-use std::time::Duration;
 
 use serde::Serialize;
 
+use crate::bench::run_options::bench_run_options;
 use crate::error::CliError;
 use crate::run_log::{LogOptions, SyncPolicy};
 use crate::stats::median;
@@ -60,13 +60,7 @@ pub fn measure(
     log_path: &Path,
     verbose: bool,
 ) -> Result<LogCostReport, CliError> {
-    let base = RunOptions {
-        agent_bin: Some(bin.to_path_buf()),
-        // Generous: a noisy machine must not turn a slow turn into a fault.
-        turn_deadline: Duration::from_secs(2),
-        progress: false,
-        ..RunOptions::default()
-    };
+    let base = bench_run_options(bin);
     let logged = RunOptions {
         log: Some(LogOptions {
             path: log_path.to_path_buf(),

@@ -5,11 +5,12 @@
 //! `simulate S B`, ... so a machine that gets busier or quieter weighs on all alike.
 
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use serde::Serialize;
 use shared::simulate::simulate_along;
 
+use crate::bench::run_options::bench_run_options;
 use crate::error::CliError;
 use crate::stats::{Distribution, median};
 use crate::turns::{RunOptions, RunOutcome, TurnSample, WaitMode, run_scenario};
@@ -112,12 +113,8 @@ pub fn measure(
         ..
     } = loaded;
     let options = |wait| RunOptions {
-        agent_bin: Some(bin.to_path_buf()),
-        // Generous: a noisy machine must not turn a slow turn into a fault.
-        turn_deadline: Duration::from_secs(2),
-        progress: false,
         wait,
-        ..RunOptions::default()
+        ..bench_run_options(bin)
     };
     let mut simulate_s = Vec::with_capacity(rounds);
     let (mut block, mut spin) = (Vec::new(), Vec::new());

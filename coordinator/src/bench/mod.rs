@@ -32,6 +32,7 @@ pub mod log_cost;
 pub mod loops;
 pub mod plot;
 pub mod report;
+pub mod run_options;
 pub mod scenario;
 pub mod split;
 pub mod turns;
@@ -43,6 +44,7 @@ use anyhow::Context;
 use shared::vocabulary::MAX_AGENTS;
 
 use crate::agents::locate_agent_binary;
+use crate::bench::run_options::bench_run_options;
 use crate::cli::BenchArgs;
 use crate::error::CliError;
 use crate::ipc::TurnSplit;
@@ -361,12 +363,8 @@ fn bench_one(
     let request_bytes = WORLD_HEADER_BYTES + BYTES_PER_AGENT * agents;
     let reply_bytes = MOVE_HEADER_BYTES + BYTES_PER_WAYPOINT * REPLY_WAYPOINTS;
     let options = RunOptions {
-        agent_bin: Some(bin.to_path_buf()),
-        // Generous: a noisy machine must not turn a slow turn into a fault.
-        turn_deadline: Duration::from_secs(2),
-        progress: false,
         idle_probe: Some(Duration::from_millis(args.idle_ms)),
-        ..RunOptions::default()
+        ..bench_run_options(bin)
     };
     let mut session = floor::PingPongSession::start().context("starting the ping-pong")?;
     let floor_prefix = session.prefix().to_string();

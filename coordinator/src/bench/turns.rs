@@ -12,6 +12,7 @@ use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::vocabulary::TurnMode;
 
+use crate::bench::run_options::bench_run_options;
 use crate::compare::with_turn_mode;
 use crate::error::CliError;
 use crate::stats::{Distribution, median};
@@ -201,13 +202,7 @@ pub fn measure(
         source,
         own,
     } = prepared;
-    let options = RunOptions {
-        agent_bin: Some(bin.to_path_buf()),
-        // Generous: a noisy machine must not turn a slow turn into a fault.
-        turn_deadline: Duration::from_secs(2),
-        progress: false,
-        ..RunOptions::default()
-    };
+    let options = bench_run_options(bin);
     // A second host for the veth runs, made once (needs root).
     let host = if b.links.contains(&Link::ZenohVeth) {
         Some(crate::netns::NetnsHost::new().map_err(CliError::Other)?)

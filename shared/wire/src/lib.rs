@@ -38,6 +38,7 @@ mod bench;
 pub mod cgroup;
 mod clock;
 mod config;
+mod descriptors;
 mod loan;
 pub mod logging;
 mod message;
@@ -53,6 +54,7 @@ pub use bench::{
 };
 pub use clock::monotonic_ns;
 pub use config::{Role, ipc_config};
+pub use descriptors::mark_cloexec_from;
 pub use loan::loan_default;
 pub use message::{
     AgentState, CapacityError, MAX_COMPUTE_NS, MalformedState, StateKind, StateMsg, WireBody,

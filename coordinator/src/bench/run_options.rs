@@ -1,0 +1,21 @@
+//! The run options every bench measurement starts from.
+
+use std::path::Path;
+use std::time::Duration;
+
+use crate::turns::RunOptions;
+
+/// How long a benched agent has to answer a turn: generous, so that a noisy machine
+/// never turns a slow turn into a fault and changes what is measured.
+pub const BENCH_TURN_DEADLINE: Duration = Duration::from_secs(2);
+
+/// The options of a measured run: the agents from `agent_bin`, the generous
+/// [`BENCH_TURN_DEADLINE`], no progress line; the rest as [`RunOptions::default`].
+pub fn bench_run_options(agent_bin: &Path) -> RunOptions {
+    RunOptions {
+        agent_bin: Some(agent_bin.to_path_buf()),
+        turn_deadline: BENCH_TURN_DEADLINE,
+        progress: false,
+        ..RunOptions::default()
+    }
+}
