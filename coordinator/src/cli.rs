@@ -79,6 +79,18 @@ pub struct RunArgs {
     /// (repeatable), e.g. `--kill-agent 2@40`.
     #[arg(long = "kill-agent", value_name = "AGENT@STEP", value_parser = parse_kill)]
     pub kill_agent: Vec<(usize, usize)>,
+    /// Deterministic fault injection: agent AGENT dies at step STEP, killed with SIGKILL
+    /// just before its group's turns (repeatable), e.g. `--die-agent 2@40`: unlike
+    /// `--kill-agent`, nothing races with its answer, so the run is the same every time.
+    #[arg(long = "die-agent", value_name = "AGENT@STEP", value_parser = parse_kill)]
+    pub die_agent: Vec<(usize, usize)>,
+    /// Go on with the run killed in DIR from the last step its `run.mcap` holds: the
+    /// scenario, the centre plan and the options that change the record (turn deadline,
+    /// respawn, kills, deaths, misbehaviour) are the log's; the world at that step is
+    /// rebuilt from it, the agents alive then are started, and the run goes on and
+    /// writes its outputs into DIR. A SCENARIO given too must be the one logged.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "force", "controller", "respawn", "kill_agent", "die_agent", "misbehave", "slow_turn_ms"])]
+    pub resume: Option<PathBuf>,
     /// Test mode: agent AGENT misbehaves or attacks on purpose: nan, teleport,
     /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
@@ -324,7 +336,7 @@ fn parse_kill(s: &str) -> Result<(usize, usize), String> {
 }
 
 /// `AGENT=MODE`, the mode one of [`Misbehave::ALL`] by name.
-fn parse_misbehave(s: &str) -> Result<(usize, Misbehave), String> {
+pub(crate) fn parse_misbehave(s: &str) -> Result<(usize, Misbehave), String> {
     let (a, m) = s
         .split_once('=')
         .ok_or_else(|| format!("{s:?}: expected AGENT=MODE, e.g. 3=nan"))?;

@@ -15,6 +15,7 @@ pub mod output;
 mod plan;
 mod procfs;
 pub mod render;
+mod resume;
 mod run_command;
 pub mod run_log;
 mod simulate_command;

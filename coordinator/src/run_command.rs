@@ -1,11 +1,18 @@
 //! The `run` subcommand, `coordinator run [SCENARIO] [--out DIR [--force]]`: its
 //! arguments checked, the run taken by [`crate::turns`], its outputs written.
 
+use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Duration;
+
+use shared::geometry::Pose;
+use shared::scenario::Scenario;
 
 use crate::cli::RunArgs;
 use crate::error::CliError;
 use crate::output;
+use crate::resume::{RecordOptions, check_agents_named, load_resume};
+use crate::run_log::LoggedRun;
 use crate::turns::{RunOptions, run_scenario};
 use crate::validate::load_and_plan;
 
@@ -13,27 +20,20 @@ use crate::validate::load_and_plan;
 /// take the run over agent processes ([`run_scenario`]), write the outputs. An interrupted run still writes its outputs, marked not
 /// completed, and exits 1.
 pub fn execute(args: &RunArgs) -> Result<(), CliError> {
-    let loaded = load_and_plan(args.scenario.as_deref())?;
-    let scenario = &match args.controller {
-        Some(kind) => loaded.scenario.with_controller(kind),
-        None => loaded.scenario.clone(),
+    let prepared = match &args.resume {
+        Some(dir) => prepare_resume(args, dir)?,
+        None => prepare_new(args)?,
     };
-    let centre_path = &loaded.centre_path;
-    let n = scenario.agents.len();
-    let mut named = args.kill_agent.iter().map(|(a, _)| *a);
-    let mut misbehaving = args
-        .misbehave
-        .iter()
-        .flat_map(|(a, mode)| std::iter::once(*a).chain(mode.victim()));
-    if let Some(a) = named
-        .find(|&a| a >= n)
-        .or_else(|| misbehaving.find(|&a| a >= n))
-    {
-        return Err(CliError::Usage(format!(
-            "agent {a} does not exist: the scenario has {n} agents (0 to {})",
-            n - 1
-        )));
-    }
+    let Prepared {
+        scenario,
+        source,
+        centre_path,
+        dir,
+        record,
+        resume,
+    } = prepared;
+    let scenario = &scenario;
+    let centre_path = &centre_path;
     let network = args.network.options().map_err(CliError::Usage)?;
     if let Some(a) = network.as_ref().and_then(|n| {
         n.remote
@@ -42,8 +42,9 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
             .find(|&a| a >= scenario.agents.len())
     }) {
         return Err(CliError::Usage(format!(
-            "--remote {a}: the scenario has {n} agents (0 to {})",
-            n - 1
+            "--remote {a}: the scenario has {} agents (0 to {})",
+            scenario.agents.len(),
+            scenario.agents.len() - 1
         )));
     }
     if let Some(n) = &network {
@@ -53,36 +54,41 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         .sandbox
         .options(scenario.agents.len(), network.is_some())
         .map_err(CliError::Usage)?;
-    // Before any agent is spawned or anything created: a folder holding something is
-    // refused unless --force.
-    let out = output::OutDir::check(
-        args.out
-            .clone()
-            .unwrap_or_else(|| output::default_run_dir(&scenario.name)),
-        args.force,
-    )?;
-    // The folder is made now: the run writes its log into it as it goes.
-    let dir = out.create_in_place()?;
+    let dir = match dir {
+        Some(dir) => dir,
+        // Before any agent is spawned or anything created: a folder holding something is
+        // refused unless --force. The folder is made now: the run writes its log into it
+        // as it goes.
+        None => output::OutDir::check(
+            args.out
+                .clone()
+                .unwrap_or_else(|| output::default_run_dir(&scenario.name)),
+            args.force,
+        )?
+        .create_in_place()?,
+    };
     let log_path = dir.join(crate::run_log::RUN_LOG_FILE);
     let options = RunOptions {
         agent_bin: args.agent_bin.clone(),
-        turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
-        slow_turn: args.slow_turn_ms.map(Duration::from_millis),
-        respawn: args.respawn,
-        kills: args.kill_agent.clone(),
-        misbehave: args.misbehave.clone(),
+        turn_deadline: record.turn_deadline,
+        slow_turn: record.slow_turn,
+        respawn: record.respawn,
+        kills: record.kills,
+        deaths: record.deaths,
+        misbehave: record.misbehave,
         progress: !args.quiet,
         wait: args.wait,
         network,
         sandbox,
         log: Some(crate::run_log::LogOptions {
             path: log_path.clone(),
-            source: loaded.source.clone(),
+            source: source.clone(),
             sync: args.sync_every_steps.map_or(
                 crate::run_log::SyncPolicy::EverySecond,
                 crate::run_log::SyncPolicy::EverySteps,
             ),
         }),
+        resume,
         ..RunOptions::default()
     };
     // A failed run still writes what it recorded, marked not completed.
@@ -107,14 +113,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
             outcome.run.clone()
         }
     };
-    output::write_run(
-        &dir,
-        scenario,
-        &loaded.source,
-        &run,
-        centre_path,
-        &outcome.timing,
-    )?;
+    output::write_run(&dir, scenario, &source, &run, centre_path, &outcome.timing)?;
     let plots = if args.no_plots {
         None
     } else {
@@ -163,4 +162,61 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// What a run starts from: a new one's scenario and options, or a killed run's.
+struct Prepared {
+    scenario: Scenario,
+    source: String,
+    centre_path: Vec<Pose>,
+    /// The folder to write into, when it is there already (`--resume`).
+    dir: Option<PathBuf>,
+    record: RecordOptions,
+    resume: Option<Arc<LoggedRun>>,
+}
+
+/// A new run: the scenario loaded and planned (bad input exits 2 before anything is
+/// created), the options from the command line.
+fn prepare_new(args: &RunArgs) -> Result<Prepared, CliError> {
+    let loaded = load_and_plan(args.scenario.as_deref())?;
+    let scenario = match args.controller {
+        Some(kind) => loaded.scenario.with_controller(kind),
+        None => loaded.scenario.clone(),
+    };
+    let record = RecordOptions {
+        turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
+        slow_turn: args.slow_turn_ms.map(Duration::from_millis),
+        respawn: args.respawn,
+        kills: args.kill_agent.clone(),
+        deaths: args.die_agent.clone(),
+        misbehave: args.misbehave.clone(),
+    };
+    check_agents_named(scenario.agents.len(), &record).map_err(CliError::Usage)?;
+    Ok(Prepared {
+        scenario,
+        source: loaded.source,
+        centre_path: loaded.centre_path,
+        dir: None,
+        record,
+        resume: None,
+    })
+}
+
+/// A killed run, from its log ([`load_resume`]).
+fn prepare_resume(args: &RunArgs, dir: &std::path::Path) -> Result<Prepared, CliError> {
+    let resumed = load_resume(dir, args.scenario.as_deref())?;
+    tracing::info!(
+        "resuming {} after step {}",
+        resumed.dir.display(),
+        resumed.logged.steps.last().map_or(0, |s| s.step)
+    );
+    Ok(Prepared {
+        centre_path: resumed.logged.first_plan.clone(),
+        // A log without a step: the run starts again from the start.
+        resume: (!resumed.logged.steps.is_empty()).then_some(resumed.logged),
+        scenario: resumed.scenario,
+        source: resumed.source,
+        dir: Some(resumed.dir),
+        record: resumed.record,
+    })
 }

@@ -26,9 +26,9 @@ mod reader;
 mod records;
 mod writer;
 
-pub use reader::{LoggedRun, ReadLogError, read_run_log};
-pub use records::{StepMessage, TurnMessage};
-pub use writer::{LogOptions, RunLogError, RunLogWriter, SyncPolicy};
+pub use reader::{LoggedRun, ReadLogError, StepMarks, read_run_log};
+pub use records::{LOG_FORMAT_VERSION, LoggedOptions, StepMessage, TurnMessage};
+pub use writer::{CourseSoFar, LogOptions, RunLogError, RunLogWriter, SyncPolicy};
 
 use serde_json::{Value, json};
 
@@ -131,7 +131,7 @@ impl Topic {
     pub fn schema(self) -> Value {
         let own = |keys: &[&str]| json!({"title": self.schema_name(), "type": "object", "required": keys});
         match self {
-            Self::Scenario => own(&["toml"]),
+            Self::Scenario => own(&["toml", "source", "format_version", "options"]),
             Self::Plan => own(&["path"]),
             Self::Step => own(&["step", "centre", "agents", "groups", "moving", "struck"]),
             Self::Fault => own(&["agent", "step", "kind", "detail"]),

@@ -13,8 +13,8 @@ use shared::record::{CourseRecord, Fault, Run, Step};
 
 use super::Topic;
 use super::records::{
-    EndMessage, FaultMessage, FoundMessage, PlanMessage, RecordError, ReplanMessage, StepMessage,
-    TurnMessage, WaitMessage,
+    EndMessage, FaultMessage, FoundMessage, LoggedOptions, PlanMessage, RecordError, ReplanMessage,
+    ScenarioMessage, StepMessage, TurnMessage, WaitMessage,
 };
 
 /// What a run's log holds, read back.
@@ -22,6 +22,12 @@ use super::records::{
 pub struct LoggedRun {
     /// The scenario as run (its resolved TOML).
     pub scenario_toml: String,
+    /// The scenario file as the run was given it.
+    pub source: Option<String>,
+    /// The version of the format the log was written in (`None`: an older program's).
+    pub format_version: Option<u32>,
+    /// The run's options that change its record (`None`: an older program's log).
+    pub options: Option<LoggedOptions>,
     /// The centre path planned before the run.
     pub first_plan: Vec<Pose>,
     /// Every step logged, from step 0, in order.
@@ -40,6 +46,25 @@ pub struct LoggedRun {
     pub end: Option<EndMessage>,
     /// Whether an incomplete last chunk was dropped.
     pub truncated: bool,
+    /// For each step, how much of each list was logged up to and with it: the log of a
+    /// resumed run is written again chunk for chunk from these.
+    pub marks: Vec<StepMarks>,
+}
+
+/// How many faults, replans, waits, obstacles found and turns a log holds up to and with
+/// a step.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepMarks {
+    /// Faults.
+    pub faults: usize,
+    /// Replannings.
+    pub replans: usize,
+    /// Waits.
+    pub waits: usize,
+    /// Obstacles found.
+    pub found: usize,
+    /// Turns.
+    pub turns: usize,
 }
 
 /// Why a log cannot be read.
@@ -184,18 +209,27 @@ fn take_message(log: &mut LoggedRun, topic: Topic, data: &[u8]) -> Result<(), St
     let record = |e: RecordError| format!("{}: {e}", topic.name());
     match topic {
         Topic::Scenario => {
-            #[derive(serde::Deserialize)]
-            struct ScenarioMessage {
-                toml: String,
-            }
-            log.scenario_toml = parse::<ScenarioMessage>(topic, data)?.toml;
+            let message = parse::<ScenarioMessage>(topic, data)?;
+            log.scenario_toml = message.toml;
+            log.format_version = message.format_version;
+            log.source = message.source;
+            log.options = message.options;
         }
         Topic::Plan => log.first_plan = parse::<PlanMessage>(topic, data)?.to_path(),
-        Topic::Step => log.steps.push(
-            parse::<StepMessage>(topic, data)?
-                .to_step()
-                .map_err(record)?,
-        ),
+        Topic::Step => {
+            log.steps.push(
+                parse::<StepMessage>(topic, data)?
+                    .to_step()
+                    .map_err(record)?,
+            );
+            log.marks.push(StepMarks {
+                faults: log.faults.len(),
+                replans: log.replans.len(),
+                waits: log.waits.len(),
+                found: log.found.len(),
+                turns: log.turns.len(),
+            });
+        }
         Topic::Fault => log
             .faults
             .push(parse::<FaultMessage>(topic, data)?.to_fault()),

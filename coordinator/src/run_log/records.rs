@@ -330,3 +330,41 @@ pub struct EndMessage {
     /// Whether the course gave up (no way through for too long).
     pub gave_up: bool,
 }
+
+/// The version of the log's format this program writes and resumes: a log of another
+/// version is read for `render` as far as it can be, never resumed.
+pub const LOG_FORMAT_VERSION: u32 = 1;
+
+/// `/formation/scenario`: the scenario as run, the format's version, and the run's
+/// options that change what happens (so that `run --resume` goes on as the run would).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScenarioMessage {
+    /// The scenario's resolved TOML.
+    pub toml: String,
+    /// The scenario file as it was given (absent: an older program's log).
+    #[serde(default)]
+    pub source: Option<String>,
+    /// [`LOG_FORMAT_VERSION`] of the program that wrote the log (absent: an older one).
+    #[serde(default)]
+    pub format_version: Option<u32>,
+    /// The run's options (absent: an older program's log).
+    #[serde(default)]
+    pub options: Option<LoggedOptions>,
+}
+
+/// The options of a run that change its record, as logged.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LoggedOptions {
+    /// The turn deadline, milliseconds.
+    pub turn_deadline_ms: u64,
+    /// The slow bound, milliseconds, if one was set.
+    pub slow_turn_ms: Option<u64>,
+    /// Whether dead agents are replaced.
+    pub respawn: bool,
+    /// `(agent, step)`: SIGKILL right after the grant of that turn.
+    pub kills: Vec<(usize, usize)>,
+    /// `(agent, step)`: killed before its group's turns at that step.
+    pub deaths: Vec<(usize, usize)>,
+    /// `AGENT=MODE`: test-mode misbehaviour.
+    pub misbehave: Vec<String>,
+}

@@ -9,15 +9,16 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
-use shared::course::Course;
+use shared::course::{Course, Replan, Wait};
 use shared::geometry::Pose;
 use shared::record::{Fault, Step};
 use shared::scenario::Scenario;
 
 use super::foxglove;
+use super::reader::LoggedRun;
 use super::records::{
-    EndMessage, FaultMessage, FoundMessage, PlanMessage, ReplanMessage, StepMessage, TurnMessage,
-    WaitMessage,
+    EndMessage, FaultMessage, FoundMessage, LOG_FORMAT_VERSION, LoggedOptions, PlanMessage,
+    ReplanMessage, ScenarioMessage, StepMessage, TurnMessage, WaitMessage,
 };
 use super::{Topic, log_time_ns};
 
@@ -65,6 +66,29 @@ pub enum RunLogError {
     Scenario(String),
 }
 
+/// What the centre's course has done so far, as the log takes it: from a [`Course`]
+/// under way, or from a log read back.
+#[derive(Clone, Copy, Debug)]
+pub struct CourseSoFar<'a> {
+    /// Every replanning so far.
+    pub replans: &'a [Replan],
+    /// Every wait so far.
+    pub waits: &'a [Wait],
+    /// For each unknown obstacle, the step it was found, if it was.
+    pub found_at: &'a [Option<usize>],
+}
+
+impl<'a> CourseSoFar<'a> {
+    /// What `course` has done so far.
+    pub fn of(course: &'a Course<'_>) -> Self {
+        Self {
+            replans: course.replans(),
+            waits: course.waits(),
+            found_at: course.found_at(),
+        }
+    }
+}
+
 /// A run's log, open for writing.
 pub struct RunLogWriter {
     path: PathBuf,
@@ -88,13 +112,83 @@ pub struct RunLogWriter {
 
 impl RunLogWriter {
     /// Create the log at `options.path` (a file there is replaced) and write what is known
-    /// before the first step: the scenario as run and the first centre plan.
+    /// before the first step: the scenario as run, the options `run` that change its
+    /// record, and the first centre plan.
     pub fn create(
         options: &LogOptions,
         scenario: &Scenario,
         first_plan: &[Pose],
+        run: &LoggedOptions,
     ) -> Result<Self, RunLogError> {
-        let path = options.path.clone();
+        let toml = scenario
+            .to_resolved_toml(&options.source)
+            .map_err(|e| RunLogError::Scenario(e.to_string()))?;
+        Self::create_at(
+            options.path.clone(),
+            options,
+            scenario,
+            toml,
+            first_plan,
+            run,
+        )
+    }
+
+    /// The log of a run resumed from `logged` (the killed run's log at `options.path`): a
+    /// new file beside it holding every step of `logged` as it was logged, then put in its
+    /// place in one rename, so that a kill at any moment leaves a log with at least those
+    /// steps. Goes on with the steps after them.
+    pub fn create_resumed(
+        options: &LogOptions,
+        scenario: &Scenario,
+        logged: &LoggedRun,
+    ) -> Result<Self, RunLogError> {
+        let mut part = options.path.clone().into_os_string();
+        part.push(".resuming");
+        let part = PathBuf::from(part);
+        let run = logged.options.clone().unwrap_or_default();
+        let toml = logged.scenario_toml.clone();
+        let mut log = Self::create_at(
+            part.clone(),
+            options,
+            scenario,
+            toml,
+            &logged.first_plan,
+            &run,
+        )?;
+        let mut found_at = vec![None; scenario.unknown.len()];
+        let mut turns_before = 0;
+        for (step, marks) in logged.steps.iter().zip(&logged.marks) {
+            for &(obstacle, at) in &logged.found[..marks.found] {
+                if let Some(slot) = found_at.get_mut(obstacle) {
+                    *slot = Some(at);
+                }
+            }
+            let course = CourseSoFar {
+                replans: &logged.replans[..marks.replans],
+                waits: &logged.waits[..marks.waits],
+                found_at: &found_at,
+            };
+            let turns = logged.turns[turns_before..marks.turns].iter().cloned();
+            turns_before = marks.turns;
+            log.log_step(step, &logged.faults[..marks.faults], Some(course), turns)?;
+        }
+        log.end_chunk(true)?;
+        std::fs::rename(&part, &options.path).map_err(|source| RunLogError::Io {
+            path: options.path.clone(),
+            source,
+        })?;
+        log.path = options.path.clone();
+        Ok(log)
+    }
+
+    fn create_at(
+        path: PathBuf,
+        options: &LogOptions,
+        scenario: &Scenario,
+        toml: String,
+        first_plan: &[Pose],
+        run: &LoggedOptions,
+    ) -> Result<Self, RunLogError> {
         let io = |source| RunLogError::Io {
             path: path.clone(),
             source,
@@ -144,10 +238,13 @@ impl RunLogWriter {
                 .map_err(|source| log.mcap_error(source))?;
             log.channels.insert(topic, channel);
         }
-        let toml = scenario
-            .to_resolved_toml(&options.source)
-            .map_err(|e| RunLogError::Scenario(e.to_string()))?;
-        log.write(Topic::Scenario, 0, &serde_json::json!({ "toml": toml }))?;
+        let message = ScenarioMessage {
+            toml,
+            source: Some(options.source.clone()),
+            format_version: Some(LOG_FORMAT_VERSION),
+            options: Some(run.clone()),
+        };
+        log.write(Topic::Scenario, 0, &message)?;
         log.write(Topic::Plan, 0, &PlanMessage::of(first_plan))?;
         log.write(
             Topic::CentrePlan,
@@ -211,7 +308,7 @@ impl RunLogWriter {
         &mut self,
         step: &Step,
         faults: &[Fault],
-        course: Option<&Course<'_>>,
+        course: Option<CourseSoFar<'_>>,
         turns: impl IntoIterator<Item = TurnMessage>,
     ) -> Result<(), RunLogError> {
         let at = step.step;
@@ -222,7 +319,7 @@ impl RunLogWriter {
         self.faults = self.faults.max(faults.len());
         let found_before = self.found.iter().filter(|f| **f).count();
         if let Some(course) = course {
-            for replan in course.replans().iter().skip(self.replans) {
+            for replan in course.replans.iter().skip(self.replans) {
                 self.write(Topic::Replan, at, &ReplanMessage::of(replan))?;
                 if replan.found {
                     self.write(
@@ -232,12 +329,12 @@ impl RunLogWriter {
                     )?;
                 }
             }
-            self.replans = self.replans.max(course.replans().len());
-            for wait in course.waits().iter().skip(self.waits) {
+            self.replans = self.replans.max(course.replans.len());
+            for wait in course.waits.iter().skip(self.waits) {
                 self.write(Topic::Wait, at, &WaitMessage::of(wait))?;
             }
-            self.waits = self.waits.max(course.waits().len());
-            for (obstacle, found_at) in course.found_at().iter().enumerate() {
+            self.waits = self.waits.max(course.waits.len());
+            for (obstacle, found_at) in course.found_at.iter().enumerate() {
                 if let (Some(found_step), Some(logged)) = (found_at, self.found.get(obstacle))
                     && !logged
                 {

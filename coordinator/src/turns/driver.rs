@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::course::Course;
 use shared::geometry::{Point, Pose};
 use shared::groups::turn_groups;
-use shared::record::Recorder;
+use shared::record::{Recorder, replay_course};
 use shared::scenario::Scenario;
 
 use super::hand_over::HandOver;
@@ -97,6 +97,7 @@ impl Driver<'_, '_> {
 
     /// Log the step just recorded, with what happened since the last one.
     fn log_step(&mut self, course: Option<&Course<'_>>) -> anyhow::Result<()> {
+        let course = course.map(crate::run_log::CourseSoFar::of);
         let Some(log) = self.log.as_deref_mut() else {
             return Ok(());
         };
@@ -123,19 +124,43 @@ impl Driver<'_, '_> {
             .collect()
     }
 
-    /// Start every agent, then run every step of `centre_path`.
+    /// Start every agent, then run every step of `centre_path`; a resumed run (its
+    /// recorder rebuilt from the log) starts the agents alive at its last step and goes
+    /// on from there, its course replayed through the steps logged.
     pub(super) fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<()> {
         let n = self.scenario.agents.len();
-        self.log_step(None)?;
-        for i in 0..n {
+        let resumed_at = self
+            .options
+            .resume
+            .as_ref()
+            .and_then(|_| self.recorder.steps().last())
+            .map(|s| s.step);
+        let (mut course, mut step) = match resumed_at {
+            Some(last) => (
+                replay_course(self.scenario, centre_path, self.recorder.steps()).map_err(|at| {
+                    anyhow::anyhow!("the log does not replay: step {at}'s centre differs")
+                })?,
+                last,
+            ),
+            None => {
+                self.log_step(None)?;
+                (Course::new(self.scenario, centre_path), 0)
+            }
+        };
+        let to_start: Vec<usize> = (0..n).filter(|&i| self.recorder.alive()[i]).collect();
+        for &i in &to_start {
             // A spawn that fails (the machine out of processes, say) fails that agent
             // alone: it is frozen where it starts, or replaced with `--respawn`.
             if let Err(e) = self.spawn(i, false) {
-                self.on_failed_start(0, i, &format!("its process could not be started: {e:#}"))?;
+                self.on_failed_start(step, i, &format!("its process could not be started: {e:#}"))?;
             }
         }
-        let all: Vec<usize> = (0..n).collect();
-        self.start_agents(0, &all, self.options.startup_timeout_for(n), false)?;
+        self.start_agents(
+            step,
+            &to_start,
+            self.options.startup_timeout_for(to_start.len()),
+            false,
+        )?;
         self.progress.startup_s = started.elapsed().as_secs_f64();
         self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
             let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
@@ -150,10 +175,9 @@ impl Driver<'_, '_> {
             &self.scenario.name,
             self.options.progress,
         );
+        bar.set_position(step as u64);
 
         let stepping = Instant::now();
-        let mut course = Course::new(self.scenario, centre_path);
-        let mut step = 0;
         'steps: while let Some(centre) =
             course.advance(step + 1, self.recorder.bodies(), self.recorder.alive())
         {

@@ -91,6 +91,9 @@ pub struct RunOptions {
     pub sandbox: Option<SandboxOptions>,
     /// Where the run writes its log as it goes (`run.mcap`), if anywhere.
     pub log: Option<crate::run_log::LogOptions>,
+    /// Go on with a killed run from the last step of its log (`run --resume DIR`): the
+    /// world at that step rebuilt from it, the log written again and continued.
+    pub resume: Option<std::sync::Arc<crate::run_log::LoggedRun>>,
 }
 
 /// How agents are sandboxed: agent `i` runs as user and group `first_uid + i`, in a
@@ -105,6 +108,24 @@ pub struct SandboxOptions {
 }
 
 impl RunOptions {
+    /// The options that change the run's record, as its log keeps them.
+    pub fn logged(&self) -> crate::run_log::LoggedOptions {
+        crate::run_log::LoggedOptions {
+            turn_deadline_ms: u64::try_from(self.turn_deadline.as_millis()).unwrap_or(u64::MAX),
+            slow_turn_ms: self
+                .slow_turn
+                .map(|d| u64::try_from(d.as_millis()).unwrap_or(u64::MAX)),
+            respawn: self.respawn,
+            kills: self.kills.clone(),
+            deaths: self.deaths.clone(),
+            misbehave: self
+                .misbehave
+                .iter()
+                .map(|(agent, mode)| format!("{agent}={mode}"))
+                .collect(),
+        }
+    }
+
     /// The slow bound in force: [`Self::slow_turn`], or a fifth of the turn deadline.
     pub fn slow_bound(&self) -> Duration {
         self.slow_turn.unwrap_or(self.turn_deadline / 5)
@@ -187,6 +208,7 @@ impl Default for RunOptions {
             network: None,
             sandbox: None,
             log: None,
+            resume: None,
         }
     }
 }

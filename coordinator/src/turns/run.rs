@@ -38,11 +38,30 @@ pub fn run_scenario_with(
 ) -> Result<RunOutcome, RunFailure> {
     let started = Instant::now();
     let n = scenario.agents.len();
-    let mut recorder = Recorder::new(
-        scenario,
-        centre_path.first().copied().unwrap_or(scenario.path.start),
-    );
+    let start = centre_path.first().copied().unwrap_or(scenario.path.start);
+    // A resumed run goes on from its log's last step (checked by `run --resume`).
+    let resumed = options.resume.as_deref().map(|logged| {
+        Recorder::resume(
+            scenario,
+            logged.to_run(&scenario.name, scenario.unknown.len()),
+        )
+    });
     let mut progress = Progress::default();
+    let mut recorder = match resumed {
+        None => Recorder::new(scenario, start),
+        Some(Some(recorder)) => recorder,
+        Some(None) => {
+            return Err(RunFailure {
+                error: anyhow::anyhow!("the log's last step does not fit the scenario"),
+                partial: Box::new(outcome(
+                    Recorder::new(scenario, start).snapshot(),
+                    progress,
+                    String::new(),
+                    started,
+                )),
+            });
+        }
+    };
     let fail = |error: anyhow::Error, recorder: &Recorder, progress: Progress| RunFailure {
         error,
         partial: Box::new(outcome(
@@ -101,7 +120,12 @@ pub fn run_scenario_with(
     let mut log = match options
         .log
         .as_ref()
-        .map(|log| crate::run_log::RunLogWriter::create(log, scenario, centre_path))
+        .map(|log| match options.resume.as_deref() {
+            Some(logged) => crate::run_log::RunLogWriter::create_resumed(log, scenario, logged),
+            None => {
+                crate::run_log::RunLogWriter::create(log, scenario, centre_path, &options.logged())
+            }
+        })
         .transpose()
     {
         Ok(log) => log,

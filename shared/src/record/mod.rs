@@ -12,10 +12,12 @@ use crate::vocabulary::MoveStatus;
 
 mod fault;
 mod recorder;
+mod replay;
 mod summary;
 
 pub use fault::{Fault, FaultKind, UnknownFaultKind};
 pub use recorder::Recorder;
+pub use replay::replay_course;
 pub use summary::{ReplanNote, Summary, WaitNote};
 
 /// One agent at the end of one step.

@@ -76,6 +76,45 @@ impl<'a> Recorder<'a> {
         recorder
     }
 
+    /// Go on with a run of `scenario` whose record so far is `run` (a killed run's, read
+    /// back from its log): every agent where the last step left it, alive or not as it
+    /// was, every moving obstacle where it stood; the next step is the one after the
+    /// last. `None` when `run` has no step, or its last step does not fit the scenario
+    /// (another number of agents or moving obstacles).
+    pub fn resume(scenario: &'a Scenario, run: Run) -> Option<Self> {
+        let last = run.steps.last()?;
+        if last.agents.len() != scenario.agents.len() || last.moving.len() != scenario.moving.len()
+        {
+            return None;
+        }
+        let bodies: Vec<Body> = scenario
+            .agents
+            .iter()
+            .zip(&last.agents)
+            .map(|(spec, row)| Body {
+                position: row.position,
+                radius_m: spec.radius_m,
+            })
+            .collect();
+        let n = bodies.len();
+        Some(Self {
+            scenario,
+            obstacles: DiskGrid::new(scenario.static_obstacles()),
+            moving_now: Self::moving_at(scenario, last.step),
+            moving: last.moving.clone(),
+            struck: Vec::new(),
+            alive: last.agents.iter().map(|a| a.alive).collect(),
+            bodies,
+            pending: vec![None; n],
+            groups: 0,
+            run: Run {
+                centre_path: run.steps.iter().map(|s| s.centre).collect(),
+                completed: false,
+                ..run
+            },
+        })
+    }
+
     /// The scenario being run.
     pub fn scenario(&self) -> &Scenario {
         self.scenario
