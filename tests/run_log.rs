@@ -136,12 +136,56 @@ fn wait_for_step_zero(out: &Path) {
     });
 }
 
+/// The files a resumed run must write as the uninterrupted run did, byte for byte.
+const RESUMED_EQUAL: [&str; 5] = [
+    "trajectory.csv",
+    "moves.csv",
+    "path.csv",
+    "plans.csv",
+    "obstacles.csv",
+];
+
+/// `coordinator run --resume DIR` (exit 0 required); its process id.
+fn resume(out: &Path, what: &str) -> u32 {
+    let child = Command::new(support::coordinator_bin())
+        .args(["run", "--quiet", "--no-plots", "--resume"])
+        .arg(out)
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("resume");
+    let pid = child.id();
+    let resumed = child.wait_with_output().expect("resume");
+    assert!(
+        resumed.status.success(),
+        "{what}: --resume failed: {}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    pid
+}
+
+/// Every file of [`RESUMED_EQUAL`] in `out` is the one in `reference`.
+fn assert_same_files(out: &Path, reference: &Path, what: &str) {
+    for name in RESUMED_EQUAL {
+        let got = std::fs::read(out.join(name)).unwrap_or_else(|e| panic!("{what}: {name}: {e}"));
+        let want = std::fs::read(reference.join(name)).expect(name);
+        assert!(
+            got == want,
+            "{what}: {name} differs from the uninterrupted run's"
+        );
+    }
+}
+
 /// 20 kills (SIGKILL of the coordinator) in runs of two shipped scenarios made longer:
 /// the first of each scenario during start-up, the others at a seeded random step while
 /// steps are still to come. Each time the folder has no `summary.json`; `render` recovers
 /// it (exit 0): `completed` false, every step up to the kill (at least the step the run
 /// had reported), and `trajectory.csv` and `moves.csv` equal to the reference's first
-/// steps byte for byte. Nothing is left once the next run has cleaned up.
+/// steps byte for byte. Then `run --resume` goes on from there, and its five data files
+/// equal the uninterrupted run's byte for byte. One more kill per scenario while the
+/// plots are drawn: the data files are whole, `render` draws the plots, and `--resume`
+/// refuses the finished run. Nothing is left once the next run has cleaned up.
 #[test]
 fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_kill() {
     let mut rng = ChaCha8Rng::seed_from_u64(26);
@@ -153,6 +197,10 @@ fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_ki
         let path = plan_centre_path(&scenario).expect("centre path");
         let reference = simulate_along(&scenario, &path).expect("reference");
         let latest = progress::latest_hold_step(path.len() - 1);
+        let uninterrupted = dir.path().join(format!("{name}-uninterrupted"));
+        let (output, pid) = run_to_end(&[file.to_str().expect("utf-8")], &uninterrupted);
+        assert!(output.status.success(), "{name}: the uninterrupted run");
+        killed.push(pid);
         for kill_number in 0..10 {
             let out = dir.path().join(format!("{name}-{kill_number}"));
             let args = [file.to_str().expect("utf-8")];
@@ -202,7 +250,44 @@ fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_ki
                     last + 1
                 );
             }
+            killed.push(resume(&out, &what));
+            assert_same_files(&out, &uninterrupted, &what);
+            assert_eq!(summary(&out)["completed"], true, "{what}");
         }
+        // Killed while drawing its plots: the data files are there and whole.
+        let out = dir.path().join(format!("{name}-plots"));
+        let mut child = Command::new(support::coordinator_bin())
+            .args(["run", "--quiet"])
+            .arg(&file)
+            .arg("--out")
+            .arg(&out)
+            .env("FORMATION_AGENT_BIN", support::agent_bin())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("start");
+        support::wait_until(Duration::from_secs(300), "no plot drawn", || {
+            out.join(coordinator::render::PLOTS_DIR).is_dir()
+        });
+        kill(Pid::from_raw(child.id() as i32), Signal::SIGKILL).expect("kill");
+        let _ = child.wait();
+        killed.push(child.id());
+        let what = format!("{name}, killed while drawing");
+        assert_same_files(&out, &uninterrupted, &what);
+        let rendered = Command::new(support::coordinator_bin())
+            .arg("render")
+            .arg(&out)
+            .output()
+            .expect("render");
+        assert!(rendered.status.success(), "{what}: render");
+        let refused = Command::new(support::coordinator_bin())
+            .args(["run", "--resume"])
+            .arg(&out)
+            .output()
+            .expect("resume");
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert_eq!(refused.status.code(), Some(2), "{what}: {stderr}");
+        assert!(stderr.contains("finished"), "{what}: {stderr}");
     }
     // The killed coordinators' agents went with them; their files go with the next run.
     let (next, next_pid) = run_to_end(&[], &dir.path().join("next"));
@@ -261,4 +346,127 @@ fn a_cut_log_reads_as_its_first_steps_and_a_corrupted_chunk_is_refused() {
         "{text}"
     );
     assert_nothing_left(pid);
+}
+
+/// Every file in `dir` (recursively) with its bytes: what a refusal must leave as it was.
+fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut files = BTreeMap::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return files;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            files.extend(snapshot(&path));
+        } else {
+            files.insert(path.clone(), std::fs::read(&path).expect("read"));
+        }
+    }
+    files
+}
+
+/// A killed run's folder made from the finished log `from` with the mcap crate's writer:
+/// every message but the end, the scenario message's format version set to `version`.
+fn killed_copy(from: &Path, to: &Path, version: u64) {
+    std::fs::create_dir_all(to).expect("folder");
+    let bytes = std::fs::read(from).expect("run.mcap");
+    let file =
+        std::io::BufWriter::new(std::fs::File::create(to.join(RUN_LOG_FILE)).expect("create"));
+    let mut writer = mcap::WriteOptions::new()
+        .compression(None)
+        .create(file)
+        .expect("writer");
+    for message in mcap::MessageStream::new(&bytes).expect("a complete MCAP file") {
+        let mut message = message.expect("a message");
+        match message.channel.topic.as_str() {
+            "/formation/end" => continue,
+            "/formation/scenario" => {
+                let mut value: Value = serde_json::from_slice(&message.data).expect("JSON");
+                value["format_version"] = version.into();
+                message.data = serde_json::to_vec(&value).expect("JSON").into();
+            }
+            _ => {}
+        }
+        writer.write(&message).expect("write");
+    }
+    writer.finish().expect("finish");
+}
+
+/// `run --resume` on what is not a killed run of this program's format and this
+/// scenario: a missing or empty folder, a finished run, a log of another format
+/// version, of another scenario, with a corrupted chunk, or cut inside its first chunk:
+/// exit 2 with one line naming the folder or file and what is wrong, and every file there
+/// as it was. The same killed copy, whole and of this version, resumes to the finished
+/// run's files (so what is refused is refused for the reason named).
+#[test]
+fn resume_refuses_a_folder_that_is_not_a_killed_run_and_changes_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let finished = dir.path().join("finished");
+    let (output, pid) = run_to_end(&[], &finished);
+    assert!(output.status.success());
+    let log = finished.join(RUN_LOG_FILE);
+    let version = coordinator::run_log::LOG_FORMAT_VERSION as u64;
+
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).expect("folder");
+    let other_version = dir.path().join("other-version");
+    killed_copy(&log, &other_version, version + 6);
+    let killed = dir.path().join("killed");
+    killed_copy(&log, &killed, version);
+    let corrupted = dir.path().join("corrupted");
+    killed_copy(&log, &corrupted, version);
+    let mut bytes = std::fs::read(corrupted.join(RUN_LOG_FILE)).expect("log");
+    let summary_section = mcap::Summary::read(&bytes)
+        .expect("summary")
+        .expect("a summary");
+    let chunk = &summary_section.chunk_indexes[summary_section.chunk_indexes.len() / 2];
+    bytes[(chunk.chunk_start_offset + chunk.chunk_length - 8) as usize] ^= 0x20;
+    std::fs::write(corrupted.join(RUN_LOG_FILE), &bytes).expect("write");
+    let cut = dir.path().join("cut");
+    std::fs::create_dir(&cut).expect("folder");
+    std::fs::write(cut.join(RUN_LOG_FILE), &bytes[..40]).expect("write");
+    let dense = support::repo_root().join("scenarios/dense.toml");
+
+    let cases: [(&str, &Path, Option<&Path>, &str); 7] = [
+        (
+            "a missing folder",
+            &dir.path().join("missing"),
+            None,
+            "no such folder",
+        ),
+        ("an empty folder", &empty, None, "not a run folder"),
+        ("a finished run", &finished, None, "finished"),
+        ("another format", &other_version, None, "format version"),
+        ("another scenario", &killed, Some(&dense), "not of"),
+        ("a corrupted chunk", &corrupted, None, "corrupted"),
+        ("a log cut short", &cut, None, "no scenario"),
+    ];
+    for (what, folder, scenario, expected) in cases {
+        let before = snapshot(folder);
+        let mut command = Command::new(support::coordinator_bin());
+        command.arg("run");
+        if let Some(file) = scenario {
+            command.arg(file);
+        }
+        let refused = command
+            .arg("--resume")
+            .arg(folder)
+            .output()
+            .expect("resume");
+        let stderr = String::from_utf8_lossy(&refused.stderr);
+        assert_eq!(refused.status.code(), Some(2), "{what}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{what}: {stderr}");
+        assert!(stderr.contains(expected), "{what}: {stderr}");
+        let named = folder.file_name().and_then(|n| n.to_str()).expect("name");
+        assert!(
+            stderr.contains(named),
+            "{what}: the line names no file: {stderr}"
+        );
+        assert!(snapshot(folder) == before, "{what}: the folder changed");
+    }
+    let resumed = resume(&killed, "the killed copy");
+    assert_same_files(&killed, &finished, "the killed copy");
+    for pid in [pid, resumed] {
+        assert_nothing_left(pid);
+    }
 }

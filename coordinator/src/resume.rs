@@ -65,6 +65,11 @@ pub fn load_resume(dir: &Path, scenario_file: Option<&Path>) -> Result<Resumed, 
         )));
     }
     let logged = read_run_log(&path).map_err(|e| usage(e.to_string()))?;
+    if logged.scenario_toml.is_empty() {
+        return Err(usage(format!(
+            "{shown}: no scenario in it (cut before its first chunk ended, or not a run's log)"
+        )));
+    }
     if logged.format_version != Some(LOG_FORMAT_VERSION) {
         return Err(usage(format!(
             "{shown}: written in log format version {}, this program resumes version {LOG_FORMAT_VERSION}",
@@ -81,12 +86,6 @@ pub fn load_resume(dir: &Path, scenario_file: Option<&Path>) -> Result<Resumed, 
             } else {
                 "stopped early"
             },
-            dir.display()
-        )));
-    }
-    if dir.join("summary.json").exists() {
-        return Err(usage(format!(
-            "{}: the run finished (summary.json is there); there is nothing to resume",
             dir.display()
         )));
     }
