@@ -114,11 +114,35 @@ fn the_log_is_read_by_the_mcap_reader_and_every_foxglove_message_fits_its_schema
 /// The shipped scenario `name` with four times as many steps (`step_m` a quarter), in
 /// `dir`: long enough for kills timed by the run's progress.
 fn lengthened(dir: &Path, name: &str) -> PathBuf {
-    let text = std::fs::read_to_string(support::repo_root().join(format!("scenarios/{name}.toml")))
-        .expect("scenario");
-    assert!(text.contains("\nstep_m = 0.25"), "{name}: its step changed");
-    let path = dir.join(format!("{name}-long.toml"));
-    std::fs::write(&path, text.replace("\nstep_m = 0.25", "\nstep_m = 0.0625")).expect("write");
+    lengthened_file(
+        dir,
+        &support::repo_root().join(format!("scenarios/{name}.toml")),
+    )
+}
+
+/// The scenario in `file` with four times as many steps (its `step_m` a quarter), in
+/// `dir`.
+fn lengthened_file(dir: &Path, file: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(file).expect("scenario");
+    let (at, line) = text
+        .match_indices("\nstep_m = ")
+        .next()
+        .map(|(at, _)| (at, text[at + 1..].lines().next().unwrap_or("")))
+        .unwrap_or_else(|| panic!("{}: no step_m line", file.display()));
+    let step_m: f64 = line["step_m = ".len()..]
+        .split('#')
+        .next()
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("{}: {line}", file.display()));
+    let stem = file.file_stem().and_then(|s| s.to_str()).expect("name");
+    let path = dir.join(format!("{stem}-long.toml"));
+    let longer = format!(
+        "{}\nstep_m = {}{}",
+        &text[..at],
+        step_m / 4.0,
+        &text[at + 1 + line.len()..]
+    );
+    std::fs::write(&path, longer).expect("write");
     path
 }
 
@@ -467,6 +491,95 @@ fn resume_refuses_a_folder_that_is_not_a_killed_run_and_changes_nothing() {
     let resumed = resume(&killed, "the killed copy");
     assert_same_files(&killed, &finished, "the killed copy");
     for pid in [pid, resumed] {
+        assert_nothing_left(pid);
+    }
+}
+
+/// Resumed runs of what a run can hold, each made longer and killed twice at seeded steps
+/// (resumed after the first kill, killed again, resumed again): deaths at fixed steps and
+/// their replacements, parallel turns with sensing, moving obstacles, a top speed. Each
+/// time the five data files equal the uninterrupted run's byte for byte.
+#[test]
+fn resumed_runs_with_deaths_replacements_parallel_turns_and_moving_obstacles_equal_the_uninterrupted_ones()
+ {
+    let mut rng = ChaCha8Rng::seed_from_u64(2612);
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = support::repo_root();
+    let cases: [(&str, PathBuf, &[&str]); 4] = [
+        (
+            "swarm16-parallel",
+            root.join("tests/data/swarm16-parallel.toml"),
+            &["--die-agent", "3@40", "--die-agent", "9@150", "--respawn"],
+        ),
+        (
+            "moving-field",
+            root.join("scenarios/moving-field.toml"),
+            &[],
+        ),
+        (
+            "sensing-wall",
+            root.join("scenarios/sensing-wall.toml"),
+            &["--die-agent", "2@100"],
+        ),
+        (
+            "paper-top-speed",
+            root.join("scenarios/paper-top-speed.toml"),
+            &["--die-agent", "1@30", "--die-agent", "4@200", "--respawn"],
+        ),
+    ];
+    let mut pids = Vec::new();
+    for (name, file, extra) in cases {
+        let file = lengthened_file(dir.path(), &file);
+        let mut args = vec![file.to_str().expect("utf-8")];
+        args.extend_from_slice(extra);
+        let uninterrupted = dir.path().join(format!("{name}-uninterrupted"));
+        let (output, pid) = run_to_end(&args, &uninterrupted);
+        assert!(output.status.success(), "{name}: the uninterrupted run");
+        pids.push(pid);
+        let latest = progress::latest_hold_step(progress::centre_path_steps(&file));
+        let out = dir.path().join(name);
+        // The first kill in the run as started, the second in the resumed run.
+        let first = rng.random_range(1..=latest / 2);
+        let mut run = Watched::spawn(coordinator(&args, &out), &[first]);
+        let held = run.hold();
+        kill(Pid::from_raw(run.id() as i32), Signal::SIGKILL).expect("kill");
+        drop(held);
+        pids.push(run.id());
+        let _ = run.wait_with_output();
+        let second = rng.random_range(first + 1..=latest);
+        let mut resumed = Command::new(support::coordinator_bin());
+        resumed
+            .args(["run", "--quiet", "--no-plots", "--resume"])
+            .arg(&out)
+            .env("FORMATION_AGENT_BIN", support::agent_bin())
+            .stdin(std::process::Stdio::null());
+        let mut run = Watched::spawn(resumed, &[second]);
+        let held = run.hold();
+        kill(Pid::from_raw(run.id() as i32), Signal::SIGKILL).expect("kill");
+        drop(held);
+        pids.push(run.id());
+        let _ = run.wait_with_output();
+        let what = format!("{name}, killed at steps {first} and {second}");
+        pids.push(resume(&out, &what));
+        assert_same_files(&out, &uninterrupted, &what);
+        let s = summary(&out);
+        assert_eq!(s["completed"], true, "{what}");
+        // The same faults (the process ids and detection times are the run's own).
+        let faults = |s: &Value| -> Vec<(Value, Value, Value)> {
+            s["faults"]
+                .as_array()
+                .expect("faults")
+                .iter()
+                .map(|f| (f["agent"].clone(), f["step"].clone(), f["kind"].clone()))
+                .collect()
+        };
+        assert_eq!(
+            faults(&s),
+            faults(&summary(&uninterrupted)),
+            "{what}: the faults"
+        );
+    }
+    for pid in pids {
         assert_nothing_left(pid);
     }
 }
