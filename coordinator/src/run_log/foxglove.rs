@@ -416,3 +416,109 @@ pub fn frame_transform(centre: &Pose, log_time_ns: u64) -> FrameTransform {
         rotation: rotation(centre.heading_rad),
     }
 }
+
+/// Writes `value` as `serde_json` does.
+fn put(out: &mut Vec<u8>, value: &impl Serialize) {
+    // Writing into a Vec cannot fail, and these values always serialise.
+    let _ = serde_json::to_writer(&mut *out, value);
+}
+
+/// The JSON of the last value written of a kind, kept while the next is the same: most
+/// discs of an entity share their size, colour and orientation.
+#[derive(Default)]
+struct Repeated {
+    bits: Vec<u64>,
+    json: Vec<u8>,
+}
+
+impl Repeated {
+    fn put(&mut self, out: &mut Vec<u8>, bits: &[u64], value: &impl Serialize) {
+        if self.bits != bits {
+            self.bits = bits.to_vec();
+            self.json.clear();
+            put(&mut self.json, value);
+        }
+        out.extend_from_slice(&self.json);
+    }
+}
+
+impl SceneUpdate {
+    /// This message's JSON: the same value `serde_json` writes (checked by a test), with
+    /// the discs written from a template, their repeated sizes, colours and orientations
+    /// formatted once. The scene is most of the log, and most of it discs.
+    pub fn to_json(&self) -> Vec<u8> {
+        let discs: usize = self.entities.iter().map(|e| e.cylinders.len()).sum();
+        let mut out = Vec::with_capacity(512 + 260 * discs);
+        out.extend_from_slice(br#"{"deletions":[],"entities":["#);
+        let (mut size, mut color, mut orientation) = Default::default();
+        for (i, e) in self.entities.iter().enumerate() {
+            if i > 0 {
+                out.push(b',');
+            }
+            out.extend_from_slice(br#"{"timestamp":"#);
+            put(&mut out, &e.timestamp);
+            out.extend_from_slice(br#","frame_id":"#);
+            put(&mut out, &e.frame_id);
+            out.extend_from_slice(br#","id":"#);
+            put(&mut out, &e.id);
+            out.extend_from_slice(br#","lifetime":"#);
+            put(&mut out, &e.lifetime);
+            out.extend_from_slice(
+                br#","frame_locked":false,"metadata":[],"arrows":[],"cubes":[],"spheres":[],"cylinders":["#,
+            );
+            for (k, c) in e.cylinders.iter().enumerate() {
+                if k > 0 {
+                    out.push(b',');
+                }
+                let p = &c.pose;
+                out.extend_from_slice(br#"{"pose":{"position":"#);
+                put(&mut out, &p.position);
+                out.extend_from_slice(br#","orientation":"#);
+                let o = &p.orientation;
+                let o_bits = [o.x, o.y, o.z, o.w].map(f64::to_bits);
+                Repeated::put(&mut orientation, &mut out, &o_bits, o);
+                out.extend_from_slice(br#"},"size":"#);
+                let s_bits = [c.size.x, c.size.y, c.size.z].map(f64::to_bits);
+                Repeated::put(&mut size, &mut out, &s_bits, &c.size);
+                out.extend_from_slice(br#","bottom_scale":"#);
+                put(&mut out, &c.bottom_scale);
+                out.extend_from_slice(br#","top_scale":"#);
+                put(&mut out, &c.top_scale);
+                out.extend_from_slice(br#","color":"#);
+                let c_bits = [c.color.r, c.color.g, c.color.b, c.color.a].map(f64::to_bits);
+                Repeated::put(&mut color, &mut out, &c_bits, &c.color);
+                out.push(b'}');
+            }
+            out.extend_from_slice(br#"],"lines":"#);
+            put(&mut out, &e.lines);
+            out.extend_from_slice(br#","triangles":[],"texts":[],"models":[]}"#);
+        }
+        out.extend_from_slice(b"]}");
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use shared::simulate::{plan_centre_path, simulate_along};
+
+    /// The scenes of a run with moving obstacles, sensing and unknown obstacles: the
+    /// template's JSON is the value `serde_json` writes of the same message.
+    #[test]
+    fn the_scene_written_from_the_template_is_the_one_serde_writes() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+        for name in ["moving-field.toml", "discovered-wall.toml", "paper.toml"] {
+            let scenario = Scenario::load(&file.join(name)).expect("scenario");
+            let path = plan_centre_path(&scenario).expect("path");
+            let run = simulate_along(&scenario, &path).expect("run");
+            let known = vec![true; scenario.unknown.len()];
+            for step in run.steps.iter().step_by(7) {
+                let scene = scene_update(&scenario, step, &known, step.step == 0, 0);
+                let fast: Value = serde_json::from_slice(&scene.to_json()).expect("JSON");
+                let serde = serde_json::to_value(&scene).expect("JSON");
+                assert_eq!(fast, serde, "{name}, step {}", step.step);
+            }
+        }
+    }
+}

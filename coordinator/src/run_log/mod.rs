@@ -2,10 +2,11 @@
 //! is made from (`docs/outputs.md#runmcap`).
 //!
 //! An [MCAP](https://mcap.dev) file: one chunk per step (uncompressed, with its CRC),
-//! closed and in the file when the step ends, synced to the disk at most once a second
+//! written by a thread of its own while the next step goes on ([`LogThread`]), which
+//! tells each step done once it is in the file; synced to the disk about once a second
 //! (or every N steps) and at the end; the summary section at the end. A run killed at
-//! any moment leaves every step before the one under way: a reader drops the last chunk
-//! if it is incomplete, and never reads part of one ([`read_run_log`]).
+//! any moment leaves every step reported done: a reader drops the last chunk if it is
+//! incomplete, and never reads part of one ([`read_run_log`]).
 //!
 //! Every message is JSON with a JSON schema. Times are step-based: a message about step
 //! `k` has log time `k` seconds ([`log_time_ns`]). Channels ([`Topic`]):
@@ -19,15 +20,19 @@
 //!   answered turn's latency and compute), `/formation/end` (the run ended).
 //!
 //! One concept per file: the own messages in `records`, Foxglove's in `foxglove`, the
-//! writer in `writer`, the reader in `reader`.
+//! writer in `writer` (its thread in `thread`, its syncing in `sync`), the reader in
+//! `reader`.
 
 mod foxglove;
 mod reader;
 mod records;
+mod sync;
+mod thread;
 mod writer;
 
 pub use reader::{LoggedRun, ReadLogError, StepMarks, read_run_log};
 pub use records::{LOG_FORMAT_VERSION, LoggedOptions, StepMessage, TurnMessage};
+pub use thread::LogThread;
 pub use writer::{CourseSoFar, LogOptions, RunLogError, RunLogWriter, SyncPolicy};
 
 use serde_json::{Value, json};

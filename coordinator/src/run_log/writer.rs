@@ -1,12 +1,13 @@
-//! Writing `run.mcap` as the run goes ([`RunLogWriter`]): one chunk per step, closed and
-//! flushed to the file when the step ends, synced to the disk at most once a second (or
-//! every N steps), the summary section at the end.
+//! Writing `run.mcap` ([`RunLogWriter`]): one chunk per step, closed and handed to the
+//! file once the step is logged, synced to the disk about once a second by a thread of
+//! its own (or every N steps), the summary section at the end. The run hands it its
+//! steps through [`super::LogThread`].
 
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use serde::Serialize;
 use shared::course::{Course, Replan, Wait};
@@ -20,6 +21,7 @@ use super::records::{
     EndMessage, FaultMessage, FoundMessage, LOG_FORMAT_VERSION, LoggedOptions, PlanMessage,
     ReplanMessage, ScenarioMessage, StepMessage, TurnMessage, WaitMessage,
 };
+use super::sync::BackgroundSync;
 use super::{Topic, log_time_ns};
 
 /// When the log is synced to the disk (`fsync`), besides at the end.
@@ -61,6 +63,9 @@ pub enum RunLogError {
         /// What it refused.
         source: mcap::McapError,
     },
+    /// The log's thread stopped (it panicked, or an earlier error was reported).
+    #[error("the run log's thread stopped")]
+    Stopped,
     /// The scenario has no resolved form to keep in the log.
     #[error("the scenario as run: {0}")]
     Scenario(String),
@@ -98,7 +103,8 @@ pub struct RunLogWriter {
     channels: BTreeMap<Topic, u16>,
     sequence: u32,
     sync: SyncPolicy,
-    last_sync: Instant,
+    /// With [`SyncPolicy::EverySecond`], the thread that syncs.
+    background: Option<BackgroundSync>,
     steps_since_sync: u32,
     scenario: Scenario,
     /// How much of each growing list is in the log already.
@@ -213,7 +219,7 @@ impl RunLogWriter {
             channels: BTreeMap::new(),
             sequence: 0,
             sync: options.sync,
-            last_sync: Instant::now(),
+            background: None,
             steps_since_sync: 0,
             scenario: scenario.clone(),
             faults: 0,
@@ -252,6 +258,18 @@ impl RunLogWriter {
             &foxglove::poses_in_frame(first_plan, 0),
         )?;
         log.end_chunk(true)?;
+        if log.sync == SyncPolicy::EverySecond {
+            let file = log.file.try_clone().map_err(|source| RunLogError::Io {
+                path: log.path.clone(),
+                source,
+            })?;
+            log.background = Some(BackgroundSync::start(file, Duration::from_secs(1)).map_err(
+                |source| RunLogError::Io {
+                    path: log.path.clone(),
+                    source,
+                },
+            )?);
+        }
         Ok(log)
     }
 
@@ -272,6 +290,11 @@ impl RunLogWriter {
             path: self.path.clone(),
             source: e.into(),
         })?;
+        self.write_json(topic, step, data)
+    }
+
+    /// Write the message `data` (JSON) on `topic`, about `step`.
+    fn write_json(&mut self, topic: Topic, step: usize, data: Vec<u8>) -> Result<(), RunLogError> {
         let header = mcap::records::MessageHeader {
             channel_id: self.channels[&topic],
             sequence: self.sequence,
@@ -294,7 +317,6 @@ impl RunLogWriter {
                 path: self.path.clone(),
                 source,
             })?;
-            self.last_sync = Instant::now();
             self.steps_since_sync = 0;
         }
         Ok(())
@@ -363,7 +385,7 @@ impl RunLogWriter {
             with_obstacles,
             log_time_ns(at),
         );
-        self.write(Topic::Scene, at, &scene)?;
+        self.write_json(Topic::Scene, at, scene.to_json())?;
         self.write(
             Topic::Tf,
             at,
@@ -371,10 +393,14 @@ impl RunLogWriter {
         )?;
         self.steps_since_sync += 1;
         let sync = match self.sync {
-            SyncPolicy::EverySecond => self.last_sync.elapsed() >= Duration::from_secs(1),
+            SyncPolicy::EverySecond => false,
             SyncPolicy::EverySteps(n) => self.steps_since_sync >= n.max(1),
         };
-        self.end_chunk(sync)
+        self.end_chunk(sync)?;
+        if let Some(background) = &self.background {
+            background.note_written();
+        }
+        Ok(())
     }
 
     /// End the log: the end message, the summary section, synced.
@@ -382,6 +408,8 @@ impl RunLogWriter {
         let end = EndMessage { completed, gave_up };
         // Stamped with the last step's time.
         self.write(Topic::End, self.last_step, &end)?;
+        // The last sync is this one.
+        self.background.take();
         self.writer
             .finish()
             .map_err(|source| self.mcap_error(source))?;

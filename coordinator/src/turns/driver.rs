@@ -60,8 +60,9 @@ pub(super) struct Driver<'a, 's> {
     pub(super) run_cgroup: bool,
     /// How agents reach the router, as it was opened (the run's own TLS folder named).
     pub(super) network: Option<&'a NetworkOptions>,
-    /// The run's log, written at the end of every step.
-    pub(super) log: Option<&'a mut crate::run_log::RunLogWriter>,
+    /// The run's log, handed every step as it ends (written by a thread of its own,
+    /// which also tells each step done once it is in the file).
+    pub(super) log: Option<&'a mut crate::run_log::LogThread>,
     /// How many of the turn samples are in the log.
     pub(super) turns_logged: usize,
     /// The mission file's digest, handed to every process started.
@@ -111,7 +112,8 @@ impl Driver<'_, '_> {
                 agent: t.agent,
                 latency_us: t.latency_us,
                 compute_us: t.compute_us,
-            });
+            })
+            .collect();
         log.log_step(step, self.recorder.faults(), course, turns)?;
         self.turns_logged = self.progress.turn_samples.len();
         Ok(())
@@ -221,8 +223,11 @@ impl Driver<'_, '_> {
             self.log_step(Some(&course))?;
             self.hand_over.end_step(self.ipc);
             bar.inc(1);
-            // For whoever follows the run from outside (tests time their kills by it).
-            tracing::info!(target: PROGRESS_TARGET, "step {step} done");
+            // For whoever follows the run from outside (tests time their kills by it);
+            // with a log, its thread tells each step once it is in the file.
+            if self.log.is_none() {
+                tell_step_done(step);
+            }
             let pids = self.pids();
             (self.between_steps)(BetweenSteps {
                 step,
@@ -281,6 +286,14 @@ impl Driver<'_, '_> {
                 "step {step}: the monitor sees moving obstacles strike {seen:?}, the recorder {recorded:?}"
             );
         }
+    }
+}
+
+/// Tell that `step` is done: the `step N done` line of [`PROGRESS_TARGET`] (not for step
+/// 0, the start).
+pub(super) fn tell_step_done(step: usize) {
+    if step > 0 {
+        tracing::info!(target: PROGRESS_TARGET, "step {step} done");
     }
 }
 

@@ -10,7 +10,7 @@ use shared::record::Recorder;
 use shared::scenario::Scenario;
 use wire::{RunPrefix, RunRoot};
 
-use super::driver::{BetweenSteps, Driver};
+use super::driver::{BetweenSteps, Driver, tell_step_done};
 use super::hand_over::HandOver;
 use super::lateness::TurnHistory;
 use super::options::RunOptions;
@@ -125,6 +125,9 @@ pub fn run_scenario_with(
             None => {
                 crate::run_log::RunLogWriter::create(log, scenario, centre_path, &options.logged())
             }
+        })
+        .map(|created| {
+            created.and_then(|writer| crate::run_log::LogThread::start(writer, tell_step_done))
         })
         .transpose()
     {
