@@ -38,9 +38,10 @@ const READ_CHUNK: usize = 64;
 pub const SHORTEST_PROGRESS_LINE: usize = "INFO step 1 done\n".len();
 
 /// How many steps past a held step the coordinator can have ended while the reader
-/// holds: the whole lines that fit in the pipe and the reader's last chunk, and one more
-/// step ended whose line is blocked.
-pub const RUN_AHEAD_STEPS: usize = (PIPE_BYTES + READ_CHUNK) / SHORTEST_PROGRESS_LINE + 1;
+/// holds: the whole lines that fit in the pipe and the reader's last chunk, one more
+/// step ended whose line is blocked, and one more ended and handed to the log's thread
+/// (which tells a step done once it is written, and takes the next only after telling).
+pub const RUN_AHEAD_STEPS: usize = (PIPE_BYTES + READ_CHUNK) / SHORTEST_PROGRESS_LINE + 2;
 
 /// How long [`Watched::hold`] waits for a step before it fails the test: a run that
 /// never reports the step is stuck (the deadline only keeps a broken run from hanging
