@@ -55,6 +55,7 @@ impl LogThread {
         let thread = std::thread::Builder::new()
             .name("run-log".into())
             .spawn(move || {
+                lower_own_priority();
                 let mut writer = writer;
                 let (mut faults, mut replans, mut waits) = (Vec::new(), Vec::new(), Vec::new());
                 for ended in receiver {
@@ -142,6 +143,18 @@ impl LogThread {
         gave_up: bool,
     ) -> Result<std::path::PathBuf, RunLogError> {
         self.stop()?.finish(completed, gave_up)
+    }
+}
+
+/// Lower this thread's scheduling priority (nice 10): on a machine whose cores the
+/// coordinator and the agent whose turn it is keep busy, the log waits rather than
+/// delays a turn; the rendezvous hand-over gives it a core whenever it falls behind.
+fn lower_own_priority() {
+    // SAFETY: gettid(2) and setpriority(2) on this thread's own id; a failure only leaves
+    // the priority as it was.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, 10);
     }
 }
 
