@@ -16,8 +16,9 @@
 //! - the project's own, lossless: `/formation/scenario` (the scenario as run, its
 //!   resolved TOML), `/formation/plan` (the first centre plan), `/formation/step` (every
 //!   agent at the end of a step, each move's exact waypoints), `/formation/fault`,
-//!   `/formation/replan`, `/formation/wait`, `/formation/found`, `/formation/turn` (each
-//!   answered turn's latency and compute), `/formation/end` (the run ended).
+//!   `/formation/replan`, `/formation/wait`, `/formation/found`, `/formation/turns` (each
+//!   answered turn's latency and compute, a step at a time), `/formation/end` (the run
+//!   ended).
 //!
 //! One concept per file: the own messages in `records`, Foxglove's in `foxglove`, the
 //! writer in `writer` (its thread in `thread`, its syncing in `sync`), the reader in
@@ -62,7 +63,7 @@ pub enum Topic {
     Wait,
     /// `/formation/found`: an unknown obstacle became known.
     Found,
-    /// `/formation/turn`: an answered turn's timing.
+    /// `/formation/turns`: the timing of every turn answered in a step.
     Turn,
     /// `/formation/end`: the run ended.
     End,
@@ -101,7 +102,7 @@ impl Topic {
             Self::Replan => "/formation/replan",
             Self::Wait => "/formation/wait",
             Self::Found => "/formation/found",
-            Self::Turn => "/formation/turn",
+            Self::Turn => "/formation/turns",
             Self::End => "/formation/end",
             Self::Scene => "/scene",
             Self::CentrePlan => "/centre/plan",
@@ -124,7 +125,7 @@ impl Topic {
             Self::Replan => "formation.Replan",
             Self::Wait => "formation.Wait",
             Self::Found => "formation.Found",
-            Self::Turn => "formation.Turn",
+            Self::Turn => "formation.Turns",
             Self::End => "formation.End",
             Self::Scene => "foxglove.SceneUpdate",
             Self::CentrePlan => "foxglove.PosesInFrame",
@@ -143,7 +144,7 @@ impl Topic {
             Self::Replan => own(&["step", "reason", "planning_ms", "found", "path"]),
             Self::Wait => own(&["step", "reason"]),
             Self::Found => own(&["obstacle", "step"]),
-            Self::Turn => own(&["step", "agent", "latency_us", "compute_us"]),
+            Self::Turn => own(&["step", "turns"]),
             Self::End => own(&["completed", "gave_up"]),
             Self::Scene => foxglove::scene_update_schema(),
             Self::CentrePlan => foxglove::poses_in_frame_schema(),

@@ -14,7 +14,7 @@ use shared::record::{CourseRecord, Fault, Run, Step};
 use super::Topic;
 use super::records::{
     EndMessage, FaultMessage, FoundMessage, LoggedOptions, PlanMessage, RecordError, ReplanMessage,
-    ScenarioMessage, StepMessage, TurnMessage, WaitMessage,
+    ScenarioMessage, StepMessage, TurnMessage, TurnsMessage, WaitMessage,
 };
 
 /// What a run's log holds, read back.
@@ -247,7 +247,9 @@ fn take_message(log: &mut LoggedRun, topic: Topic, data: &[u8]) -> Result<(), St
             let found = parse::<FoundMessage>(topic, data)?;
             log.found.push((found.obstacle, found.step));
         }
-        Topic::Turn => log.turns.push(parse(topic, data)?),
+        Topic::Turn => log
+            .turns
+            .extend(parse::<TurnsMessage>(topic, data)?.to_turns()),
         Topic::End => log.end = Some(parse(topic, data)?),
         Topic::Scene | Topic::CentrePlan | Topic::Tf => {}
     }

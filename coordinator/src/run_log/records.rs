@@ -288,7 +288,7 @@ pub struct FoundMessage {
     pub step: usize,
 }
 
-/// `/formation/turn`: one answered turn's timing.
+/// One answered turn's timing (the log writes them a step at a time: [`TurnsMessage`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TurnMessage {
     /// The step.
@@ -299,6 +299,59 @@ pub struct TurnMessage {
     pub latency_us: f64,
     /// The agent's own compute time, as it reported it, microseconds.
     pub compute_us: f64,
+}
+
+/// One answered turn in a [`TurnsMessage`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TurnTiming {
+    /// The agent.
+    pub agent: usize,
+    /// From ringing the turn to holding the move, microseconds.
+    pub latency_us: f64,
+    /// The agent's own compute time, as it reported it, microseconds.
+    pub compute_us: f64,
+}
+
+/// `/formation/turns`: every turn answered during a step, one message a step (one MCAP
+/// record for hundreds of turns).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TurnsMessage {
+    /// The step.
+    pub step: usize,
+    /// Its answered turns, in the order they were answered.
+    pub turns: Vec<TurnTiming>,
+}
+
+impl TurnsMessage {
+    /// The messages of `turns`: one per step they belong to, in order.
+    pub fn of(turns: &[TurnMessage]) -> Vec<Self> {
+        let mut messages: Vec<Self> = Vec::new();
+        for t in turns {
+            let timing = TurnTiming {
+                agent: t.agent,
+                latency_us: t.latency_us,
+                compute_us: t.compute_us,
+            };
+            match messages.last_mut() {
+                Some(m) if m.step == t.step => m.turns.push(timing),
+                _ => messages.push(Self {
+                    step: t.step,
+                    turns: vec![timing],
+                }),
+            }
+        }
+        messages
+    }
+
+    /// Its turns, each with its step.
+    pub fn to_turns(&self) -> impl Iterator<Item = TurnMessage> + '_ {
+        self.turns.iter().map(|t| TurnMessage {
+            step: self.step,
+            agent: t.agent,
+            latency_us: t.latency_us,
+            compute_us: t.compute_us,
+        })
+    }
 }
 
 /// `/formation/plan`: the centre path planned before the run (plan 0).

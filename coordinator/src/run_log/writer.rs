@@ -19,7 +19,7 @@ use super::foxglove;
 use super::reader::LoggedRun;
 use super::records::{
     EndMessage, FaultMessage, FoundMessage, LOG_FORMAT_VERSION, LoggedOptions, PlanMessage,
-    ReplanMessage, ScenarioMessage, StepMessage, TurnMessage, WaitMessage,
+    ReplanMessage, ScenarioMessage, StepMessage, TurnMessage, TurnsMessage, WaitMessage,
 };
 use super::sync::BackgroundSync;
 use super::{Topic, log_time_ns};
@@ -372,8 +372,9 @@ impl RunLogWriter {
                 }
             }
         }
-        for turn in turns {
-            self.write(Topic::Turn, at, &turn)?;
+        let turns: Vec<TurnMessage> = turns.into_iter().collect();
+        for message in TurnsMessage::of(&turns) {
+            self.write(Topic::Turn, at, &message)?;
         }
         self.write(Topic::Step, at, &StepMessage::of(step))?;
         let found_now = self.found.iter().filter(|f| **f).count();
