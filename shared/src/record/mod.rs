@@ -8,7 +8,8 @@
 
 use crate::course::{Course, Replan, Wait};
 use crate::geometry::{Point, Pose, polyline_length_m};
-use crate::vocabulary::MoveStatus;
+use crate::scenario::Scenario;
+use crate::vocabulary::{Body, MoveStatus};
 
 mod fault;
 mod recorder;
@@ -62,6 +63,19 @@ pub struct Step {
 }
 
 impl Step {
+    /// Every agent's body where this step left it, with its radius from `scenario`.
+    pub fn bodies(&self, scenario: &Scenario) -> Vec<Body> {
+        scenario
+            .agents
+            .iter()
+            .zip(&self.agents)
+            .map(|(spec, row)| Body {
+                position: row.position,
+                radius_m: spec.radius_m,
+            })
+            .collect()
+    }
+
     /// The longest move of the step, in metres.
     pub fn max_move_m(&self) -> f64 {
         self.agents

@@ -87,15 +87,7 @@ impl<'a> Recorder<'a> {
         {
             return None;
         }
-        let bodies: Vec<Body> = scenario
-            .agents
-            .iter()
-            .zip(&last.agents)
-            .map(|(spec, row)| Body {
-                position: row.position,
-                radius_m: spec.radius_m,
-            })
-            .collect();
+        let bodies = last.bodies(scenario);
         let n = bodies.len();
         Some(Self {
             scenario,

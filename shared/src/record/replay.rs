@@ -5,7 +5,6 @@ use super::Step;
 use crate::course::Course;
 use crate::geometry::Pose;
 use crate::scenario::Scenario;
-use crate::vocabulary::Body;
 
 /// The course of `scenario` along `first_plan`, advanced through the recorded `steps`
 /// (from step 0, in order) as the run advanced it: before step `k`, with every agent
@@ -24,15 +23,7 @@ pub fn replay_course<'a>(
     let mut course = Course::new(scenario, first_plan);
     for pair in steps.windows(2) {
         let (before, step) = (&pair[0], &pair[1]);
-        let bodies: Vec<Body> = scenario
-            .agents
-            .iter()
-            .zip(&before.agents)
-            .map(|(spec, row)| Body {
-                position: row.position,
-                radius_m: spec.radius_m,
-            })
-            .collect();
+        let bodies = before.bodies(scenario);
         let alive: Vec<bool> = before.agents.iter().map(|a| a.alive).collect();
         match course.advance(step.step, &bodies, &alive) {
             Some(centre) if centre == step.centre => {}
