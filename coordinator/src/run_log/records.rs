@@ -288,7 +288,7 @@ pub struct FoundMessage {
     pub step: usize,
 }
 
-/// One answered turn's timing (the log writes them a step at a time: [`TurnsMessage`]).
+/// One answered turn's timing (the log writes them a step at a time: `/formation/turns`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TurnMessage {
     /// The step.
