@@ -57,11 +57,51 @@ impl Drop for SandboxedAgent {
     fn drop(&mut self) {
         let _ = self.child.kill();
         if let Some(group) = &self.cgroup
-            && let Err(e) = group.kill_all(std::time::Duration::from_secs(2))
+            && let Err(e) = group.kill_all(ORPHANS_TIMEOUT)
         {
             tracing::warn!("sandboxed agent {}: {e}", self.child.id());
         }
         let _ = self.child.wait();
+        // Without a control group nothing here killed the agent's other processes: the
+        // dead ones are reaped, the live ones left to the coordinator's sweep.
+        reap_adopted_orphans(match self.cgroup {
+            Some(_) => ORPHANS_TIMEOUT,
+            None => std::time::Duration::ZERO,
+        });
+    }
+}
+
+/// How long a relay waits for its sandboxed agent's processes to die and be reaped.
+const ORPHANS_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Make this process (a relay) a child subreaper: whatever its sandboxed agent starts
+/// and leaves behind is handed to it, not to the coordinator, so the relay, which kills
+/// them, also reaps them before it exits (the coordinator cannot tell a dead process of
+/// the run from any other zombie, and would leave it unreaped until it exits itself).
+pub fn adopt_orphans() {
+    if let Err(e) = nix::sys::prctl::set_child_subreaper(true) {
+        tracing::warn!("cannot become a child subreaper ({e}): the agent's orphans go up");
+    }
+}
+
+/// Reap every child of this process, the agent's orphans it adopted included, until it
+/// has none or `timeout` passes (a child still alive after the kill). A relay has no
+/// child of its own but the agent, so waiting for any child touches nothing else.
+fn reap_adopted_orphans(timeout: std::time::Duration) {
+    use nix::sys::wait::{WaitPidFlag, WaitStatus, waitpid};
+    let deadline = std::time::Instant::now() + timeout;
+    loop {
+        match waitpid(None, Some(WaitPidFlag::WNOHANG)) {
+            Ok(WaitStatus::StillAlive) => {
+                if std::time::Instant::now() >= deadline {
+                    tracing::warn!("the sandboxed agent left processes that would not die");
+                    return;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+            Ok(_) => {}
+            Err(_) => return,
+        }
     }
 }
 

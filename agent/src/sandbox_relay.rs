@@ -17,7 +17,7 @@ use anyhow::{Context, bail};
 use net::{Down, Up};
 
 use crate::forward::{AgentLink, RelayedChannel, forward_turns};
-use crate::sandbox::{AGENT_SOCKET_FD, Sandbox, spawn_sandboxed};
+use crate::sandbox::{AGENT_SOCKET_FD, Sandbox, adopt_orphans, spawn_sandboxed};
 use crate::socket_link::{MAX_UP_FRAME_BYTES, SocketLink};
 use crate::transport::Transport;
 
@@ -67,6 +67,7 @@ pub fn serve_sandboxed(settings: &SandboxRelaySettings) -> anyhow::Result<()> {
         AGENT_SOCKET_FD.to_string(),
     ];
     args.extend(settings.agent_args.iter().cloned());
+    adopt_orphans();
     let mut child = spawn_sandboxed(&exe, &args, theirs, &settings.sandbox)?;
     let mut link = SocketLink::new(ours);
     let agent_u32 = u32::try_from(agent).context("the agent's index")?;

@@ -10,6 +10,8 @@
 //!   the agent is reaped.
 //! - the coordinator is a child subreaper (`PR_SET_CHILD_SUBREAPER`): a process whose
 //!   parent dies is handed to it, not to init, even if it left the group (`setsid`).
+//!   A sandboxed agent's relay is one too, for what its agent leaves: it kills the
+//!   agent's control group and reaps every process it adopted before it exits.
 //! - every agent gets [`wire::RUN_ENV`]`=<prefix>` in its environment, and whatever it
 //!   starts inherits it. When the run ends ([`AgentProcesses::stop_all`], drop), every
 //!   live process of the run found through `/proc/PID/environ` is killed, and every
