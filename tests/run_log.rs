@@ -276,7 +276,13 @@ fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_ki
             }
             killed.push(resume(&out, &what));
             assert_same_files(&out, &uninterrupted, &what);
-            assert_eq!(summary(&out)["completed"], true, "{what}");
+            let (resumed, whole) = (summary(&out), summary(&uninterrupted));
+            assert_eq!(resumed["completed"], true, "{what}");
+            // Every answered turn counts in the timing, those before the kill too.
+            assert_eq!(
+                resumed["turn_latency_us"]["count"], whole["turn_latency_us"]["count"],
+                "{what}"
+            );
         }
         // Killed while drawing its plots: the data files are there and whole.
         let out = dir.path().join(format!("{name}-plots"));

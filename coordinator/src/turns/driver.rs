@@ -138,12 +138,22 @@ impl Driver<'_, '_> {
             .and_then(|_| self.recorder.steps().last())
             .map(|s| s.step);
         let (mut course, mut step) = match resumed_at {
-            Some(last) => (
-                replay_course(self.scenario, centre_path, self.recorder.steps()).map_err(|at| {
-                    anyhow::anyhow!("the log does not replay: step {at}'s centre differs")
-                })?,
-                last,
-            ),
+            Some(last) => {
+                let course = replay_course(self.scenario, centre_path, self.recorder.steps())
+                    .map_err(|at| {
+                        anyhow::anyhow!("the log does not replay: step {at}'s centre differs")
+                    })?;
+                // The turns of the steps before the kill count in the run's timing.
+                if let Some(logged) = self.options.resume.as_deref() {
+                    let before = logged.turns.iter().filter(|t| t.step <= last);
+                    for t in before {
+                        self.progress.latency_us.push(t.latency_us);
+                        self.progress.compute_us.push(t.compute_us);
+                    }
+                }
+                self.progress.steps_before = last;
+                (course, last)
+            }
             None => {
                 self.log_step(None)?;
                 (Course::new(self.scenario, centre_path), 0)

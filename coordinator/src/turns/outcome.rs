@@ -78,6 +78,9 @@ pub(crate) struct TurnSample {
 #[derive(Default)]
 pub(super) struct Progress {
     pub(super) startup_s: f64,
+    /// The steps already logged when the run was resumed (none otherwise): the step
+    /// loop's speed is of the steps run here.
+    pub(super) steps_before: usize,
     /// Time spent in the step loop, seconds.
     pub(super) steps_s: f64,
     pub(super) latency_us: Vec<f64>,
@@ -98,7 +101,11 @@ pub(super) fn outcome(
     prefix: String,
     started: Instant,
 ) -> RunOutcome {
-    let steps = run.steps.len().saturating_sub(1);
+    let steps = run
+        .steps
+        .len()
+        .saturating_sub(1)
+        .saturating_sub(progress.steps_before);
     RunOutcome {
         timing: Timing {
             steps_per_s: if progress.steps_s > 0.0 {
