@@ -11,6 +11,7 @@
 //! - [`curve`]: curvature-bounded paths (arcs and lines) between poses;
 //! - [`reeds_shepp`] and [`dubins`]: the shortest such paths;
 //! - [`hybrid_astar`]: the formation centre's planner;
+//! - [`kinematics`]: moves a robot with a heading can drive (a unicycle's), and their checks;
 //! - [`cbf`]: the control-barrier-function controllers and their exact 2-D QP;
 //! - [`orca`]: the reactive baseline ORCA (RVO2, on `dodgy_2d`), cut to stay safe;
 //! - [`moving_obstacle`]: obstacles driven along routes, and when they move;
@@ -36,6 +37,7 @@ pub mod formation;
 pub mod geometry;
 pub mod groups;
 pub mod hybrid_astar;
+pub mod kinematics;
 pub mod moving_obstacle;
 pub mod orca;
 mod ordered;

@@ -9,6 +9,7 @@
 //! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
 //! - [`AgentSpec`]: one agent of a scenario (its slot, radius, top speed and sensing
 //!   radius);
+//! - [`Kinematics`]: how an agent can move (holonomic, or a unicycle with a heading);
 //! - [`Named`]: the values files and the command line spell by name, read and written
 //!   through one helper;
 //! - [`TurnMode`]: one mover at a time, or parallel groups;
@@ -23,6 +24,7 @@ mod body;
 mod capacity;
 mod cbf_settings;
 mod controller;
+mod kinematics;
 mod moves;
 pub mod named;
 mod turn_mode;
@@ -32,6 +34,7 @@ pub use body::Body;
 pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
 pub use cbf_settings::{CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
 pub use controller::{ControllerKind, ControllerSpec};
+pub use kinematics::Kinematics;
 pub use moves::{Move, MoveStatus};
 pub use named::Named;
 pub use turn_mode::TurnMode;
