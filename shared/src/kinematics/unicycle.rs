@@ -85,13 +85,13 @@ pub fn driving_headings(
         let mut back = [0usize; 2];
         for (c, slot) in next.iter_mut().enumerate().take(choices) {
             let h = heading_of(*dir, c);
-            for p in 0..choices {
+            for (p, &so_far) in cost.iter().enumerate().take(choices) {
                 let before = match last {
                     None if p == 0 => start_heading_rad,
                     None => continue,
                     Some(prev) => heading_of(prev, p),
                 };
-                let total = cost[p] + turn_rad(before, h);
+                let total = so_far + turn_rad(before, h);
                 // Strictly less: on a tie the earlier (forward) choice stays.
                 if total < *slot {
                     *slot = total;
