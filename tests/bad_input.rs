@@ -406,6 +406,17 @@ fn coordinator_run_refuses_every_corpus_file_before_creating_anything() {
 }
 
 #[test]
+fn agents_with_a_heading_are_refused_by_run_until_the_processes_carry_it() {
+    // Valid for the reference simulation, which moves them; not yet for the processes.
+    let case = Case {
+        path: support::repo_root().join("scenarios/paper-unicycle.toml"),
+        expect: "formation.kinematics".into(),
+    };
+    Scenario::load(&case.path).expect("a valid scenario");
+    assert_no_problems("coordinator run on unicycles", 1, &run_problems(&case));
+}
+
+#[test]
 fn a_missing_file_and_a_directory_are_refused_as_unreadable() {
     let dir = tempfile::tempdir().expect("temporary folder");
     let folder = dir.path().join("a-folder.toml");

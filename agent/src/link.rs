@@ -95,6 +95,7 @@ pub fn move_of(agent: usize, m: NetMove) -> Option<(Move, u32, Duration)> {
     let p = |xy: [f64; 2]| Point::new(xy[0], xy[1]);
     Some((
         Move {
+            end_heading_rad: None,
             slot: p(m.slot),
             best: p(m.best),
             // Only the code below is sent; this field is not read.

@@ -194,6 +194,9 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
             .map(|f| load_and_plan(Some(f)))
             .collect::<Result<Vec<_>, _>>()?
     };
+    for l in &loaded {
+        crate::validate::refuse_headings_in_processes(l, "coordinator compare")?;
+    }
     // Each mode once, in the order given.
     let mut modes: Vec<TurnMode> = Vec::new();
     for &m in &args.turns {

@@ -153,6 +153,7 @@ impl OrcaController {
                 MoveStatus::Stayed
             };
             Move {
+                end_heading_rad: None,
                 slot,
                 best: *me,
                 status,
@@ -193,6 +194,7 @@ impl OrcaController {
             MoveStatus::Deviated
         };
         Move {
+            end_heading_rad: None,
             slot,
             best: end,
             status,

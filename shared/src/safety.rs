@@ -72,6 +72,16 @@ pub enum Violation {
     /// The move ends neither at its best point nor, under way, short of it.
     #[error("the move does not end at its best point")]
     WrongEnd,
+    /// An agent with a heading sent a move without a finite end heading.
+    #[error("the move of an agent with a heading does not say where it ends facing")]
+    NoHeading,
+    /// A unicycle's move needs more than one step's time: its turning and driving
+    /// together exceed what the step allows.
+    #[error("turning and driving take {share} of a step; at most one step is allowed")]
+    TooMuchTurning {
+        /// The share of a step the move takes at the least.
+        share: f64,
+    },
     /// The move comes too close to the move of an agent of the same parallel group.
     #[error(
         "the move comes within {distance_m} m of agent {agent}'s move in the same group (radii sum {reach_m} m)"

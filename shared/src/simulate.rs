@@ -153,10 +153,18 @@ pub fn simulate_along_with_deaths(
                 .filter(|&&agent| recorder.alive()[agent])
                 .map(|&agent| {
                     let me = recorder.bodies()[agent].position;
-                    (
-                        agent,
-                        controllers[agent].plan_turn(step, centre, &me, &recorder.others(agent)),
-                    )
+                    let others = recorder.others(agent);
+                    let mv = match recorder.headings()[agent] {
+                        Some(heading_rad) => controllers[agent].plan_turn_with_heading(
+                            step,
+                            centre,
+                            &me,
+                            heading_rad,
+                            &others,
+                        ),
+                        None => controllers[agent].plan_turn(step, centre, &me, &others),
+                    };
+                    (agent, mv)
                 })
                 .collect();
             // A rejected move is recorded by the recorder; the agent simply stays.

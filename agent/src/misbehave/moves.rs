@@ -135,6 +135,7 @@ pub fn corrupt(
             let bad = Point::new(f64::NAN, me.y);
             Some((
                 Move {
+                    end_heading_rad: None,
                     best: bad,
                     waypoints: vec![*me, bad],
                     ..honest
@@ -146,6 +147,7 @@ pub fn corrupt(
             let far = me + Vector::new(7.5, -3.25);
             Some((
                 Move {
+                    end_heading_rad: None,
                     best: far,
                     waypoints: vec![far],
                     ..honest
@@ -160,6 +162,7 @@ pub fn corrupt(
             let across = nearest.centre + (nearest.centre - me);
             Some((
                 Move {
+                    end_heading_rad: None,
                     best: across,
                     waypoints: vec![*me, nearest.centre, across],
                     ..honest
@@ -171,6 +174,7 @@ pub fn corrupt(
             let waypoints = overspeed(&honest.waypoints);
             Some((
                 Move {
+                    end_heading_rad: None,
                     waypoints,
                     ..honest
                 },
@@ -201,6 +205,7 @@ pub fn corrupt(
             let junk = Point::new(s.fract() * 1e6, -s.fract() * 3e5);
             Some((
                 Move {
+                    end_heading_rad: None,
                     best: junk,
                     waypoints: vec![*me, junk, *me],
                     status: MoveStatus::AtSlot,
@@ -256,6 +261,7 @@ mod tests {
     fn the_fork_mode_publishes_the_honest_move() {
         let me = Point::new(1.0, 2.0);
         let honest = Move {
+            end_heading_rad: None,
             slot: Point::new(3.0, 4.0),
             best: Point::new(2.0, 3.0),
             status: MoveStatus::AtSlot,
@@ -270,6 +276,7 @@ mod tests {
         let me = Point::new(1.0, 2.0);
         let path = vec![me, Point::new(1.3, 2.4), Point::new(1.6, 2.4)];
         let honest = Move {
+            end_heading_rad: None,
             slot: Point::new(3.0, 4.0),
             best: Point::new(1.6, 2.4),
             status: MoveStatus::AtSlot,

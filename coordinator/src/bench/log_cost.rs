@@ -48,7 +48,9 @@ pub fn prepare(file: &Path, rounds: usize) -> Result<Loaded, CliError> {
     if rounds == 0 {
         return Err(CliError::Usage("--log-rounds: at least 1".into()));
     }
-    Ok(load_and_plan(Some(file))?)
+    let loaded = load_and_plan(Some(file))?;
+    crate::validate::refuse_headings_in_processes(&loaded, "coordinator bench")?;
+    Ok(loaded)
 }
 
 /// Run the comparison on `loaded` with the agent executable `bin`, `rounds` runs of each;

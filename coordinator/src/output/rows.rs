@@ -64,6 +64,14 @@ pub struct TrajectoryRow {
     /// Whether it is still in the formation: `1` or `0` (read: anything but `0` is alive).
     #[serde(with = "zero_one")]
     pub alive: bool,
+    /// Where it faces, radians: a column only in runs with agents that have a heading
+    /// (`None`), empty for a holonomic agent among them (`Some(None)`).
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "cell_f64")]
+    pub heading_rad: Option<Option<f64>>,
+    /// Its heading minus the centre's, wrapped into `(-pi, pi]`, radians: present when
+    /// `heading_rad` is.
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "cell_f64")]
+    pub heading_error_rad: Option<Option<f64>>,
 }
 
 /// A row of `moves.csv`: one waypoint of the polyline an agent followed in one step.
@@ -203,6 +211,34 @@ mod display_f64 {
     }
 }
 
+/// A column that a file may lack (outer `None`: not written) and whose cells may be empty
+/// (inner `None`); numbers as [`display_f64`] writes them.
+mod cell_f64 {
+    use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+    pub(super) fn serialize<S: Serializer>(
+        v: &Option<Option<f64>>,
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(Some(x)) => serializer.collect_str(x),
+            _ => serializer.serialize_none(),
+        }
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<Option<Option<f64>>, D::Error> {
+        let cell = String::deserialize(deserializer)?;
+        if cell.is_empty() {
+            return Ok(Some(None));
+        }
+        cell.parse()
+            .map(|v| Some(Some(v)))
+            .map_err(|_| D::Error::custom(format!("{cell:?} is not a number")))
+    }
+}
+
 /// A `bool` column written `1` or `0`; any number but 0 reads as true.
 mod zero_one {
     use serde::{Deserialize, Deserializer, Serializer};
@@ -259,10 +295,21 @@ pub fn header<R: DeserializeOwned>() -> &'static [&'static str] {
 pub fn csv_bytes<R: Serialize + DeserializeOwned>(
     rows: impl IntoIterator<Item = R>,
 ) -> anyhow::Result<Vec<u8>> {
+    csv_bytes_with_columns(rows, header::<R>().len())
+}
+
+/// [`csv_bytes`] with only the first `columns` columns of `R` in the header: the rows
+/// leave out the optional columns after them (`skip_serializing_if`), as
+/// [`TrajectoryRow`]'s heading columns in a holonomic run.
+pub fn csv_bytes_with_columns<R: Serialize + DeserializeOwned>(
+    rows: impl IntoIterator<Item = R>,
+    columns: usize,
+) -> anyhow::Result<Vec<u8>> {
     let mut w = csv::WriterBuilder::new()
         .has_headers(false)
         .from_writer(Vec::new());
-    w.write_record(header::<R>())?;
+    let header = header::<R>();
+    w.write_record(&header[..columns.min(header.len())])?;
     for row in rows {
         w.serialize(row)?;
     }
@@ -371,6 +418,8 @@ mod tests {
                 clearance_m: v,
                 status: MoveStatus::AtSlot,
                 alive: true,
+                heading_rad: Some(Some(v)),
+                heading_error_rad: Some(Some(v)),
             }]),
             csv_bytes([MoveRow {
                 step: 0,
@@ -404,6 +453,51 @@ mod tests {
     }
 
     #[test]
+    fn the_heading_columns_are_absent_empty_or_a_number_and_read_back() {
+        let row = |heading: Option<Option<f64>>| TrajectoryRow {
+            step: 1,
+            agent: 0,
+            x: 0.5,
+            y: 1.0,
+            slot_x: 2.0,
+            slot_y: 3.0,
+            best_x: 4.0,
+            best_y: 5.0,
+            deviation_m: 0.25,
+            clearance_m: -0.125,
+            status: MoveStatus::AtSlot,
+            alive: true,
+            heading_rad: heading,
+            heading_error_rad: heading.map(|h| h.map(|v| -v)),
+        };
+        let columns = header::<TrajectoryRow>().len() - 2;
+        let without = String::from_utf8(csv_bytes_with_columns([row(None)], columns).expect("csv"))
+            .expect("utf-8");
+        assert!(!without.contains("heading"), "{without}");
+        let rows = [row(Some(Some(-1.5))), row(Some(None))];
+        let with = String::from_utf8(csv_bytes(rows).expect("csv")).expect("utf-8");
+        let lines: Vec<&str> = with.lines().collect();
+        assert!(
+            lines[0].ends_with(",alive,heading_rad,heading_error_rad"),
+            "{with}"
+        );
+        assert!(lines[1].ends_with(",1,-1.5,1.5"), "{with}");
+        assert!(lines[2].ends_with(",1,,"), "{with}");
+        let mut reader = csv::Reader::from_reader(with.as_bytes());
+        let back: Vec<TrajectoryRow> = reader
+            .deserialize()
+            .collect::<Result<_, _>>()
+            .expect("reads back");
+        assert_eq!(back, rows);
+        let mut reader = csv::Reader::from_reader(without.as_bytes());
+        let back: Vec<TrajectoryRow> = reader
+            .deserialize()
+            .collect::<Result<_, _>>()
+            .expect("reads back");
+        assert_eq!(back, [row(None)]);
+    }
+
+    #[test]
     fn status_and_alive_keep_their_encodings() {
         let rows: Vec<TrajectoryRow> = MoveStatus::ALL
             .iter()
@@ -421,9 +515,12 @@ mod tests {
                 clearance_m: -0.125,
                 status,
                 alive: i % 2 == 0,
+                heading_rad: None,
+                heading_error_rad: None,
             })
             .collect();
-        let bytes = csv_bytes(rows.iter().copied()).expect("csv");
+        let columns = header::<TrajectoryRow>().len() - 2;
+        let bytes = csv_bytes_with_columns(rows.iter().copied(), columns).expect("csv");
         let text = String::from_utf8(bytes.clone()).expect("utf-8");
         let mut lines = text.lines();
         assert_eq!(
@@ -443,7 +540,7 @@ mod tests {
         }
         assert_eq!(read::<TrajectoryRow>(&bytes), rows);
         // Any non-zero `alive` is alive; an unknown status is refused.
-        let header = header::<TrajectoryRow>().join(",");
+        let header = header::<TrajectoryRow>()[..columns].join(",");
         let two: Vec<TrajectoryRow> =
             read(format!("{header}\n0,0,0,0,0,0,0,0,0,0,dead,2\n").as_bytes());
         assert!(two[0].alive);

@@ -7,6 +7,7 @@ use shared::scenario::Scenario;
 
 use super::rows::{
     MoveRow, ObstacleKind, ObstacleRow, PathRow, PlanReason, PlanRow, TrajectoryRow, csv_bytes,
+    csv_bytes_with_columns, header,
 };
 
 /// The centre path as CSV: `step,x_m,y_m,heading_rad` ([`PathRow`]), full precision
@@ -25,22 +26,40 @@ pub fn path_csv(path: &[Pose]) -> anyhow::Result<Vec<u8>> {
 /// The trajectory as CSV, one row per agent per step ([`TrajectoryRow`],
 /// `docs/outputs.md`), full precision.
 pub fn trajectory_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
-    csv_bytes(run.steps.iter().flat_map(|s| {
-        s.agents.iter().enumerate().map(|(agent, a)| TrajectoryRow {
-            step: s.step,
-            agent,
-            x: a.position.x,
-            y: a.position.y,
-            slot_x: a.slot.x,
-            slot_y: a.slot.y,
-            best_x: a.best.x,
-            best_y: a.best.y,
-            deviation_m: a.deviation_m,
-            clearance_m: a.clearance_m,
-            status: a.status,
-            alive: a.alive,
-        })
-    }))
+    // The heading columns only when some agent has a heading: a holonomic run's file is
+    // as it always was.
+    let headings = run
+        .steps
+        .iter()
+        .any(|s| s.agents.iter().any(|a| a.heading_rad.is_some()));
+    let columns = header::<TrajectoryRow>().len() - if headings { 0 } else { 2 };
+    csv_bytes_with_columns(
+        run.steps.iter().flat_map(|s| {
+            s.agents
+                .iter()
+                .enumerate()
+                .map(move |(agent, a)| TrajectoryRow {
+                    heading_rad: headings.then_some(a.heading_rad),
+                    heading_error_rad: headings.then(|| {
+                        a.heading_rad
+                            .map(|h| shared::geometry::wrap_angle_rad(h - s.centre.heading_rad))
+                    }),
+                    step: s.step,
+                    agent,
+                    x: a.position.x,
+                    y: a.position.y,
+                    slot_x: a.slot.x,
+                    slot_y: a.slot.y,
+                    best_x: a.best.x,
+                    best_y: a.best.y,
+                    deviation_m: a.deviation_m,
+                    clearance_m: a.clearance_m,
+                    status: a.status,
+                    alive: a.alive,
+                })
+        }),
+        columns,
+    )
 }
 
 /// Every move's polyline as CSV: `step,agent,index,x,y` ([`MoveRow`], one row per

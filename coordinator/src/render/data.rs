@@ -335,6 +335,7 @@ fn read_trajectory(path: &Path, agents: usize) -> Result<Vec<StepRecord>, RunDir
             status: r.status,
             alive: r.alive,
             waypoints: Vec::new(),
+            heading_rad: r.heading_rad.flatten(),
         };
         match steps.last_mut() {
             Some((step, _)) if *step > r.step => {

@@ -83,6 +83,9 @@ pub struct AgentMessage {
     pub alive: bool,
     /// The polyline it followed this step.
     pub waypoints: Vec<XyM>,
+    /// Where it faces, radians, for an agent with a heading (absent for a holonomic one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heading_rad: Option<f64>,
 }
 
 /// Why a message of the log cannot be turned back into the record.
@@ -124,6 +127,7 @@ impl StepMessage {
                     status: a.status.name().to_string(),
                     alive: a.alive,
                     waypoints: a.waypoints.iter().map(xy).collect(),
+                    heading_rad: a.heading_rad,
                 })
                 .collect(),
             groups: step.groups,
@@ -148,6 +152,7 @@ impl StepMessage {
                     status,
                     alive: a.alive,
                     waypoints: a.waypoints.iter().copied().map(point).collect(),
+                    heading_rad: a.heading_rad,
                 })
             })
             .collect::<Result<Vec<_>, RecordError>>()?;

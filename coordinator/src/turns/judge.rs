@@ -43,6 +43,7 @@ pub(super) fn judge_move(
     };
     match verdict {
         Ok(status) => Some(Move {
+            end_heading_rad: None,
             slot: msg.slot,
             best: msg.best,
             status,

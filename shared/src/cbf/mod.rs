@@ -116,6 +116,7 @@ pub(super) fn step_move(slot: Point, me: &Point, u: Option<Vector>, dt_s: f64) -
         vec![*me, best]
     };
     Move {
+        end_heading_rad: None,
         slot,
         best,
         status,

@@ -41,6 +41,10 @@ pub struct AgentStep {
     pub alive: bool,
     /// The polyline it followed this step (its position alone when it did not move).
     pub waypoints: Vec<Point>,
+    /// Where it faces, radians in `(-pi, pi]`, for an agent with a heading
+    /// ([`Kinematics::Unicycle`](crate::vocabulary::Kinematics)); `None` for a holonomic
+    /// one.
+    pub heading_rad: Option<f64>,
 }
 
 /// Every agent at the end of one step.

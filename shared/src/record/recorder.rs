@@ -3,11 +3,17 @@
 
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
-use crate::geometry::{DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m};
+use crate::geometry::{
+    DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m, wrap_angle_rad,
+};
 use crate::groups::{GroupMove, group_meetings};
+use crate::kinematics::{UnicycleLimits, unicycle_step_share};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
-use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
+use crate::vocabulary::{Body, Kinematics, MAX_WAYPOINTS, Move, MoveStatus};
+
+/// How far beyond one step a unicycle's move may go, as a share of the step (rounding).
+const UNICYCLE_SHARE_TOLERANCE: f64 = 1e-9;
 
 /// The world during a run: where every agent stands, who is alive, and the record so far.
 #[derive(Debug)]
@@ -23,6 +29,8 @@ pub struct Recorder<'a> {
     /// The agents a moving obstacle's motion struck at the start of this step.
     struck: Vec<(usize, usize, f64)>,
     bodies: Vec<Body>,
+    /// Where each agent with a heading faces (`None` for a holonomic agent).
+    headings: Vec<Option<f64>>,
     alive: Vec<bool>,
     /// This step's moves, one per agent, until the step ends.
     pending: Vec<Option<Move>>,
@@ -44,6 +52,15 @@ impl<'a> Recorder<'a> {
             })
             .collect();
         let n = bodies.len();
+        let headings = scenario
+            .agents
+            .iter()
+            .map(|a| {
+                a.kinematics
+                    .has_heading()
+                    .then(|| wrap_angle_rad(start.heading_rad + a.heading_offset_rad))
+            })
+            .collect();
         let moving: Vec<Point> = scenario.moving.iter().map(|m| m.position_at(0)).collect();
         let mut recorder = Self {
             scenario,
@@ -52,6 +69,7 @@ impl<'a> Recorder<'a> {
             moving,
             struck: Vec::new(),
             bodies,
+            headings,
             alive: vec![true; n],
             pending: vec![None; n],
             groups: 0,
@@ -66,6 +84,7 @@ impl<'a> Recorder<'a> {
         };
         for (i, b) in recorder.bodies.clone().iter().enumerate() {
             recorder.pending[i] = Some(Move {
+                end_heading_rad: None,
                 slot: b.position,
                 best: b.position,
                 status: MoveStatus::AtSlot,
@@ -96,6 +115,7 @@ impl<'a> Recorder<'a> {
             moving: last.moving.clone(),
             struck: Vec::new(),
             alive: last.agents.iter().map(|a| a.alive).collect(),
+            headings: last.agents.iter().map(|a| a.heading_rad).collect(),
             bodies,
             pending: vec![None; n],
             groups: 0,
@@ -167,6 +187,11 @@ impl<'a> Recorder<'a> {
     /// Every agent's body, in agent order.
     pub fn bodies(&self) -> &[Body] {
         &self.bodies
+    }
+
+    /// Where each agent faces, in agent order: `None` for a holonomic agent.
+    pub fn headings(&self) -> &[Option<f64>] {
+        &self.headings
     }
 
     /// Whether each agent is alive, in agent order.
@@ -248,6 +273,9 @@ impl<'a> Recorder<'a> {
             match verdict {
                 Ok(()) => {
                     self.bodies[agent].position = mv.end();
+                    if self.headings[agent].is_some() {
+                        self.headings[agent] = mv.end_heading_rad.map(wrap_angle_rad);
+                    }
                     self.pending[agent] = Some(mv);
                 }
                 Err(v) => {
@@ -277,10 +305,34 @@ impl<'a> Recorder<'a> {
             &body.position,
             &mv.waypoints,
         )?;
-        if let Some(max_m) = self.scenario.agents[agent].max_step_m {
+        let spec = &self.scenario.agents[agent];
+        if let Some(max_m) = spec.max_step_m {
             let length_m = polyline_length_m(&mv.waypoints);
             if length_m > max_m + SAFETY_TOLERANCE_M {
                 return Err(Violation::TooLong { length_m, max_m });
+            }
+        }
+        if let (
+            Some(heading_rad),
+            Kinematics::Unicycle {
+                max_turn_rad,
+                reverse,
+            },
+        ) = (self.headings[agent], spec.kinematics)
+        {
+            let Some(end_rad) = mv.end_heading_rad.filter(|h| h.is_finite()) else {
+                return Err(Violation::NoHeading);
+            };
+            // Validation gives every unicycle a top speed.
+            let max_step_m = spec.max_step_m.unwrap_or(f64::INFINITY);
+            let limits = UnicycleLimits {
+                max_step_m,
+                max_turn_rad,
+                reverse,
+            };
+            let share = unicycle_step_share(heading_rad, &mv.waypoints, end_rad, &limits);
+            if share.is_nan() || share > 1.0 + UNICYCLE_SHARE_TOLERANCE {
+                return Err(Violation::TooMuchTurning { share });
             }
         }
         // The last waypoint is where the agent ends up; it must be the best point, unless
@@ -311,6 +363,7 @@ impl<'a> Recorder<'a> {
         };
         let here = self.bodies[agent].position;
         self.pending[agent] = Some(Move {
+            end_heading_rad: None,
             slot,
             best: here,
             status,
@@ -364,6 +417,7 @@ impl<'a> Recorder<'a> {
             .copied()
             .unwrap_or(self.scenario.path.start);
         self.pending[agent] = Some(Move {
+            end_heading_rad: None,
             slot: self.scenario.agents[agent].slot.ideal_position(&centre),
             best: here,
             status: MoveStatus::Dead,
@@ -396,6 +450,7 @@ impl<'a> Recorder<'a> {
             let body = self.bodies[i];
             let slot = self.scenario.agents[i].slot.ideal_position(&centre);
             let mv = self.pending[i].take().unwrap_or(Move {
+                end_heading_rad: None,
                 slot,
                 best: body.position,
                 status: if self.alive[i] {
@@ -425,6 +480,7 @@ impl<'a> Recorder<'a> {
                 status: mv.status,
                 alive: self.alive[i],
                 waypoints: mv.waypoints,
+                heading_rad: self.headings[i],
             });
         }
         self.run.steps.push(Step {

@@ -151,6 +151,21 @@ pub(super) struct FormationFile {
     /// Sensing radius of every agent, metres (absent: every body is known).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) sensing_radius_m: Option<f64>,
+    /// The agents' kinematic model by name (absent: holonomic).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) kinematics: Option<String>,
+    /// A unicycle's largest heading change per step, radians.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) max_turn_rad: Option<f64>,
+    /// Whether an agent with a heading may drive backwards (absent: no).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) reverse: Option<bool>,
+    /// A car's turning radius, metres (read to be refused with a clear reason).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) turning_radius_m: Option<f64>,
+    /// Whether the agents end each move facing the centre's heading (absent: no).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) align_heading: Option<bool>,
     pub(super) slots: Vec<SlotFile>,
 }
 
@@ -164,6 +179,21 @@ pub(super) struct SlotFile {
     /// This slot's top speed, overriding the formation's.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) max_step_m: Option<f64>,
+    /// This slot's kinematic model, overriding the formation's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) kinematics: Option<String>,
+    /// This slot's largest heading change per step, overriding the formation's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) max_turn_rad: Option<f64>,
+    /// Whether this slot's agent may drive backwards, overriding the formation's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) reverse: Option<bool>,
+    /// A car's turning radius (read to be refused with a clear reason).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) turning_radius_m: Option<f64>,
+    /// The agent's heading relative to the centre's at the start, degrees (absent: 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) heading_deg: Option<f64>,
 }
 
 #[derive(Deserialize, Serialize)]

@@ -12,6 +12,7 @@ use super::file::{
 };
 use crate::geometry::{Disk, Point, Pose};
 use crate::moving_obstacle::MovingObstacle;
+use crate::vocabulary::Kinematics;
 
 /// Why a scenario has no resolved TOML form (only a scenario built by hand, not one this
 /// module parsed, can meet these).
@@ -142,6 +143,28 @@ impl Scenario {
                         .ok_or_else(|| not_in_degrees(field, a.slot.theta_rad))?,
                     radius_m: Some(a.radius_m),
                     max_step_m: a.max_step_m,
+                    kinematics: a
+                        .kinematics
+                        .has_heading()
+                        .then(|| a.kinematics.name().to_string()),
+                    max_turn_rad: match a.kinematics {
+                        Kinematics::Unicycle { max_turn_rad, .. } => Some(max_turn_rad),
+                        Kinematics::Holonomic => None,
+                    },
+                    reverse: match a.kinematics {
+                        Kinematics::Unicycle { reverse, .. } => Some(reverse),
+                        Kinematics::Holonomic => None,
+                    },
+                    turning_radius_m: None,
+                    heading_deg: match a.kinematics.has_heading() {
+                        true => Some(degrees_for(a.heading_offset_rad).ok_or_else(|| {
+                            not_in_degrees(
+                                format!("formation.slots[{i}].heading_deg"),
+                                a.heading_offset_rad,
+                            )
+                        })?),
+                        false => None,
+                    },
                 })
             })
             .collect::<Result<_, ResolveError>>()?;
@@ -150,9 +173,14 @@ impl Scenario {
                 .agents
                 .first()
                 .map_or(default_agent_radius_m(), |a| a.radius_m),
-            // Every slot carries its own top speed.
+            // Every slot carries its own top speed and kinematics.
             max_step_m: None,
             sensing_radius_m,
+            kinematics: None,
+            max_turn_rad: None,
+            reverse: None,
+            turning_radius_m: None,
+            align_heading: self.agents.iter().any(|a| a.align_heading).then_some(true),
             slots,
         })
     }

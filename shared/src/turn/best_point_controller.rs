@@ -135,6 +135,7 @@ impl BestPointController {
             }
         };
         let stay = |status| Move {
+            end_heading_rad: None,
             slot,
             best: *me,
             status,
@@ -204,6 +205,7 @@ impl BestPointController {
             MoveStatus::Deviated
         };
         Move {
+            end_heading_rad: None,
             slot,
             best,
             status,

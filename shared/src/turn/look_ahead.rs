@@ -214,6 +214,7 @@ impl TurnController {
         }
         match best {
             Some((s, q)) if better(s, kept) => Move {
+                end_heading_rad: None,
                 slot,
                 best: q,
                 status: if (q - slot).norm() <= 1e-9 {

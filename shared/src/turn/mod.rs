@@ -14,10 +14,11 @@ use std::borrow::Cow;
 
 use crate::cbf::{CbfController, ZcbfLogSumExpController};
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, polyline_prefix};
+use crate::kinematics::{UnicycleLimits, drive_unicycle};
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaController;
 use crate::vocabulary::{
-    AgentSpec, Body, CbfSettingsError, ControllerKind, ControllerSpec, Move, MoveStatus,
+    AgentSpec, Body, CbfSettingsError, ControllerKind, ControllerSpec, Kinematics, Move, MoveStatus,
 };
 
 mod best_point_controller;
@@ -45,6 +46,9 @@ pub struct TurnController {
     moving: Vec<MovingObstacle>,
     /// With moving obstacles: the static ones (true radii), to check an escape against.
     statics: DiskGrid,
+    /// For an agent with a heading: the static obstacles (true radii), to check where a
+    /// move cut inside a segment stops.
+    obstacles: DiskGrid,
     field: Field,
 }
 
@@ -104,6 +108,11 @@ impl TurnController {
             spec: *spec,
             moving: Vec::new(),
             statics: DiskGrid::new(Vec::new()),
+            obstacles: DiskGrid::new(if spec.kinematics.has_heading() {
+                obstacles.to_vec()
+            } else {
+                Vec::new()
+            }),
             field,
         })
     }
@@ -172,6 +181,68 @@ impl TurnController {
         let reach: Vec<Disk> = sensed.iter().map(|m| m.reach_disk_at(step)).collect();
         let mv = self.plan_turn_around(step, centre, me, others, &sensed, &reach);
         self.look_ahead(step, me, others, &sensed, &reach, mv)
+    }
+
+    /// [`Self::plan_turn`] for an agent that may have a heading: a unicycle agent standing
+    /// at `me` facing `heading_rad` plans its path as a holonomic one would (a disk turning
+    /// in place sweeps nothing new, so the path's safety holds for it), then follows it by
+    /// turning in place and driving straight, as far as one step's time allows
+    /// ([`drive_unicycle`]); it ends facing the centre's heading when the scenario asks
+    /// for it (`align_heading`). A move cut short is [`MoveStatus::UnderWay`]. The move
+    /// carries the heading it ends at. A holonomic agent ignores `heading_rad`.
+    pub fn plan_turn_with_heading(
+        &self,
+        step: usize,
+        centre: &Pose,
+        me: &Point,
+        heading_rad: f64,
+        others: &[Body],
+    ) -> Move {
+        let Kinematics::Unicycle {
+            max_turn_rad,
+            reverse,
+        } = self.spec.kinematics
+        else {
+            return self.plan_turn(step, centre, me, others);
+        };
+        // Validation gives a unicycle a top speed, and no moving obstacles beside it.
+        let Some(max_step_m) = self.spec.max_step_m else {
+            return self.plan_turn(step, centre, me, others);
+        };
+        let mut mv = self.plan_move_within(centre, me, others, None);
+        let limits = UnicycleLimits {
+            max_step_m,
+            max_turn_rad,
+            reverse,
+        };
+        let align = self.spec.align_heading.then_some(centre.heading_rad);
+        let driven = drive_unicycle(heading_rad, &mv.waypoints, align, &limits);
+        let mut waypoints = driven.waypoints;
+        // A stop inside a segment may lie within the planning margin of a body (on the
+        // chord of an arc round it), where the next turn could not plan from: then the
+        // agent stops at the segment's start instead, already facing along it.
+        let k = waypoints.len();
+        if k >= 2 && waypoints[k - 1] != mv.waypoints[k - 1] {
+            let stop = waypoints[k - 1];
+            let reach_m = self.spec.radius_m + PLANNING_MARGIN_M;
+            let clear =
+                |centre: &Point, radius_m: f64| (stop - centre).norm() >= radius_m + reach_m;
+            let free = others.iter().all(|b| clear(&b.position, b.radius_m))
+                && self
+                    .obstacles
+                    .all_near(&stop, reach_m + self.obstacles.max_radius_m(), |d| {
+                        clear(&d.centre, d.radius_m)
+                    });
+            if !free {
+                waypoints.pop();
+            }
+        }
+        mv.waypoints = waypoints;
+        mv.end_heading_rad = Some(driven.end_heading_rad);
+        if !driven.complete {
+            mv.status = MoveStatus::UnderWay;
+        }
+        mv
     }
 
     /// The bodies of `others` this agent senses from `me` (all of them without a sensing

@@ -1,9 +1,10 @@
 //! One agent of a scenario: where it belongs in the formation, how large it is, how far
 //! it may move in one step and how far it sees.
 
+use super::Kinematics;
 use crate::formation::Slot;
 
-/// One agent: its formation slot, body radius, top speed and sensing radius.
+/// One agent: its formation slot, body radius, top speed, sensing radius and kinematics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AgentSpec {
     /// Its slot in the formation.
@@ -17,6 +18,14 @@ pub struct AgentSpec {
     /// within this distance of its centre, in metres (`None`: it knows every body, the
     /// paper's Assumption 5).
     pub sensing_radius_m: Option<f64>,
+    /// How it can move (holonomic: in any direction at once).
+    pub kinematics: Kinematics,
+    /// Its heading at the start relative to the centre's, radians (for an agent with a
+    /// heading).
+    pub heading_offset_rad: f64,
+    /// Whether it ends each move facing the centre's heading (for an agent with a
+    /// heading; otherwise its heading at the best point is free).
+    pub align_heading: bool,
 }
 
 impl AgentSpec {
@@ -27,6 +36,9 @@ impl AgentSpec {
             radius_m,
             max_step_m: None,
             sensing_radius_m: None,
+            kinematics: Kinematics::Holonomic,
+            heading_offset_rad: 0.0,
+            align_heading: false,
         }
     }
 

@@ -88,6 +88,10 @@ pub struct Move {
     /// The polyline followed, from the current position to where the agent stops: `best`,
     /// or short of it when under way (a single point when the agent stays).
     pub waypoints: Vec<Point>,
+    /// The agent's heading where the move ends, radians, for an agent with a heading
+    /// ([`Kinematics::Unicycle`](crate::vocabulary::Kinematics)); `None` for a holonomic
+    /// agent.
+    pub end_heading_rad: Option<f64>,
 }
 
 impl Move {

@@ -6,7 +6,7 @@ use crate::formation::Slot;
 use crate::geometry::{Field, Pose};
 use crate::scenario::ScenarioError;
 use crate::scenario::file::{CbfFile, FormationFile};
-use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_AGENTS};
+use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, Kinematics, MAX_AGENTS};
 
 impl Checker<'_> {
     pub(super) fn controller(
@@ -122,12 +122,43 @@ impl Checker<'_> {
                     ));
                 }
             }
+            let kinematics = self.kinematics(raw, i, max_step_m)?;
+            let heading_offset_rad = match s.heading_deg {
+                Some(_) if !kinematics.has_heading() => {
+                    return Err(self.invalid(
+                        format!("{name}.heading_deg"),
+                        "a heading belongs to agents with one (kinematics = \"unicycle\"); this agent is holonomic",
+                    ));
+                }
+                Some(h) => self
+                    .angle_deg(&format!("{name}.heading_deg"), h)?
+                    .to_radians(),
+                None => 0.0,
+            };
             agents.push(AgentSpec {
                 slot: Slot::new(r_m, theta_deg.to_radians()),
                 radius_m,
                 max_step_m,
                 sensing_radius_m,
+                kinematics,
+                heading_offset_rad,
+                align_heading: raw.align_heading.unwrap_or(false) && kinematics.has_heading(),
             });
+        }
+        // A formation-wide key of a model no agent has would be silently unused.
+        if !agents.iter().any(|a| a.kinematics.has_heading()) {
+            for (key, given) in [
+                ("max_turn_rad", raw.max_turn_rad.is_some()),
+                ("reverse", raw.reverse.is_some()),
+                ("align_heading", raw.align_heading.is_some()),
+            ] {
+                if given {
+                    return Err(self.invalid(
+                        format!("formation.{key}"),
+                        "belongs to agents with a heading (kinematics = \"unicycle\"); every agent here is holonomic",
+                    ));
+                }
+            }
         }
         // The paper's Assumption 2: the nominal formation is itself collision-free.
         let origin = Pose::new(0.0, 0.0, 0.0);
@@ -148,5 +179,94 @@ impl Checker<'_> {
             }
         }
         Ok(agents)
+    }
+
+    /// Slot `i`'s kinematic model: its own keys over the formation's, checked; its top
+    /// speed is `max_step_m`.
+    fn kinematics(
+        &self,
+        raw: &FormationFile,
+        i: usize,
+        max_step_m: Option<f64>,
+    ) -> Result<Kinematics, ScenarioError> {
+        let slot = &raw.slots[i];
+        let (field, name) = match (&slot.kinematics, &raw.kinematics) {
+            (Some(k), _) => (format!("formation.slots[{i}].kinematics"), k.as_str()),
+            (None, Some(k)) => ("formation.kinematics".to_string(), k.as_str()),
+            (None, None) => ("formation.kinematics".to_string(), "holonomic"),
+        };
+        let at_slot = |key: &str, given: bool| given.then(|| format!("formation.slots[{i}].{key}"));
+        match name {
+            "holonomic" => {
+                let stray = at_slot("max_turn_rad", slot.max_turn_rad.is_some())
+                    .or_else(|| at_slot("reverse", slot.reverse.is_some()))
+                    .or_else(|| at_slot("turning_radius_m", slot.turning_radius_m.is_some()));
+                if let Some(key) = stray {
+                    return Err(self.invalid(
+                        key,
+                        format!("belongs to another kinematic model; agent {i} is holonomic"),
+                    ));
+                }
+                if raw.turning_radius_m.is_some() {
+                    return Err(self.invalid(
+                        "formation.turning_radius_m",
+                        "belongs to kinematics = \"car\", which is not supported yet",
+                    ));
+                }
+                Ok(Kinematics::Holonomic)
+            }
+            "unicycle" => {
+                if let Some(key) = at_slot("turning_radius_m", slot.turning_radius_m.is_some())
+                    .or_else(|| {
+                        raw.turning_radius_m
+                            .is_some()
+                            .then(|| "formation.turning_radius_m".to_string())
+                    })
+                {
+                    return Err(self.invalid(
+                        key,
+                        "belongs to kinematics = \"car\"; a unicycle turns in place (max_turn_rad)",
+                    ));
+                }
+                if max_step_m.is_none() {
+                    return Err(self.invalid(
+                        field,
+                        format!(
+                            "a unicycle needs a top speed (formation.max_step_m or formation.slots[{i}].max_step_m): its turning and driving share one step"
+                        ),
+                    ));
+                }
+                let (turn_field, max_turn_rad) = match (slot.max_turn_rad, raw.max_turn_rad) {
+                    (Some(v), _) => (format!("formation.slots[{i}].max_turn_rad"), v),
+                    (None, Some(v)) => ("formation.max_turn_rad".to_string(), v),
+                    (None, None) => {
+                        let missing = match slot.kinematics {
+                            Some(_) => format!("formation.slots[{i}].max_turn_rad"),
+                            None => "formation.max_turn_rad".to_string(),
+                        };
+                        return Err(self.invalid(
+                            missing,
+                            format!(
+                                "a unicycle needs max_turn_rad (formation.max_turn_rad or formation.slots[{i}].max_turn_rad): its largest heading change per step"
+                            ),
+                        ));
+                    }
+                };
+                let max_turn_rad =
+                    self.positive(&turn_field, max_turn_rad, std::f64::consts::TAU)?;
+                Ok(Kinematics::Unicycle {
+                    max_turn_rad,
+                    reverse: slot.reverse.or(raw.reverse).unwrap_or(false),
+                })
+            }
+            "car" => Err(self.invalid(
+                field,
+                "kinematics = \"car\" is not supported yet (holonomic, unicycle)",
+            )),
+            other => Err(self.invalid(
+                field,
+                format!("unknown kinematic model {other:?} (holonomic, unicycle)"),
+            )),
+        }
     }
 }

@@ -199,6 +199,16 @@ impl Checker<'_> {
         self.formation_fits_at_start(&agents, &all_static, &field, &path)?;
         let moving =
             self.moving_obstacles(&raw.obstacles, &field, &path, &agents, all_static.len())?;
+        if !moving.is_empty()
+            && let Some(i) = agents.iter().position(|a| a.kinematics.has_heading())
+        {
+            return Err(self.invalid(
+                "obstacles.moving",
+                format!(
+                    "moving obstacles beside agents with a heading (agent {i}) are not supported yet: the escape from a moving obstacle assumes a holonomic agent"
+                ),
+            ));
+        }
         let controller = self.controller(raw.controller, raw.cbf.as_ref(), &agents, side_m)?;
         let turns = raw.turns.mode;
         if turns == TurnMode::Parallel
