@@ -452,11 +452,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_heading_columns_are_absent_empty_or_a_number_and_read_back() {
-        let row = |heading: Option<Option<f64>>| TrajectoryRow {
+    /// A row of step 1 for `agent` with plain numbers and no heading columns.
+    fn trajectory_row(agent: usize, status: MoveStatus, alive: bool) -> TrajectoryRow {
+        TrajectoryRow {
             step: 1,
-            agent: 0,
+            agent,
             x: 0.5,
             y: 1.0,
             slot_x: 2.0,
@@ -465,10 +465,19 @@ mod tests {
             best_y: 5.0,
             deviation_m: 0.25,
             clearance_m: -0.125,
-            status: MoveStatus::AtSlot,
-            alive: true,
+            status,
+            alive,
+            heading_rad: None,
+            heading_error_rad: None,
+        }
+    }
+
+    #[test]
+    fn the_heading_columns_are_absent_empty_or_a_number_and_read_back() {
+        let row = |heading: Option<Option<f64>>| TrajectoryRow {
             heading_rad: heading,
             heading_error_rad: heading.map(|h| h.map(|v| -v)),
+            ..trajectory_row(0, MoveStatus::AtSlot, true)
         };
         let columns = header::<TrajectoryRow>().len() - 2;
         let without = String::from_utf8(csv_bytes_with_columns([row(None)], columns).expect("csv"))
@@ -502,22 +511,7 @@ mod tests {
         let rows: Vec<TrajectoryRow> = MoveStatus::ALL
             .iter()
             .enumerate()
-            .map(|(i, &status)| TrajectoryRow {
-                step: 1,
-                agent: i,
-                x: 0.5,
-                y: 1.0,
-                slot_x: 2.0,
-                slot_y: 3.0,
-                best_x: 4.0,
-                best_y: 5.0,
-                deviation_m: 0.25,
-                clearance_m: -0.125,
-                status,
-                alive: i % 2 == 0,
-                heading_rad: None,
-                heading_error_rad: None,
-            })
+            .map(|(i, &status)| trajectory_row(i, status, i % 2 == 0))
             .collect();
         let columns = header::<TrajectoryRow>().len() - 2;
         let bytes = csv_bytes_with_columns(rows.iter().copied(), columns).expect("csv");
