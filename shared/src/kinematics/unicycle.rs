@@ -115,9 +115,6 @@ pub fn driving_headings(
         best = 1;
         total = cost[1] + final_turn(1);
     }
-    if last.is_none() {
-        total = final_turn(0);
-    }
     // Read the choices back, last to first.
     let mut picked = vec![0usize; from.len()];
     let mut c = best;
