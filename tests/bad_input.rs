@@ -223,22 +223,32 @@ fn validate_problems(case: &Case) -> Vec<String> {
 /// Problems with `coordinator run --out` refusing `case`: as for `validate`, and neither
 /// the output folder nor anything else appears in the (otherwise empty) working folder.
 fn run_problems(case: &Case) -> Vec<String> {
+    command_problems("run", case)
+}
+
+/// What is wrong with how `coordinator COMMAND` refused `case`: the exit code and line as
+/// for `validate`, and nothing created, neither the `--out` folder nor anything else in
+/// the working folder.
+fn command_problems(command: &str, case: &Case) -> Vec<String> {
     let work = tempfile::tempdir().expect("temporary working folder");
     let out = work.path().join("out");
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.current_dir(work.path())
-        .arg("run")
+        .arg(command)
         .arg(&case.path)
         .arg("--out")
-        .arg(&out)
-        .arg("--quiet");
+        .arg(&out);
+    if command == "run" {
+        // `run` draws a progress bar; `compare` has none to hush.
+        cmd.arg("--quiet");
+    }
     let mut problems = match run_bounded(cmd) {
-        Ok(output) => refusal_problems("run", case, &output),
+        Ok(output) => refusal_problems(command, case, &output),
         Err(e) => vec![e],
     };
     if out.exists() {
         problems.push(format!(
-            "coordinator run {}: created the --out folder {}",
+            "coordinator {command} {}: created the --out folder {}",
             case.name(),
             out.display()
         ));
@@ -254,7 +264,7 @@ fn run_problems(case: &Case) -> Vec<String> {
         .collect();
     if !left.is_empty() {
         problems.push(format!(
-            "coordinator run {}: left {left:?} in its working folder",
+            "coordinator {command} {}: left {left:?} in its working folder",
             case.name()
         ));
     }
@@ -406,14 +416,15 @@ fn coordinator_run_refuses_every_corpus_file_before_creating_anything() {
 }
 
 #[test]
-fn agents_with_a_heading_are_refused_by_run_until_the_processes_carry_it() {
-    // Valid for the reference simulation, which moves them; not yet for the processes.
+fn agents_with_a_heading_are_refused_by_compare_whose_baselines_are_holonomic() {
+    // Valid for `run` and `simulate`, which move them; not for the baselines.
     let case = Case {
         path: support::repo_root().join("scenarios/paper-unicycle.toml"),
         expect: "formation.kinematics".into(),
     };
     Scenario::load(&case.path).expect("a valid scenario");
-    assert_no_problems("coordinator run on unicycles", 1, &run_problems(&case));
+    let problems = command_problems("compare", &case);
+    assert_no_problems("coordinator compare on unicycles", 1, &problems);
 }
 
 #[test]

@@ -195,20 +195,44 @@ fn a_thousand_agent_processes_match_the_reference_or_are_refused_up_front() {
 #[test]
 fn every_other_shipped_scenario_matches_the_reference() {
     for file in support::shipped_scenarios() {
-        if ["swarm200.toml", "swarm1000.toml", "paper.toml"]
-            .iter()
-            .any(|own| file.ends_with(own))
+        if [
+            "swarm200.toml",
+            "swarm1000.toml",
+            "paper.toml",
+            "paper-unicycle.toml",
+        ]
+        .iter()
+        .any(|own| file.ends_with(own))
         {
             continue; // their own tests above
         }
         let scenario = Scenario::load(&file).expect("shipped scenario");
-        if scenario.agents.iter().any(|a| a.kinematics.has_heading()) {
-            // The agent processes carry no heading yet: `run` refuses these
-            // (tests/bad_input.rs), the reference simulation runs them.
-            continue;
-        }
         run_and_compare(&scenario);
     }
+}
+
+/// Unicycle agents over real processes: each is sent its heading with its world and
+/// publishes the heading it ends at; the coordinator checks the turning and the run
+/// equals the reference to the bit, headings and all.
+#[test]
+fn unicycle_agent_processes_match_the_reference_headings_and_all() {
+    let file = support::repo_root().join("scenarios/paper-unicycle.toml");
+    let scenario = Scenario::load(&file).expect("paper-unicycle.toml");
+    assert!(scenario.agents.iter().all(|a| a.kinematics.has_heading()));
+    let run = run_and_compare(&scenario);
+    let first: Vec<Option<f64>> = run.steps[0].agents.iter().map(|a| a.heading_rad).collect();
+    assert!(
+        first.iter().all(Option::is_some),
+        "every agent has a heading"
+    );
+    let last = run.steps.last().expect("steps");
+    assert!(
+        last.agents
+            .iter()
+            .zip(&first)
+            .any(|(a, h)| a.heading_rad != *h),
+        "some agent turned on the way"
+    );
 }
 
 /// A changing world with limited sensing: each agent process is sent only the agents

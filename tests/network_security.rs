@@ -215,6 +215,7 @@ fn spy_on_a_run(tls: bool) -> usize {
                 slot: [0.0, 0.0],
                 best: [0.0, 0.0],
                 waypoints: vec![[0.0, 0.0]],
+                end_heading_rad: None,
             });
             net::send(forger, &forged)?;
         }

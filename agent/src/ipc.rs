@@ -101,11 +101,16 @@ impl Channel for IpcPorts {
                     w.bodies.len()
                 );
             }
+            let heading_rad = w.heading();
+            if heading_rad.is_some_and(|h| !h.is_finite()) {
+                bail!("a world whose heading is not a finite number");
+            }
             turn = Some(TurnInput {
                 seq: w.seq,
                 step: w.step,
                 token: w.token,
                 centre: w.centre.into(),
+                heading_rad,
                 bodies: w
                     .bodies
                     .iter()
@@ -368,6 +373,7 @@ impl<C: Channel> Transport for IpcTransport<C> {
             s.status = status;
             s.slot = mv.slot.into();
             s.best = mv.best.into();
+            s.set_end_heading(mv.end_heading_rad);
             s.set_waypoints(&mv.waypoints)?;
             Ok(())
         })

@@ -325,7 +325,13 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         };
         let started = Instant::now();
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
-        let mv = controller.plan_turn(turn_step(&turn), &turn.centre, &me, &others);
+        let step = turn_step(&turn);
+        let mv = match turn.heading_rad {
+            Some(heading_rad) => {
+                controller.plan_turn_with_heading(step, &turn.centre, &me, heading_rad, &others)
+            }
+            None => controller.plan_turn(step, &turn.centre, &me, &others),
+        };
         let compute = started.elapsed();
         transport.publish_move(Reply::new(&turn, &mv, compute))?;
     }
@@ -396,6 +402,7 @@ mod tests {
                 step: step as u64,
                 token: 1000 + step as u64,
                 centre: path[step],
+                heading_rad: None,
                 bodies: positions.iter().copied().enumerate().collect(),
             })
             .collect()

@@ -32,6 +32,7 @@ pub fn net_turn(t: &TurnInput) -> NetTurn {
         step: t.step,
         token: t.token,
         centre: [t.centre.x_m, t.centre.y_m, t.centre.heading_rad],
+        heading_rad: t.heading_rad,
         bodies: t
             .bodies
             .iter()
@@ -46,6 +47,7 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
         bail!("a turn with {} bodies, beyond the capacity", t.bodies.len());
     }
     let finite = t.centre.iter().all(|v| v.is_finite())
+        && t.heading_rad.is_none_or(f64::is_finite)
         && t.bodies
             .iter()
             .all(|(_, p)| p.iter().all(|v| v.is_finite()));
@@ -57,6 +59,7 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
         step: t.step,
         token: t.token,
         centre: Pose::new(t.centre[0], t.centre[1], t.centre[2]),
+        heading_rad: t.heading_rad,
         bodies: t
             .bodies
             .into_iter()
@@ -77,6 +80,7 @@ pub fn net_move(agent: usize, reply: Reply<'_>) -> anyhow::Result<NetMove> {
         compute_ns: u64::try_from(reply.compute.as_nanos()).unwrap_or(u64::MAX),
         slot: xy(&reply.mv.slot),
         best: xy(&reply.mv.best),
+        end_heading_rad: reply.mv.end_heading_rad,
         waypoints: reply.mv.waypoints.iter().map(xy).collect(),
     })
 }
@@ -95,7 +99,7 @@ pub fn move_of(agent: usize, m: NetMove) -> Option<(Move, u32, Duration)> {
     let p = |xy: [f64; 2]| Point::new(xy[0], xy[1]);
     Some((
         Move {
-            end_heading_rad: None,
+            end_heading_rad: m.end_heading_rad,
             slot: p(m.slot),
             best: p(m.best),
             // Only the code below is sent; this field is not read.

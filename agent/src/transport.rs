@@ -47,6 +47,9 @@ pub struct TurnInput {
     pub token: u64,
     /// The formation centre.
     pub centre: Pose,
+    /// Where this agent faces, if it has a heading (a unicycle): the coordinator keeps
+    /// every agent's pose and hands it over with each turn.
+    pub heading_rad: Option<f64>,
     /// The agents this agent may sense, itself included, as (agent index, position) in
     /// increasing index order (every agent when it has no sensing radius); their radii
     /// are in the mission.

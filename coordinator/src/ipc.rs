@@ -67,6 +67,21 @@ pub struct Incoming {
     pub msg: Result<StateMsg, MalformedState>,
 }
 
+/// What one agent's turn shows it: the formation centre, the agent's own heading when its
+/// kinematics has one, and the bodies it sees.
+pub struct TurnWorld<'a> {
+    /// The formation centre at this step.
+    pub centre: &'a Pose,
+    /// The agent's heading, `None` for a holonomic agent.
+    pub heading_rad: Option<f64>,
+    /// Every agent's body.
+    pub bodies: &'a [Body],
+    /// Which agents are alive.
+    pub alive: &'a [bool],
+    /// The agents the turn's agent sees (increasing), or every agent when `None`.
+    pub visible: Option<&'a [usize]>,
+}
+
 /// The turn a world was published for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Grant {
@@ -325,16 +340,12 @@ impl CoordinatorIpc {
         Ok(())
     }
 
-    /// Publish the world for `agent`'s turn at `step`, with a fresh token: the agents of
-    /// `visible` (increasing), or every agent when `None`.
+    /// Publish `world` for `agent`'s turn at `step`, with a fresh token.
     pub fn publish_world(
         &mut self,
         step: usize,
         agent: usize,
-        centre: &Pose,
-        bodies: &[Body],
-        alive: &[bool],
-        visible: Option<&[usize]>,
+        world: &TurnWorld<'_>,
     ) -> anyhow::Result<Grant> {
         self.seq += 1;
         let grant = Grant {
@@ -348,8 +359,10 @@ impl CoordinatorIpc {
         w.step = step as u64;
         w.token = grant.token;
         w.turn_agent = agent as u32;
-        w.centre = (*centre).into();
-        match visible {
+        w.centre = (*world.centre).into();
+        w.set_heading(world.heading_rad);
+        let (bodies, alive) = (world.bodies, world.alive);
+        match world.visible {
             Some(v) => w.set_bodies(bodies, alive, v.iter().copied())?,
             None => w.set_bodies(bodies, alive, 0..bodies.len())?,
         }

@@ -9,7 +9,7 @@ use parry2d_f64::query;
 use parry2d_f64::shape::{Ball, Segment};
 use shared::geometry::{Disk, Field, Point};
 use shared::safety::SAFETY_TOLERANCE_M;
-use shared::vocabulary::Body;
+use shared::vocabulary::{Body, Kinematics};
 
 /// Why the monitor refused a move.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -33,6 +33,19 @@ pub enum Refusal {
         length_m: f64,
         /// Top speed, metres per step.
         max_m: f64,
+    },
+    /// An agent with a heading did not say where its move leaves it facing, or said
+    /// something that is not an angle.
+    #[error("the move gives no finite end heading for an agent with a heading")]
+    NoHeading,
+    /// A holonomic agent reported a heading.
+    #[error("the move gives an end heading for a holonomic agent")]
+    UnexpectedHeading,
+    /// Driving and turning together take more than one step.
+    #[error("the move's turning and driving take {share} of a step")]
+    TooMuchTurning {
+        /// The share of the step the move takes at the least.
+        share: f64,
     },
     /// The move meets the move of another agent of the same parallel group.
     #[error("the move comes within {distance_m} m of agent {agent}'s move in the same group")]
@@ -70,6 +83,12 @@ pub enum Refusal {
         agent: usize,
     },
 }
+
+/// How far past a whole step a unicycle's turning and driving may reach: rounding only.
+const STEP_SHARE_TOLERANCE: f64 = 1e-9;
+
+/// Segments shorter than this have no direction: driven without turning.
+const DEGENERATE_SEGMENT_M: f64 = 1e-12;
 
 /// How much farther than the radii sum a body's centre may lie outside a segment's box
 /// and still be handed to parry's query ([`SafetyMonitor::check`]): far more than any
@@ -286,6 +305,68 @@ pub fn check_length(waypoints: &[Point], max_step_m: Option<f64>) -> Result<(), 
     Ok(())
 }
 
+/// Check a move against the agent's kinematics, on its own arithmetic (angles from dot
+/// and cross products, not the controllers' code): a holonomic agent reports no heading;
+/// a unicycle facing `start_heading_rad` reports a finite `end_heading_rad`, and turning
+/// in place at the vertices (the least turning over driving each segment forwards or,
+/// with `reverse`, backwards) plus driving fits one step: turning / `max_turn_rad` +
+/// length / `max_step_m` at most 1.
+pub fn check_kinematics(
+    kinematics: Kinematics,
+    start_heading_rad: Option<f64>,
+    waypoints: &[Point],
+    end_heading_rad: Option<f64>,
+    max_step_m: Option<f64>,
+) -> Result<(), Refusal> {
+    let Kinematics::Unicycle {
+        max_turn_rad,
+        reverse,
+    } = kinematics
+    else {
+        return match end_heading_rad {
+            None => Ok(()),
+            Some(_) => Err(Refusal::UnexpectedHeading),
+        };
+    };
+    let (Some(start), Some(end)) = (start_heading_rad, end_heading_rad.filter(|h| h.is_finite()))
+    else {
+        return Err(Refusal::NoHeading);
+    };
+    let unit = |rad: f64| Vector2::new(rad.cos(), rad.sin());
+    let angle = |a: &Vector2<f64>, b: &Vector2<f64>| (a.x * b.y - a.y * b.x).atan2(a.dot(b)).abs();
+    // The least turning so far ending facing forwards [0] or backwards [1] along the
+    // last segment, and the way it faces then.
+    let mut cost = [0.0, f64::INFINITY];
+    let mut facing = [unit(start), unit(start)];
+    let mut length_m = 0.0;
+    for w in waypoints.windows(2) {
+        let d = w[1] - w[0];
+        let norm = d.norm();
+        length_m += norm;
+        if norm <= DEGENERATE_SEGMENT_M {
+            continue;
+        }
+        let ahead = d / norm;
+        let options = [ahead, -ahead];
+        let mut next = [f64::INFINITY; 2];
+        for (o, way) in options.iter().enumerate().take(if reverse { 2 } else { 1 }) {
+            for p in 0..2 {
+                next[o] = next[o].min(cost[p] + angle(&facing[p], way));
+            }
+        }
+        cost = next;
+        facing = options;
+    }
+    let turning_rad = (0..2)
+        .map(|p| cost[p] + angle(&facing[p], &unit(end)))
+        .fold(f64::INFINITY, f64::min);
+    let share = turning_rad / max_turn_rad + length_m / max_step_m.unwrap_or(f64::INFINITY);
+    if share.is_nan() || share > 1.0 + STEP_SHARE_TOLERANCE {
+        return Err(Refusal::TooMuchTurning { share });
+    }
+    Ok(())
+}
+
 /// The smallest distance between the polylines `a` and `b` (a single point is a
 /// polyline), computed with parry's segment-segment query.
 pub fn distance_between_moves_m(a: &[Point], b: &[Point]) -> f64 {
@@ -322,6 +403,88 @@ mod tests {
                 radius_m: 0.3,
             },
         ]
+    }
+
+    const UNICYCLE: Kinematics = Kinematics::Unicycle {
+        max_turn_rad: 2.0,
+        reverse: false,
+    };
+
+    #[test]
+    fn headings_are_required_of_unicycles_and_refused_of_holonomic_agents() {
+        let path = [Point::new(0.0, 0.0), Point::new(0.5, 0.0)];
+        let holonomic = Kinematics::Holonomic;
+        assert_eq!(check_kinematics(holonomic, None, &path, None, None), Ok(()));
+        assert_eq!(
+            check_kinematics(holonomic, None, &path, Some(0.0), None),
+            Err(Refusal::UnexpectedHeading)
+        );
+        for end in [None, Some(f64::NAN), Some(f64::INFINITY)] {
+            assert_eq!(
+                check_kinematics(UNICYCLE, Some(0.0), &path, end, Some(1.0)),
+                Err(Refusal::NoHeading)
+            );
+        }
+        assert_eq!(
+            check_kinematics(UNICYCLE, Some(0.0), &path, Some(0.0), Some(1.0)),
+            Ok(())
+        );
+    }
+
+    #[test]
+    fn turning_and_driving_share_the_step() {
+        // Half a step's drive, then a quarter turn: 0.5 + (pi/2)/2 = 1.285 of a step.
+        let path = [Point::new(0.0, 0.0), Point::new(0.5, 0.0)];
+        let quarter = std::f64::consts::FRAC_PI_2;
+        assert!(matches!(
+            check_kinematics(UNICYCLE, Some(0.0), &path, Some(quarter), Some(1.0)),
+            Err(Refusal::TooMuchTurning { share }) if (share - (0.5 + quarter / 2.0)).abs() < 1e-12
+        ));
+        // Half the turn fits with the drive: 0.5 + 1.0 / 2 = 1.
+        assert_eq!(
+            check_kinematics(UNICYCLE, Some(0.0), &path, Some(1.0), Some(1.0)),
+            Ok(())
+        );
+        // Backwards: a half turn first without reverse, none with it.
+        let behind = [Point::new(0.0, 0.0), Point::new(-0.5, 0.0)];
+        assert!(check_kinematics(UNICYCLE, Some(0.0), &behind, Some(0.0), Some(1.0)).is_err());
+        let reversing = Kinematics::Unicycle {
+            max_turn_rad: 2.0,
+            reverse: true,
+        };
+        assert_eq!(
+            check_kinematics(reversing, Some(0.0), &behind, Some(0.0), Some(1.0)),
+            Ok(())
+        );
+    }
+
+    proptest::proptest! {
+        /// The monitor and the controllers' own arithmetic agree on every polyline: the
+        /// monitor takes exactly the moves whose share of the step is at most 1.
+        #[test]
+        fn the_turning_check_agrees_with_the_kinematics_module(
+            start in -3.2f64..3.2,
+            end in -3.2f64..3.2,
+            reverse in proptest::bool::ANY,
+            xs in proptest::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 0..5),
+        ) {
+            let limits = shared::kinematics::UnicycleLimits {
+                max_step_m: 2.0,
+                max_turn_rad: 3.0,
+                reverse,
+            };
+            let mut path = vec![Point::origin()];
+            path.extend(xs.iter().map(|&(x, y)| Point::new(x, y)));
+            let share = shared::kinematics::unicycle_step_share(start, &path, end, &limits);
+            let kinematics = Kinematics::Unicycle { max_turn_rad: 3.0, reverse };
+            let verdict = check_kinematics(kinematics, Some(start), &path, Some(end), Some(2.0));
+            if (share - 1.0).abs() > 1e-6 {
+                proptest::prop_assert_eq!(verdict.is_ok(), share <= 1.0, "share {}", share);
+            }
+            if let Err(Refusal::TooMuchTurning { share: got }) = verdict {
+                proptest::prop_assert!((got - share).abs() < 1e-9);
+            }
+        }
     }
 
     #[test]

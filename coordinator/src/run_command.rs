@@ -179,7 +179,6 @@ struct Prepared {
 /// created), the options from the command line.
 fn prepare_new(args: &RunArgs) -> Result<Prepared, CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
-    crate::validate::refuse_headings_in_processes(&loaded, "coordinator run")?;
     let scenario = match args.controller {
         Some(kind) => loaded.scenario.with_controller(kind),
         None => loaded.scenario.clone(),

@@ -48,25 +48,6 @@ pub fn load_and_plan(file: Option<&std::path::Path>) -> Result<Loaded, ScenarioE
     })
 }
 
-/// Refuse a scenario with agents that have a heading in a command that runs agent
-/// processes (`what`): so far only the reference simulation (`coordinator simulate`)
-/// moves them; the agent processes' messages carry no heading yet.
-pub fn refuse_headings_in_processes(loaded: &Loaded, what: &str) -> Result<(), CliError> {
-    match loaded
-        .scenario
-        .agents
-        .iter()
-        .position(|a| a.kinematics.has_heading())
-    {
-        Some(i) => Err(CliError::Usage(format!(
-            "{}: formation.kinematics: agent {i} is a {}: agents with a heading run in `coordinator simulate` only so far, not in `{what}`",
-            loaded.source,
-            loaded.scenario.agents[i].kinematics.name()
-        ))),
-        None => Ok(()),
-    }
-}
-
 /// Carry out `validate`.
 pub fn execute(args: &ValidateArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(Some(&args.scenario))?;

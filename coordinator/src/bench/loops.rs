@@ -96,7 +96,6 @@ pub fn prepare(file: &Path, rounds: usize) -> Result<Loaded, CliError> {
         return Err(CliError::Usage("--loop-rounds: at least 1".into()));
     }
     let loaded = load_and_plan(Some(file))?;
-    crate::validate::refuse_headings_in_processes(&loaded, "coordinator bench")?;
     Ok(loaded)
 }
 

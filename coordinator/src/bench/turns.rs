@@ -173,7 +173,6 @@ pub fn prepare(b: &TurnsBench<'_>) -> Result<Prepared, CliError> {
         ));
     }
     let loaded = load_and_plan(Some(b.file))?;
-    crate::validate::refuse_headings_in_processes(&loaded, "coordinator bench")?;
     let seq = with_turn_mode(&loaded.scenario, &loaded.source, TurnMode::Sequential)?;
     let par = with_turn_mode(&loaded.scenario, &loaded.source, TurnMode::Parallel)?;
     let mut path = loaded.centre_path;

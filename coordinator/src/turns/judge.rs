@@ -38,12 +38,21 @@ pub(super) fn judge_move(
                 MAX_WAYPOINTS,
             )
             .and_then(|()| monitor::check_length(&msg.waypoints, max_step_m))
+            .and_then(|()| {
+                monitor::check_kinematics(
+                    recorder.scenario().agents[agent].kinematics,
+                    recorder.headings()[agent],
+                    &msg.waypoints,
+                    msg.end_heading_rad,
+                    max_step_m,
+                )
+            })
             .map(|()| status)
             .map_err(|r| r.to_string()),
     };
     match verdict {
         Ok(status) => Some(Move {
-            end_heading_rad: None,
+            end_heading_rad: msg.end_heading_rad,
             slot: msg.slot,
             best: msg.best,
             status,

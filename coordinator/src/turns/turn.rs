@@ -16,7 +16,7 @@ use super::driver::Driver;
 use super::judge::{judge_move, settle_group};
 use super::lateness::Lateness;
 use super::outcome::TurnSample;
-use crate::ipc::TurnSplit;
+use crate::ipc::{TurnSplit, TurnWorld};
 use crate::monitor::SafetyMonitor;
 
 impl Driver<'_, '_> {
@@ -70,14 +70,14 @@ impl Driver<'_, '_> {
             // Stamped before the world exists, so no answer to it can predate the stamp.
             let granted_at = Instant::now();
             let granted_ns = monotonic_ns();
-            let grant = self.ipc.publish_world(
-                step,
-                agent,
+            let world = TurnWorld {
                 centre,
-                self.recorder.bodies(),
-                self.recorder.alive(),
-                visible.as_deref(),
-            )?;
+                heading_rad: self.recorder.headings()[agent],
+                bodies: self.recorder.bodies(),
+                alive: self.recorder.alive(),
+                visible: visible.as_deref(),
+            };
+            let grant = self.ipc.publish_world(step, agent, &world)?;
             let rung = !self.hand_over.polls_world(agent, self.procs.pid(agent));
             if rung {
                 self.ipc.notify_turn(agent)?;

@@ -43,6 +43,8 @@ pub struct NetTurn {
     pub token: u64,
     /// The formation centre: x, y (m), heading (rad).
     pub centre: [f64; 3],
+    /// Where the agent faces (rad), if it has a heading.
+    pub heading_rad: Option<f64>,
     /// The agents this agent may sense, itself included: (index, [x, y] in m).
     pub bodies: Vec<(u32, [f64; 2])>,
 }
@@ -87,6 +89,8 @@ pub struct NetMove {
     pub slot: [f64; 2],
     /// The best point, [x, y] in m.
     pub best: [f64; 2],
+    /// Where the agent faces at the end of the move (rad), if it has a heading.
+    pub end_heading_rad: Option<f64>,
     /// The path, [x, y] in m each.
     pub waypoints: Vec<[f64; 2]>,
 }
@@ -154,6 +158,7 @@ mod tests {
             compute_ns: 1234,
             slot: [1.0, -2.5],
             best: [0.1, f64::MIN_POSITIVE],
+            end_heading_rad: Some(-3.0),
             waypoints: vec![[0.0, 0.0], [1.0, 1e-300]],
         })
     }
@@ -165,6 +170,7 @@ mod tests {
             step: 2,
             token: u64::MAX,
             centre: [1.5, -0.25, std::f64::consts::PI],
+            heading_rad: Some(0.75),
             bodies: vec![(0, [0.3, 0.1]), (7, [-1.0, 2.0])],
         });
         assert_eq!(decode::<Down>(&encode(&turn).unwrap()).unwrap(), turn);

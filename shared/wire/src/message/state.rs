@@ -52,6 +52,13 @@ pub struct AgentState {
     pub status: u32,
     /// The agent's process id.
     pub pid: u32,
+    /// 1 when the move ends with the heading `end_heading_rad` (an agent with a heading),
+    /// 0 when it has none (a holonomic agent, a handshake, an echo).
+    pub has_end_heading: u32,
+    /// Padding, always 0.
+    pub reserved: u32,
+    /// Where the agent faces at the end of its move, in rad, when `has_end_heading` is 1.
+    pub end_heading_rad: f64,
     /// The ideal slot at this step.
     pub slot: WirePoint,
     /// The point the agent moves to.
@@ -84,6 +91,9 @@ pub struct StateMsg {
     /// The move status code, as sent (checked against [`MoveStatus`] by the monitor's
     /// caller, which refuses unknown codes as unsafe moves).
     pub status: u32,
+    /// Where it faces at the end of its move (`None`: it sent no heading). Any value, as
+    /// sent: the recorder checks it against the agent's kinematics.
+    pub end_heading_rad: Option<f64>,
     /// The ideal slot the agent computed.
     pub slot: Point,
     /// The point it moves to.
@@ -137,6 +147,14 @@ pub enum MalformedState {
     /// could not be mapped, for instance).
     #[error("the sample could not be received: {0}")]
     Unreadable(String),
+    /// The heading flag is neither 0 nor 1, or a handshake or echo carries a heading.
+    #[error("heading flag {flag} on a {kind:?} message")]
+    HeadingFlag {
+        /// The message kind.
+        kind: StateKind,
+        /// The flag as written.
+        flag: u32,
+    },
     /// A handshake or echo carries a move (waypoints).
     #[error("a {kind:?} message carries {count} waypoints")]
     UnexpectedWaypoints {
@@ -176,6 +194,12 @@ impl AgentState {
         if kind != StateKind::Move && len > 0 {
             return Err(MalformedState::UnexpectedWaypoints { kind, count: len });
         }
+        let flag = self.has_end_heading;
+        let end_heading_rad = match (flag, kind) {
+            (0, _) => None,
+            (1, StateKind::Move) => Some(self.end_heading_rad),
+            _ => return Err(MalformedState::HeadingFlag { kind, flag }),
+        };
         let compute_ns = self.compute_ns;
         if compute_ns > MAX_COMPUTE_NS {
             return Err(MalformedState::ComputeTime(compute_ns));
@@ -205,6 +229,7 @@ impl AgentState {
             sent_ns,
             pid: self.pid,
             status: self.status,
+            end_heading_rad,
             slot: self.slot.into(),
             best: self.best.into(),
             waypoints,
@@ -215,6 +240,12 @@ impl AgentState {
     fn raw_waypoint_count(&self) -> u64 {
         // `len()` only reads the field; it is the slicing methods that trust it.
         self.waypoints.len() as u64
+    }
+
+    /// Set the end heading (`None`: the agent has none).
+    pub fn set_end_heading(&mut self, end_heading_rad: Option<f64>) {
+        self.has_end_heading = u32::from(end_heading_rad.is_some());
+        self.end_heading_rad = end_heading_rad.unwrap_or(0.0);
     }
 
     /// Replace the waypoints.
@@ -278,6 +309,7 @@ mod tests {
         st.pid = 42;
         st.status = MoveStatus::AtSlot as u32;
         st.best = points[1].into();
+        st.set_end_heading(Some(0.5));
         let m = st.read_checked(3).unwrap();
         assert_eq!(
             m,
@@ -291,6 +323,7 @@ mod tests {
                 sent_ns: 20,
                 pid: 42,
                 status: MoveStatus::AtSlot as u32,
+                end_heading_rad: Some(0.5),
                 slot: Point::new(0.0, 0.0),
                 best: points[1],
                 waypoints: points.to_vec(),
@@ -342,6 +375,22 @@ mod tests {
         assert!(matches!(
             st.read_checked(0),
             Err(MalformedState::Timestamps { .. })
+        ));
+        let mut st = a_move(0, &[]);
+        st.has_end_heading = 2;
+        assert_eq!(
+            st.read_checked(0),
+            Err(MalformedState::HeadingFlag {
+                kind: StateKind::Move,
+                flag: 2
+            })
+        );
+        let mut st = a_move(0, &[]);
+        st.kind = StateKind::Echo as u32;
+        st.set_end_heading(Some(1.0));
+        assert!(matches!(
+            st.read_checked(0),
+            Err(MalformedState::HeadingFlag { .. })
         ));
         let mut st = a_move(0, &[Point::new(0.0, 0.0)]);
         st.kind = StateKind::Ready as u32;

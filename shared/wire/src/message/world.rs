@@ -35,16 +35,31 @@ pub struct World {
     pub token: u64,
     /// Whose turn it is.
     pub turn_agent: u32,
-    /// Padding, always 0.
-    pub reserved: u32,
+    /// 1 when the turn's agent has a heading (a unicycle), given in `heading_rad`; 0 for
+    /// a holonomic agent.
+    pub has_heading: u32,
     /// The formation centre at this step.
     pub centre: WirePose,
+    /// Where the turn's agent faces, in rad, when `has_heading` is 1 (else 0).
+    pub heading_rad: f64,
     /// The agents the turn's agent may sense, itself included, in increasing agent order,
     /// dead ones included (they are obstacles): every agent without a sensing radius.
     pub bodies: StaticVec<WireBody, MAX_AGENTS>,
 }
 
 impl World {
+    /// Set the turn agent's heading (`None`: the agent has none).
+    pub fn set_heading(&mut self, heading_rad: Option<f64>) {
+        self.has_heading = u32::from(heading_rad.is_some());
+        self.heading_rad = heading_rad.unwrap_or(0.0);
+    }
+
+    /// The turn agent's heading, as the coordinator wrote it (`None`: it has none; a
+    /// flag other than 0 or 1 reads as none too).
+    pub fn heading(&self) -> Option<f64> {
+        (self.has_heading == 1).then_some(self.heading_rad)
+    }
+
     /// Replace the bodies with the agents `visible` (indices, increasing) of `bodies`
     /// (positions) with their `alive` flags.
     pub fn set_bodies(
