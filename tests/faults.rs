@@ -117,6 +117,47 @@ fn every_misbehaviour_is_refused_and_nobody_collides() {
 }
 
 #[test]
+fn a_unicycle_that_turns_too_far_is_refused_at_every_turn_and_nobody_collides() {
+    // paper-unicycle.toml: at most 3 rad of turning a step, under the half turn the
+    // rogue adds to every honest end heading; a holonomic agent (the default scenario)
+    // may report no heading at all.
+    let unicycles = support::repo_root().join("scenarios/paper-unicycle.toml");
+    let unicycles = unicycles.to_str().expect("a UTF-8 path");
+    for (scenario, why) in [
+        (Some(unicycles), "turning and driving take"),
+        (None, "end heading for a holonomic agent"),
+    ] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let mut args: Vec<&str> = scenario.into_iter().collect();
+        args.extend(["--misbehave", "3=over-turn"]);
+        let (output, pid) = run_to_end(&args, &out);
+        assert!(
+            output.status.success(),
+            "{scenario:?}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = summary(&out);
+        assert_safe(&s);
+        assert_eq!(s["completed"], true, "{scenario:?}");
+        let rejected = faults_of(&s, "rejected");
+        let steps = s["steps"].as_u64().expect("steps") as usize;
+        assert_eq!(rejected.len(), steps, "{scenario:?}: {s:#}");
+        for f in &rejected {
+            assert_eq!(f["agent"], 3, "{scenario:?}");
+            let detail = f["detail"].as_str().expect("detail");
+            assert!(detail.contains(why), "{scenario:?}: {detail}");
+        }
+        // It never moved; the others did.
+        let rows = agent_rows(&out, 3);
+        assert!(rows.iter().all(|r| r.1 == rows[0].1 && r.2 == rows[0].2));
+        let others = agent_rows(&out, 2);
+        assert!(others.iter().any(|r| r.1 != others[0].1), "{scenario:?}");
+        assert_nothing_left(pid);
+    }
+}
+
+#[test]
 fn random_agents_killed_at_random_steps_over_twenty_seeds() {
     let mut detections = Vec::new();
     for seed in 0..20u64 {

@@ -135,8 +135,18 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         None => {}
     }
     let s = outcome.run.summary();
+    // Agents with a heading: how far they face from the centre, and the longest turn.
+    let headings = outcome
+        .run
+        .heading_summary(scenario)
+        .map_or_else(String::new, |h| {
+            format!(
+                ", mean heading error {:.4} rad, longest turn {:.4} rad",
+                h.mean_heading_error_rad, h.max_turn_rad
+            )
+        });
     eprintln!(
-        "{}: {} agents, {} steps, {} collisions, min clearance {:.4} m, mean deviation {:.4} m, {} faults, turn latency p50 {:.0} us p99 {:.0} us, {:.2} s -> {}",
+        "{}: {} agents, {} steps, {} collisions, min clearance {:.4} m, mean deviation {:.4} m{headings}, {} faults, turn latency p50 {:.0} us p99 {:.0} us, {:.2} s -> {}",
         s.scenario,
         s.agents,
         s.steps,

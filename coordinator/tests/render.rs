@@ -184,6 +184,84 @@ fn agents_are_drawn_where_they_are() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A pixel of an agent's edge colour (dark brown), not of its fill or the background.
+fn is_edge(c: [u8; 3]) -> bool {
+    let [r, g, b] = c.map(i32::from);
+    r < 180 && g < 130 && b < 80 && r > b
+}
+
+/// Whether a pixel of the edge colour lies within one pixel of `(x, y)`.
+fn edge_near(img: &support::Rgb, (x, y): (i32, i32)) -> bool {
+    (-1..=1).any(|dx| (-1..=1).any(|dy| is_edge(img.at((x + dx, y + dy)))))
+}
+
+#[test]
+fn an_agent_with_a_heading_shows_where_it_faces() {
+    let dir = scratch("headings");
+    write_tiny_run(&dir);
+    // The same run with unicycles: every agent starts facing +x (the centre's heading);
+    // in the run agent 0 faces +y at every step.
+    let scenario = SCENARIO.replace(
+        "agent_radius_m = 0.4",
+        "agent_radius_m = 0.4\nmax_step_m = 1.5\nkinematics = \"unicycle\"\nmax_turn_rad = 3.0",
+    );
+    std::fs::write(dir.join("scenario.toml"), scenario).expect("write scenario");
+    let old = std::fs::read_to_string(dir.join("trajectory.csv")).expect("read trajectory");
+    let mut lines = old.lines();
+    let mut trajectory = format!("{},heading_rad,heading_error_rad\n", lines.next().unwrap());
+    for line in lines {
+        let h = if line.split(',').nth(1) == Some("0") {
+            std::f64::consts::FRAC_PI_2
+        } else {
+            0.0
+        };
+        trajectory.push_str(&format!("{line},{h},{h}\n"));
+    }
+    std::fs::write(dir.join("trajectory.csv"), trajectory).expect("write trajectory");
+    render_run_dir(&dir).expect("render");
+    let data = RunData::load(&dir).expect("load");
+
+    // Formation: agent 0 at (2, 3), radius 0.4, faces +x: a tick on its +x side, fill on
+    // its -y side at the same distance.
+    let formation = FormationFigure::new(&data);
+    let l = formation.layout();
+    let png = decode_png(&dir.join("plots/formation.png"));
+    assert!(
+        edge_near(&png, px(l, 2.3, 3.0)),
+        "{:?}",
+        png.at(px(l, 2.3, 3.0))
+    );
+    assert!(
+        is_agent(png.at(px(l, 2.0, 2.7))),
+        "{:?}",
+        png.at(px(l, 2.0, 2.7))
+    );
+
+    // Animation, first frame: agent 0 faces +y, so the line is above its centre and
+    // nothing of it below.
+    let m = metrics::per_step(&data);
+    let animation = Animation::new(&data, &m);
+    let l = animation.layout();
+    let frames = decode_gif(&dir.join("plots/animation.gif"));
+    let first = &frames[0];
+    assert!(
+        edge_near(first, px(l, 2.0, 3.3)),
+        "{:?}",
+        first.at(px(l, 2.0, 3.3))
+    );
+    assert!(
+        !edge_near(first, px(l, 2.0, 2.7)),
+        "{:?}",
+        first.at(px(l, 2.0, 2.7))
+    );
+    assert!(
+        is_agent(first.at(px(l, 2.0, 2.7))),
+        "{:?}",
+        first.at(px(l, 2.0, 2.7))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
     let dir = scratch("bad");

@@ -298,6 +298,36 @@ fn docs_outputs_md_names_every_summary_key_and_every_csv_column() {
         .keys()
         .cloned()
         .collect();
+    // Agents with a heading add their figures: a run of unicycles has every key.
+    const HEADING_KEYS: [&str; 3] = [
+        "max_heading_error_rad",
+        "max_turn_rad",
+        "mean_heading_error_rad",
+    ];
+    assert!(HEADING_KEYS.iter().all(|k| summary.get(k).is_none()));
+    let unicycles = shared::scenario::Scenario::load(&repo.join("scenarios/paper-unicycle.toml"))
+        .expect("paper-unicycle.toml");
+    let unicycle_plan = shared::simulate::plan_centre_path(&unicycles).expect("first plan");
+    let unicycle_run =
+        shared::simulate::simulate_along(&unicycles, &unicycle_plan).expect("simulate");
+    let unicycle_dir = scratch("doc-unicycles");
+    coordinator::output::write_run(
+        &unicycle_dir,
+        &unicycles,
+        "paper-unicycle.toml",
+        &unicycle_run,
+        &unicycle_plan,
+        &coordinator::output::Timing::default(),
+    )
+    .expect("write run");
+    let unicycle_summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(unicycle_dir.join("summary.json")).expect("summary"))
+            .expect("summary.json parses");
+    for k in HEADING_KEYS {
+        assert!(unicycle_summary[k].is_number(), "{k}: {unicycle_summary:#}");
+        keys.push(k.to_string());
+    }
+    let _ = std::fs::remove_dir_all(&unicycle_dir);
     let mut documented = documented_names(&doc, "### `summary.json`");
     keys.sort();
     documented.sort();

@@ -181,6 +181,18 @@ pub fn corrupt(
                 status,
             ))
         }
+        Misbehave::OverTurn => {
+            let honest_end_rad = honest.end_heading_rad.unwrap_or(0.0);
+            Some((
+                Move {
+                    end_heading_rad: Some(shared::geometry::wrap_angle_rad(
+                        honest_end_rad + std::f64::consts::PI,
+                    )),
+                    ..honest
+                },
+                status,
+            ))
+        }
         Misbehave::RawLength
         | Misbehave::RawLengthReady
         | Misbehave::Replay
@@ -269,6 +281,31 @@ mod tests {
         };
         let got = corrupt(Misbehave::Fork, honest.clone(), &me, &[], 7);
         assert_eq!(got, Some((honest.clone(), honest.status as u32)));
+    }
+
+    #[test]
+    fn the_over_turn_mode_keeps_the_ground_and_ends_facing_the_other_way() {
+        let me = Point::new(1.0, 2.0);
+        let honest = Move {
+            end_heading_rad: Some(0.25),
+            slot: Point::new(3.0, 4.0),
+            best: Point::new(2.0, 3.0),
+            status: MoveStatus::Deviated,
+            waypoints: vec![me, Point::new(2.0, 3.0)],
+        };
+        let (spun, status) =
+            corrupt(Misbehave::OverTurn, honest.clone(), &me, &[], 7).expect("a move");
+        assert_eq!(status, honest.status as u32);
+        assert_eq!(spun.waypoints, honest.waypoints);
+        let end = spun.end_heading_rad.expect("a heading");
+        assert!((end - (0.25 - std::f64::consts::PI)).abs() < 1e-12, "{end}");
+        // A holonomic agent's honest move has no heading: the rogue one has one.
+        let holonomic = Move {
+            end_heading_rad: None,
+            ..honest
+        };
+        let (spun, _) = corrupt(Misbehave::OverTurn, holonomic, &me, &[], 7).expect("a move");
+        assert!(spun.end_heading_rad.is_some());
     }
 
     #[test]

@@ -102,6 +102,7 @@ pub fn write_run(
     let file = SummaryFile {
         summary: &summary,
         timing,
+        headings: run.heading_summary(scenario),
         last_step: run.steps.last().map_or(0, |s| s.step),
         log_lines_suppressed: wire::logging::suppressed_log_lines(),
     };

@@ -10,7 +10,7 @@
 //! a [`SummaryFile`] and read it back as a [`SummaryRead`].
 
 use serde::{Deserialize, Serialize};
-use shared::record::{FaultKind, Summary};
+use shared::record::{FaultKind, HeadingSummary, Summary};
 
 use crate::stats::Distribution;
 
@@ -40,6 +40,9 @@ pub struct SummaryFile<'a> {
     /// Its timing.
     #[serde(flatten)]
     pub timing: &'a Timing,
+    /// Its heading figures, when its agents have a heading (no keys for a holonomic run).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub headings: Option<HeadingSummary>,
     /// The step the run stopped after (the last one when it completed).
     pub last_step: usize,
     /// Log lines of other crates (Zenoh's, say, under a flood of junk connections) this
@@ -105,6 +108,7 @@ mod tests {
         let file = SummaryFile {
             summary: &summary,
             timing: &Timing::default(),
+            headings: None,
             last_step: 17,
             log_lines_suppressed: 3,
         };

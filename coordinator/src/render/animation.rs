@@ -425,6 +425,12 @@ impl<'a> Animation<'a> {
             } else {
                 p.disk(c, r, Some(fill(body)), Some(line(edge, 1)))?;
             }
+            // An agent with a heading shows where it faces: centre to rim, at least a few
+            // pixels long on a small disk.
+            if let Some(heading_rad) = a.heading_rad {
+                let width = if close_up { 2 } else { 1 };
+                p.heading_tick(c, r.max(p.m(4.0)), heading_rad, 0.0, line(edge, width))?;
+            }
         }
         if let Some(pose) = self.data.centre_at(step.step) {
             p.centre_arrow(pose, 22.0)?;

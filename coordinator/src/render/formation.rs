@@ -111,10 +111,15 @@ impl<'a> FormationFigure<'a> {
         let header = Header {
             title: header::title(format!("{}: formation at the start pose", s.name), s),
             subtitle: Some(format!(
-                "{n} agents around the centre ({}, {}) m, heading {}°; {labels}",
+                "{n} agents around the centre ({}, {}) m, heading {}°; {labels}{}",
                 fmt_m(start.x_m),
                 fmt_m(start.y_m),
                 fmt_m(start.heading_rad.to_degrees()),
+                if s.agents.iter().any(|a| a.kinematics.has_heading()) {
+                    "; a tick to the rim: where the agent faces"
+                } else {
+                    ""
+                },
             )),
             legend,
         };
@@ -182,6 +187,17 @@ impl MapFigure for FormationFigure<'_> {
             )?;
             if !labelled(a.radius_m) {
                 p.marker((pos.x, pos.y), 1.5, scene::fill(solid(palette::BLACK)))?;
+            }
+            // An agent with a heading: where it faces at the start, from beside its
+            // label out to its rim.
+            if a.kinematics.has_heading() {
+                p.heading_tick(
+                    (pos.x, pos.y),
+                    a.radius_m,
+                    start.heading_rad + a.heading_offset_rad,
+                    0.5,
+                    line(solid(palette::AGENT_EDGE), edge + 1),
+                )?;
             }
         }
         p.arrow(

@@ -7,7 +7,7 @@
 //!   obstacles unknown at the start (hatched, with the step they were found at) and every
 //!   plan of the centre under the path it followed (`plans.csv`, `obstacles.csv`);
 //! - `formation.png`/`.svg`: the formation at its start pose, each agent's safety circle
-//!   and its slot (Fig. 7);
+//!   and its slot (Fig. 7), and where an agent with a heading faces (a tick to its rim);
 //! - `deviation.png`/`.svg`: each agent's deviation from its slot over the steps and the
 //!   formation's mean (Fig. 9), faults marked;
 //! - `clearance.png`/`.svg`: the smallest agent-agent and agent-obstacle clearance at
@@ -15,7 +15,8 @@
 //! - `animation.gif`: the whole run (the paper's video; Fig. 8 at every frame), with each
 //!   agent's sensing radius as a faint circle on request ([`RenderOptions`]), each moving
 //!   obstacle where it stands at the frame's step and each unknown obstacle outlined until
-//!   it became known, filled after.
+//!   it became known, filled after; an agent with a heading shows it as a line from its
+//!   centre to its rim.
 //!
 //! Titles name what the run's model adds to the paper's: the top speed, the sensing
 //! radius and parallel turns, when the scenario has them (`scene::model_note`).

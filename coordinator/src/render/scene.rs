@@ -226,6 +226,21 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
         self.polygon(&head, fill(color))
     }
 
+    /// Where a robot of radius `radius_m` at `c` faces: a line along `heading_rad` from
+    /// `inner` times its radius out to its rim (`inner` 0: from its centre).
+    pub fn heading_tick(
+        &self,
+        c: Xy,
+        radius_m: f64,
+        heading_rad: f64,
+        inner: f64,
+        style: ShapeStyle,
+    ) -> anyhow::Result<()> {
+        let (sn, cs) = heading_rad.sin_cos();
+        let at = |f: f64| (c.0 + f * radius_m * cs, c.1 + f * radius_m * sn);
+        self.polyline(&[at(inner), at(1.0)], style)
+    }
+
     /// Text at `at` (metres), if it is inside the view.
     pub fn text(&self, s: &str, at: Xy, style: &TextStyle<'_>) -> anyhow::Result<()> {
         if self.view.contains(at) {

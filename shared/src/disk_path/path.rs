@@ -188,7 +188,32 @@ impl DiskPath {
     /// Segments contribute their end points only. `max_chord_error_m` below `1e-9` m (or
     /// NaN) is treated as `1e-9` m.
     pub fn polyline(&self, max_chord_error_m: f64) -> Vec<Point> {
+        self.polyline_with_chords(max_chord_error_m, f64::INFINITY)
+    }
+
+    /// [`Self::polyline`] with every chord of an arc also at most `max_chord_m` long: the
+    /// polyline a unicycle drives, which may stop only at a vertex where a chord cuts
+    /// into an arc's disk, so short chords lose it little of a step.
+    ///
+    /// `max_chord_m` below `1e-9` m (or NaN) is treated as `1e-9` m; infinite: no limit.
+    ///
+    /// ```
+    /// use shared::disk_path::{DiskPath, PathPiece};
+    /// use shared::geometry::Point;
+    /// let quarter = PathPiece::Arc {
+    ///     centre: Point::origin(),
+    ///     radius_m: 1.0,
+    ///     start_rad: 0.0,
+    ///     sweep_rad: std::f64::consts::FRAC_PI_2,
+    /// };
+    /// let path = DiskPath::new(Point::new(1.0, 0.0), vec![quarter]);
+    /// let points = path.polyline_with_chords(0.1, 0.05);
+    /// assert!(points.windows(2).all(|w| (w[1] - w[0]).norm() <= 0.05 + 1e-12));
+    /// assert!(points.iter().all(|p| (p.coords.norm() - 1.0).abs() < 1e-12), "on the arc");
+    /// ```
+    pub fn polyline_with_chords(&self, max_chord_error_m: f64, max_chord_m: f64) -> Vec<Point> {
         let error_m = max_chord_error_m.max(1e-9);
+        let chord_m = max_chord_m.max(1e-9);
         let mut out = vec![self.start()];
         for piece in &self.pieces {
             match piece {
@@ -203,6 +228,12 @@ impl DiskPath {
                         std::f64::consts::PI
                     } else {
                         (2.0 * (1.0 - error_m / radius_m).acos()).min(std::f64::consts::PI)
+                    };
+                    // A chord spanning `step` is 2 r sin(step / 2) long.
+                    let max_step_rad = if chord_m >= 2.0 * radius_m {
+                        max_step_rad
+                    } else {
+                        max_step_rad.min(2.0 * (0.5 * chord_m / radius_m).asin())
                     };
                     let n = chord_count(sweep_rad.abs(), max_step_rad);
                     for i in 1..=n {

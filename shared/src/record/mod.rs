@@ -2,9 +2,10 @@
 //! the paper reports (deviation, Fig. 9) plus the safety figures (clearance).
 //!
 //! One concept a file: the record itself here ([`Run`], [`Step`], [`AgentStep`]), the
-//! faults and their kinds in `fault.rs`, the figures of a run in `summary.rs`, and in
-//! `recorder.rs` the [`Recorder`], which holds the world state during a run and is shared
-//! by the reference simulation and the coordinator, so both keep their books the same way.
+//! faults and their kinds in `fault.rs`, the figures of a run in `summary.rs` (those of
+//! agents with a heading in `headings.rs`), and in `recorder.rs` the [`Recorder`], which
+//! holds the world state during a run and is shared by the reference simulation and the
+//! coordinator, so both keep their books the same way.
 
 use crate::course::{Course, Replan, Wait};
 use crate::geometry::{Point, Pose, polyline_length_m};
@@ -12,11 +13,13 @@ use crate::scenario::Scenario;
 use crate::vocabulary::{Body, MoveStatus};
 
 mod fault;
+mod headings;
 mod recorder;
 mod replay;
 mod summary;
 
 pub use fault::{Fault, FaultKind, UnknownFaultKind};
+pub use headings::HeadingSummary;
 pub use recorder::Recorder;
 pub use replay::replay_course;
 pub use summary::{ReplanNote, Summary, WaitNote};

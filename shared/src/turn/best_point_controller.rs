@@ -109,6 +109,20 @@ impl BestPointController {
         others: &[Body],
         max_step_m: Option<f64>,
     ) -> Move {
+        self.plan_move_with_chords(centre, me, others, max_step_m, f64::INFINITY)
+    }
+
+    /// [`Self::plan_move_within`] with every chord drawn for an arc of the path at most
+    /// `max_chord_m` long ([`DiskPath::polyline_with_chords`]; infinite: no limit), for a
+    /// unicycle, which can stop inside a chord only where it is clear.
+    pub fn plan_move_with_chords(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        others: &[Body],
+        max_step_m: Option<f64>,
+        max_chord_m: f64,
+    ) -> Move {
         let slot = self.slot_position(centre);
         let grow_m = self.radius_m + PLANNING_MARGIN_M;
         let agents = DiskGrid::new(
@@ -180,7 +194,7 @@ impl BestPointController {
         let under_way = max_step_m.and_then(|s| path.prefix(s));
         let followed = under_way.as_ref().unwrap_or(&path);
         let mut waypoints: Vec<Point> = followed
-            .polyline(0.5 * PLANNING_MARGIN_M)
+            .polyline_with_chords(0.5 * PLANNING_MARGIN_M, max_chord_m)
             .iter()
             .map(to_world)
             .collect();

@@ -36,6 +36,11 @@ pub use look_ahead::{
 /// least half of it away from every true body.
 pub const PLANNING_MARGIN_M: f64 = 1e-3;
 
+/// The longest chord of an arc in a unicycle's polyline, as a share of its top speed: a
+/// step whose time runs out inside a chord that cuts into a disk's margin ends at the
+/// chord's start, so short chords keep such a step from losing more than this share.
+const UNICYCLE_CHORD_SHARE: f64 = 0.25;
+
 /// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
 /// top speed applied: what the reference simulation and the agent processes call.
 #[derive(Clone, Debug)]
@@ -209,7 +214,20 @@ impl TurnController {
         let Some(max_step_m) = self.spec.max_step_m else {
             return self.plan_turn(step, centre, me, others);
         };
-        let mut mv = self.plan_move_within(centre, me, others, None);
+        // The path is cut at the top speed (on an arc, at a free point), further than
+        // the agent can drive this step, and drawn with chords of at most a quarter of it:
+        // where the step's time runs out inside a chord that cuts into a disk's margin,
+        // the agent stops at the chord's start, so each step loses at most one short chord.
+        let mut mv = match &self.controller {
+            Controller::BestPoint(p) => p.plan_move_with_chords(
+                centre,
+                me,
+                &self.sensed_bodies(me, others),
+                Some(max_step_m),
+                UNICYCLE_CHORD_SHARE * max_step_m,
+            ),
+            _ => self.plan_move_within(centre, me, others, None),
+        };
         let limits = UnicycleLimits {
             max_step_m,
             max_turn_rad,

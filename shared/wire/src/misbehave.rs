@@ -4,7 +4,7 @@
 //! agent built with its `misbehave` feature carries them out; the shipping agent refuses
 //! them.
 //!
-//! The first six publish unsafe or nonsensical moves through the normal protocol (the
+//! The first seven publish unsafe or nonsensical moves through the normal protocol (the
 //! safety monitor must refuse them); the others attack the protocol itself, as a
 //! compromised or buggy agent process could.
 
@@ -31,6 +31,11 @@ pub enum Misbehave {
     /// honest move's ground and nothing else, so it is safe but for its length, which
     /// is beyond a top speed whenever the honest move is longer than a ninth of it.
     Overspeed,
+    /// Spin too far: the honest move, ending half a turn from the heading it honestly
+    /// ends at (a holonomic agent: ending with a heading, where none belongs). The ground
+    /// covered is the honest move's; the turning needs more than the step's time whenever
+    /// `max_turn_rad` is under half a turn.
+    OverTurn,
     /// Write the waypoint count of every move raw, beyond the capacity (513, 2^40,
     /// `u64::MAX` in turn).
     RawLength,
@@ -96,13 +101,14 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 24] = [
+    pub const ALL: [Self; 25] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
         Self::Silent,
         Self::Garbage,
         Self::Overspeed,
+        Self::OverTurn,
         Self::RawLength,
         Self::RawLengthReady,
         Self::Replay,
@@ -133,6 +139,7 @@ impl Misbehave {
             Self::Silent => "silent",
             Self::Garbage => "garbage",
             Self::Overspeed => "overspeed",
+            Self::OverTurn => "over-turn",
             Self::RawLength => "raw-length",
             Self::RawLengthReady => "raw-length-ready",
             Self::Replay => "replay",
