@@ -349,9 +349,17 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
     }
 }
 
-/// A length in metres, shortest form up to millimetres (`0.25`, `2`, `1.125`).
+/// A length in metres, shortest form up to millimetres (`0.25`, `2`, `1.125`), with three
+/// significant digits below 0.1 (`0.0066`, `0.055`).
 pub fn fmt_m(v: f64) -> String {
-    let s = format!("{v:.3}");
+    // Millimetres for ordinary lengths; three significant digits below 0.1 (a
+    // GRITSbot's 0.0066 m step), so a small figure is never rounded away.
+    let decimals = if v != 0.0 && v.abs() < 0.1 && v.is_finite() {
+        (2 - v.abs().log10().floor() as i32).clamp(3, 12) as usize
+    } else {
+        3
+    };
+    let s = format!("{v:.decimals$}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" { "0".into() } else { s.into() }
 }
@@ -375,4 +383,21 @@ pub fn anchor_towards(dir_rad: f64) -> Pos {
         VPos::Center
     };
     Pos::new(h, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fmt_m;
+
+    #[test]
+    fn lengths_keep_millimetres_and_small_ones_three_digits() {
+        assert_eq!(fmt_m(0.25), "0.25");
+        assert_eq!(fmt_m(2.0), "2");
+        assert_eq!(fmt_m(1.1254), "1.125");
+        assert_eq!(fmt_m(0.0066), "0.0066");
+        assert_eq!(fmt_m(0.055), "0.055");
+        assert_eq!(fmt_m(0.000_123_4), "0.000123");
+        assert_eq!(fmt_m(-1e-17), "0");
+        assert_eq!(fmt_m(0.0), "0");
+    }
 }
