@@ -74,6 +74,23 @@ pub enum Refusal {
         /// Moving obstacle index, in scenario order.
         obstacle: usize,
     },
+    /// A car's segment stands for an arc tighter than its turning radius.
+    #[error("segment {segment} bends with radius {radius_m} m, tighter than the turning radius")]
+    TooTight {
+        /// Segment index.
+        segment: usize,
+        /// The radius of the arc tangent to the heading through the segment.
+        radius_m: f64,
+    },
+    /// A car that may not reverse has a segment behind its heading.
+    #[error("segment {0} is driven in reverse, which this agent may not")]
+    Reversing(usize),
+    /// A car's move ends facing other than its arcs leave it (it turned in place).
+    #[error("the move ends {off_rad} rad off the heading its arcs leave it at")]
+    EndHeading {
+        /// The difference, radians.
+        off_rad: f64,
+    },
     /// The agent would overlap another agent.
     #[error("segment {segment} overlaps agent {agent}")]
     Agent {
@@ -86,6 +103,13 @@ pub enum Refusal {
 
 /// How far past a whole step a unicycle's turning and driving may reach: rounding only.
 const STEP_SHARE_TOLERANCE: f64 = 1e-9;
+
+/// How much more a car's arc may turn along one segment than its turning radius allows,
+/// radians: the rounding of a short segment's direction only.
+const TURN_TOLERANCE_RAD: f64 = 1e-7;
+
+/// How far a car's end heading may differ from the one its arcs give, radians.
+const END_HEADING_TOLERANCE_RAD: f64 = 1e-6;
 
 /// Segments shorter than this have no direction: driven without turning.
 const DEGENERATE_SEGMENT_M: f64 = 1e-12;
@@ -166,7 +190,9 @@ impl SafetyMonitor {
     /// Check that agent `agent` (radius `radius_m`, standing at `from`) may follow
     /// `waypoints` to `best` while every body of `bodies` (all agents, by index) stands
     /// still. `under_way`: the agent says it stops short of `best` (top speed), so the
-    /// move need not end there.
+    /// move need not end there. `chord_errors_m`: for a car, how far each segment's arc
+    /// bulges from it ([`check_kinematics`]); each segment is checked with the agent's
+    /// radius grown by it (empty: straight segments).
     #[allow(clippy::too_many_arguments)]
     pub fn check(
         &self,
@@ -176,6 +202,7 @@ impl SafetyMonitor {
         best: &Point,
         under_way: bool,
         bodies: &[Body],
+        chord_errors_m: &[f64],
         max_waypoints: usize,
     ) -> Result<(), Refusal> {
         if waypoints.is_empty() || waypoints.len() > max_waypoints {
@@ -196,12 +223,12 @@ impl SafetyMonitor {
             return Err(Refusal::WrongEnd);
         }
         let radius_m = bodies[agent].radius_m;
+        let error_m = |k: usize| chord_errors_m.get(k).copied().unwrap_or(0.0).max(0.0);
+        let largest_error_m = chord_errors_m.iter().copied().fold(0.0, f64::max);
+        let outer_m = radius_m + largest_error_m;
         let inner = Aabb::new(
-            Point::new(radius_m, radius_m),
-            Point::new(
-                self.field.width_m - radius_m,
-                self.field.height_m - radius_m,
-            ),
+            Point::new(outer_m, outer_m),
+            Point::new(self.field.width_m - outer_m, self.field.height_m - outer_m),
         );
         let tol = Vector2::new(SAFETY_TOLERANCE_M, SAFETY_TOLERANCE_M);
         let inner = Aabb::new(inner.mins - tol, inner.maxs + tol);
@@ -219,6 +246,8 @@ impl SafetyMonitor {
         };
         for (segment, [a, b]) in pairs.iter().enumerate() {
             let shape = Segment::new(*a, *b);
+            // A car's arc lies within its chord error of the chord.
+            let radius_m = radius_m + error_m(segment);
             let hits = |centre: &Point, other_radius_m: f64| -> bool {
                 // Overlap deeper than the tolerance <=> the segment meets the ball shrunk
                 // by the tolerance.
@@ -310,23 +339,42 @@ pub fn check_length(waypoints: &[Point], max_step_m: Option<f64>) -> Result<(), 
 /// a unicycle facing `start_heading_rad` reports a finite `end_heading_rad`, and turning
 /// in place at the vertices (the least turning over driving each segment forwards or,
 /// with `reverse`, backwards) plus driving fits one step: turning / `max_turn_rad` +
-/// length / `max_step_m` at most 1.
+/// length / `max_step_m` at most 1. A car's segments each stand for the arc that leaves
+/// tangent to the heading (forwards, or backwards when the segment lies behind it):
+/// each arc's radius is at least `turning_radius_m`, none is reversed unless `reverse`,
+/// their length is within the top speed, and the end heading is the one they leave it
+/// at. On success, each segment's chord error (none but for a car), for [`SafetyMonitor::check`].
 pub fn check_kinematics(
     kinematics: Kinematics,
     start_heading_rad: Option<f64>,
     waypoints: &[Point],
     end_heading_rad: Option<f64>,
     max_step_m: Option<f64>,
-) -> Result<(), Refusal> {
-    let Kinematics::Unicycle {
-        max_turn_rad,
-        reverse,
-    } = kinematics
-    else {
-        return match end_heading_rad {
-            None => Ok(()),
-            Some(_) => Err(Refusal::UnexpectedHeading),
-        };
+) -> Result<Vec<f64>, Refusal> {
+    let (max_turn_rad, reverse) = match kinematics {
+        Kinematics::Unicycle {
+            max_turn_rad,
+            reverse,
+        } => (max_turn_rad, reverse),
+        Kinematics::Car {
+            turning_radius_m,
+            reverse,
+        } => {
+            return check_car(
+                turning_radius_m,
+                reverse,
+                start_heading_rad,
+                waypoints,
+                end_heading_rad,
+                max_step_m,
+            );
+        }
+        Kinematics::Holonomic => {
+            return match end_heading_rad {
+                None => Ok(Vec::new()),
+                Some(_) => Err(Refusal::UnexpectedHeading),
+            };
+        }
     };
     let (Some(start), Some(end)) = (start_heading_rad, end_heading_rad.filter(|h| h.is_finite()))
     else {
@@ -364,7 +412,70 @@ pub fn check_kinematics(
     if share.is_nan() || share > 1.0 + STEP_SHARE_TOLERANCE {
         return Err(Refusal::TooMuchTurning { share });
     }
-    Ok(())
+    Ok(Vec::new())
+}
+
+/// [`check_kinematics`] for a car: read each segment back as the arc tangent to the
+/// heading through it, and check it.
+fn check_car(
+    turning_radius_m: f64,
+    reverse: bool,
+    start_heading_rad: Option<f64>,
+    waypoints: &[Point],
+    end_heading_rad: Option<f64>,
+    max_step_m: Option<f64>,
+) -> Result<Vec<f64>, Refusal> {
+    let (Some(start), Some(end)) = (start_heading_rad, end_heading_rad.filter(|h| h.is_finite()))
+    else {
+        return Err(Refusal::NoHeading);
+    };
+    let mut heading = Vector2::new(start.cos(), start.sin());
+    let mut length_m = 0.0;
+    let mut errors_m = Vec::with_capacity(waypoints.len());
+    for (segment, w) in waypoints.windows(2).enumerate() {
+        let d = w[1] - w[0];
+        let chord_m = d.norm();
+        if chord_m <= DEGENERATE_SEGMENT_M {
+            length_m += chord_m;
+            errors_m.push(0.0);
+            continue;
+        }
+        let backwards = heading.dot(&d) < 0.0;
+        if backwards && !reverse {
+            return Err(Refusal::Reversing(segment));
+        }
+        let way = if backwards { -heading } else { heading };
+        // The chord's angle to the way driven: the arc turns by twice it.
+        let angle_rad = (way.x * d.y - way.y * d.x).atan2(way.dot(&d));
+        let sin = angle_rad.abs().sin();
+        let most_rad = (0.5 * chord_m / turning_radius_m).min(1.0).asin();
+        if angle_rad.abs() > most_rad + TURN_TOLERANCE_RAD {
+            return Err(Refusal::TooTight {
+                segment,
+                radius_m: chord_m / (2.0 * sin),
+            });
+        }
+        length_m += if sin > 0.0 {
+            chord_m * angle_rad.abs() / sin
+        } else {
+            chord_m
+        };
+        errors_m.push(0.5 * chord_m * (0.5 * angle_rad.abs()).tan());
+        heading = nalgebra::Rotation2::new(2.0 * angle_rad) * heading;
+    }
+    let want = Vector2::new(end.cos(), end.sin());
+    let off_rad = (heading.x * want.y - heading.y * want.x)
+        .atan2(heading.dot(&want))
+        .abs();
+    if off_rad.is_nan() || off_rad > END_HEADING_TOLERANCE_RAD {
+        return Err(Refusal::EndHeading { off_rad });
+    }
+    if let Some(max_m) = max_step_m
+        && (length_m.is_nan() || length_m > max_m + SAFETY_TOLERANCE_M)
+    {
+        return Err(Refusal::TooLong { length_m, max_m });
+    }
+    Ok(errors_m)
 }
 
 /// The smallest distance between the polylines `a` and `b` (a single point is a
@@ -414,7 +525,10 @@ mod tests {
     fn headings_are_required_of_unicycles_and_refused_of_holonomic_agents() {
         let path = [Point::new(0.0, 0.0), Point::new(0.5, 0.0)];
         let holonomic = Kinematics::Holonomic;
-        assert_eq!(check_kinematics(holonomic, None, &path, None, None), Ok(()));
+        assert_eq!(
+            check_kinematics(holonomic, None, &path, None, None),
+            Ok(Vec::new())
+        );
         assert_eq!(
             check_kinematics(holonomic, None, &path, Some(0.0), None),
             Err(Refusal::UnexpectedHeading)
@@ -427,7 +541,7 @@ mod tests {
         }
         assert_eq!(
             check_kinematics(UNICYCLE, Some(0.0), &path, Some(0.0), Some(1.0)),
-            Ok(())
+            Ok(Vec::new())
         );
     }
 
@@ -443,7 +557,7 @@ mod tests {
         // Half the turn fits with the drive: 0.5 + 1.0 / 2 = 1.
         assert_eq!(
             check_kinematics(UNICYCLE, Some(0.0), &path, Some(1.0), Some(1.0)),
-            Ok(())
+            Ok(Vec::new())
         );
         // Backwards: a half turn first without reverse, none with it.
         let behind = [Point::new(0.0, 0.0), Point::new(-0.5, 0.0)];
@@ -454,7 +568,7 @@ mod tests {
         };
         assert_eq!(
             check_kinematics(reversing, Some(0.0), &behind, Some(0.0), Some(1.0)),
-            Ok(())
+            Ok(Vec::new())
         );
     }
 
@@ -508,12 +622,12 @@ mod tests {
         let from = Point::new(1.0, 5.0);
         let clear = [from, Point::new(3.0, 3.0)];
         assert_eq!(
-            m.check(0, &from, &clear, &clear[1], false, &bodies(), 8),
+            m.check(0, &from, &clear, &clear[1], false, &bodies(), &[], 8),
             Ok(())
         );
         let through = [from, Point::new(9.0, 5.0)];
         assert!(matches!(
-            m.check(0, &from, &through, &through[1], false, &bodies(), 8),
+            m.check(0, &from, &through, &through[1], false, &bodies(), &[], 8),
             Err(Refusal::Obstacle { obstacle: 0, .. })
         ));
         let around = [
@@ -523,38 +637,41 @@ mod tests {
             Point::new(9.0, 5.0),
         ];
         assert_eq!(
-            m.check(0, &from, &around, &around[3], false, &bodies()[..1], 8),
+            m.check(0, &from, &around, &around[3], false, &bodies()[..1], &[], 8),
             Ok(())
         );
         assert!(matches!(
-            m.check(0, &from, &around, &around[3], false, &bodies(), 8),
+            m.check(0, &from, &around, &around[3], false, &bodies(), &[], 8),
             Err(Refusal::Agent { agent: 1, .. })
         ));
         let nan = [from, Point::new(f64::NAN, 0.0)];
         assert!(matches!(
-            m.check(0, &from, &nan, &nan[1], false, &bodies(), 8),
+            m.check(0, &from, &nan, &nan[1], false, &bodies(), &[], 8),
             Err(Refusal::NotFinite(1))
         ));
         let jump = [Point::new(2.0, 2.0)];
         assert!(matches!(
-            m.check(0, &from, &jump, &jump[0], false, &bodies(), 8),
+            m.check(0, &from, &jump, &jump[0], false, &bodies(), &[], 8),
             Err(Refusal::Teleport(_))
         ));
         let out = [from, Point::new(0.2, 5.0)];
         assert!(matches!(
-            m.check(0, &from, &out, &out[1], false, &bodies(), 8),
+            m.check(0, &from, &out, &out[1], false, &bodies(), &[], 8),
             Err(Refusal::OutsideField(1))
         ));
         assert!(matches!(
-            m.check(0, &from, &clear, &from, false, &bodies(), 8),
+            m.check(0, &from, &clear, &from, false, &bodies(), &[], 8),
             Err(Refusal::WrongEnd)
         ));
         // Under way, a move may stop short of its best point.
-        assert_eq!(m.check(0, &from, &clear, &from, true, &bodies(), 8), Ok(()));
+        assert_eq!(
+            m.check(0, &from, &clear, &from, true, &bodies(), &[], 8),
+            Ok(())
+        );
         // Touching is allowed: exactly the radii sum away.
         let touch = [from, Point::new(3.7, 5.0)];
         assert_eq!(
-            m.check(0, &from, &touch, &touch[1], false, &bodies()[..1], 8),
+            m.check(0, &from, &touch, &touch[1], false, &bodies()[..1], &[], 8),
             Ok(())
         );
     }

@@ -1,7 +1,8 @@
 //! Cost of one unicycle agent's move against the holonomic move, on the same turns: the
 //! turns of every agent at every tenth step of the reference simulation of
 //! `scenarios/paper-unicycle.toml` (the paper's example with unicycles), planned once by
-//! the unicycle's controller and once by the same agent's holonomic controller.
+//! the unicycle's controller and once by the same agent's holonomic controller; and one
+//! car agent's move, on the turns of `scenarios/paper-car.toml`.
 
 use std::hint::black_box;
 
@@ -22,12 +23,10 @@ struct Turn {
     others: Vec<Body>,
 }
 
-fn recorded() -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>) {
-    let file = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../scenarios/paper-unicycle.toml"
-    );
-    let scenario = Scenario::load(std::path::Path::new(file)).expect("paper-unicycle.toml");
+/// The controllers of `scenarios/{name}`, the same agents made holonomic, and the turns.
+fn recorded(name: &str) -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>) {
+    let file = format!("{}/../scenarios/{name}", env!("CARGO_MANIFEST_DIR"));
+    let scenario = Scenario::load(std::path::Path::new(&file)).expect("a shipped scenario");
     let run = simulate(&scenario).expect("simulate");
     let unicycles = agent_controllers(&scenario).expect("controllers");
     let mut holonomic_scenario = scenario.clone();
@@ -47,7 +46,7 @@ fn recorded() -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>) {
                 centre: now.centre,
                 agent,
                 me: bodies[agent].position,
-                heading_rad: before.agents[agent].heading_rad.expect("a unicycle"),
+                heading_rad: before.agents[agent].heading_rad.expect("a heading"),
                 others: bodies
                     .iter()
                     .enumerate()
@@ -61,7 +60,8 @@ fn recorded() -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>) {
 }
 
 fn bench_kinematics(c: &mut Criterion) {
-    let (unicycles, holonomic, turns) = recorded();
+    let (unicycles, holonomic, turns) = recorded("paper-unicycle.toml");
+    let (cars, _, car_turns) = recorded("paper-car.toml");
     let mut group = c.benchmark_group("kinematics/paper");
     let mut i = 0;
     group.bench_function("plan_turn/holonomic", |b| {
@@ -77,6 +77,20 @@ fn bench_kinematics(c: &mut Criterion) {
             let t = &turns[i % turns.len()];
             i += 1;
             black_box(unicycles[t.agent].plan_turn_with_heading(
+                t.step,
+                &t.centre,
+                &t.me,
+                t.heading_rad,
+                &t.others,
+            ))
+        })
+    });
+    let mut i = 0;
+    group.bench_function("plan_turn_with_heading/car", |b| {
+        b.iter(|| {
+            let t = &car_turns[i % car_turns.len()];
+            i += 1;
+            black_box(cars[t.agent].plan_turn_with_heading(
                 t.step,
                 &t.centre,
                 &t.me,

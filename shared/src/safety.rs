@@ -82,6 +82,10 @@ pub enum Violation {
         /// The share of a step the move takes at the least.
         share: f64,
     },
+    /// A car's move is not one it can drive (too tight, reversing where it may not,
+    /// turning in place, or too long along its arcs).
+    #[error("a car cannot drive it: {0}")]
+    NotDrivable(#[from] crate::kinematics::CarMoveError),
     /// The move comes too close to the move of an agent of the same parallel group.
     #[error(
         "the move comes within {distance_m} m of agent {agent}'s move in the same group (radii sum {reach_m} m)"
@@ -126,6 +130,7 @@ pub fn check_move(
         radius_m,
         from,
         waypoints,
+        &[],
         max_waypoints,
     )
 }
@@ -133,6 +138,11 @@ pub fn check_move(
 /// [`check_move`] for body `agent` of `bodies` against every other body of `bodies`
 /// (without copying them out): [`Violation::HitsBody`] numbers the bodies as
 /// [`check_move`] would number `bodies` without `agent`.
+///
+/// `chord_errors_m` holds, for a car's move, how far each segment's arc bulges from it
+/// ([`check_car_move`](crate::kinematics::check_car_move)): the segment is checked with
+/// the agent's radius grown by it, so the whole arc is (empty for straight segments).
+#[allow(clippy::too_many_arguments)]
 pub fn check_move_of(
     field: &Field,
     obstacles: &DiskGrid,
@@ -140,6 +150,7 @@ pub fn check_move_of(
     agent: usize,
     from: &Point,
     waypoints: &[Point],
+    chord_errors_m: &[f64],
     max_waypoints: usize,
 ) -> Result<(), Violation> {
     check_move_skipping(
@@ -150,6 +161,7 @@ pub fn check_move_of(
         bodies[agent].radius_m,
         from,
         waypoints,
+        chord_errors_m,
         max_waypoints,
     )
 }
@@ -164,8 +176,11 @@ fn check_move_skipping(
     radius_m: f64,
     from: &Point,
     waypoints: &[Point],
+    chord_errors_m: &[f64],
     max_waypoints: usize,
 ) -> Result<(), Violation> {
+    // Segment k's chord error (0 past the end); a waypoint takes that of either segment.
+    let error_m = |k: usize| chord_errors_m.get(k).copied().unwrap_or(0.0).max(0.0);
     if waypoints.is_empty() || waypoints.len() > max_waypoints {
         return Err(Violation::BadLength {
             count: waypoints.len(),
@@ -182,7 +197,8 @@ fn check_move_skipping(
         return Err(Violation::Teleport { offset_m });
     }
     for (index, p) in waypoints.iter().enumerate() {
-        let overshoot_m = radius_m - field.signed_inset_m(p);
+        let grown_m = radius_m + error_m(index).max(index.checked_sub(1).map_or(0.0, error_m));
+        let overshoot_m = grown_m - field.signed_inset_m(p);
         if overshoot_m > SAFETY_TOLERANCE_M {
             return Err(Violation::OutsideField { index, overshoot_m });
         }
@@ -195,6 +211,7 @@ fn check_move_skipping(
     };
     for (segment, w) in segments.windows(2).enumerate() {
         let (a, b) = (&w[0], &w[1]);
+        let radius_m = radius_m + error_m(segment);
         let reach = Vector::new(radius_m, radius_m);
         let min = Point::new(a.x.min(b.x), a.y.min(b.y)) - reach;
         let max = Point::new(a.x.max(b.x), a.y.max(b.y)) + reach;

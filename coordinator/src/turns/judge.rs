@@ -27,28 +27,28 @@ pub(super) fn judge_move(
         Some(status) if !status.set_by_agent() => {
             Err(format!("an agent may not report status {}", status.name()))
         }
-        Some(status) => monitor
-            .check(
+        Some(status) => monitor::check_kinematics(
+            recorder.scenario().agents[agent].kinematics,
+            recorder.headings()[agent],
+            &msg.waypoints,
+            msg.end_heading_rad,
+            max_step_m,
+        )
+        .and_then(|chord_errors_m| {
+            monitor.check(
                 agent,
                 &from,
                 &msg.waypoints,
                 &msg.best,
                 status == MoveStatus::UnderWay,
                 recorder.bodies(),
+                &chord_errors_m,
                 MAX_WAYPOINTS,
             )
-            .and_then(|()| monitor::check_length(&msg.waypoints, max_step_m))
-            .and_then(|()| {
-                monitor::check_kinematics(
-                    recorder.scenario().agents[agent].kinematics,
-                    recorder.headings()[agent],
-                    &msg.waypoints,
-                    msg.end_heading_rad,
-                    max_step_m,
-                )
-            })
-            .map(|()| status)
-            .map_err(|r| r.to_string()),
+        })
+        .and_then(|()| monitor::check_length(&msg.waypoints, max_step_m))
+        .map(|()| status)
+        .map_err(|r| r.to_string()),
     };
     match verdict {
         Ok(status) => Some(Move {

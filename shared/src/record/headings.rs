@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use super::Run;
 use crate::geometry::wrap_angle_rad;
-use crate::kinematics::driving_headings;
+use crate::kinematics::{car_piece, driving_headings};
 use crate::scenario::Scenario;
 use crate::vocabulary::Kinematics;
 
@@ -22,7 +22,8 @@ pub struct HeadingSummary {
     /// The most one agent turned in one step, radians: the least total turning that
     /// drives its move from the heading it had to the one it ended with (turns at the
     /// vertices and at the end, each segment driven forward or, where the agent may
-    /// reverse, backward), the turning the monitor checks against `max_turn_rad`.
+    /// reverse, backward), the turning the monitor checks against `max_turn_rad`; for a
+    /// car, the turning along its arcs.
     pub max_turn_rad: f64,
 }
 
@@ -70,13 +71,26 @@ impl Run {
                 .zip(&pair[1].agents)
                 .zip(&scenario.agents)
             {
-                let (Some(from_rad), Some(to_rad), Kinematics::Unicycle { reverse, .. }) =
-                    (before.heading_rad, after.heading_rad, spec.kinematics)
-                else {
+                let (Some(from_rad), Some(to_rad)) = (before.heading_rad, after.heading_rad) else {
                     continue;
                 };
-                let (_, turning_rad) =
-                    driving_headings(from_rad, &after.waypoints, Some(to_rad), reverse);
+                let turning_rad = match spec.kinematics {
+                    Kinematics::Unicycle { reverse, .. } => {
+                        driving_headings(from_rad, &after.waypoints, Some(to_rad), reverse).1
+                    }
+                    // A car turns along its arcs: each chord's arc, read back.
+                    Kinematics::Car { .. } => {
+                        let mut heading_rad = from_rad;
+                        let mut turned_rad = 0.0;
+                        for w in after.waypoints.windows(2) {
+                            let piece = car_piece(heading_rad, &w[0], &w[1]);
+                            heading_rad += piece.turn_rad;
+                            turned_rad += piece.turn_rad.abs();
+                        }
+                        turned_rad
+                    }
+                    Kinematics::Holonomic => continue,
+                };
                 max_turn = max_turn.max(turning_rad);
             }
         }

@@ -7,7 +7,7 @@ use crate::geometry::{
     DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m, wrap_angle_rad,
 };
 use crate::groups::{GroupMove, group_meetings};
-use crate::kinematics::{UnicycleLimits, unicycle_step_share};
+use crate::kinematics::{CarLimits, UnicycleLimits, check_car_move, unicycle_step_share};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
 use crate::vocabulary::{Body, Kinematics, MAX_WAYPOINTS, Move, MoveStatus};
@@ -290,6 +290,26 @@ impl<'a> Recorder<'a> {
     /// speed and its best point.
     fn check_alone(&self, agent: usize, mv: &Move) -> Result<(), Violation> {
         let body = self.bodies[agent];
+        let spec = &self.scenario.agents[agent];
+        // A car's chords stand for arcs: read them back, and grow each by its bulge.
+        let chord_errors_m = match (self.headings[agent], spec.kinematics) {
+            (
+                Some(heading_rad),
+                Kinematics::Car {
+                    turning_radius_m,
+                    reverse,
+                },
+            ) => {
+                let limits = CarLimits {
+                    // Validation gives every car a top speed.
+                    max_step_m: spec.max_step_m.unwrap_or(f64::INFINITY),
+                    turning_radius_m,
+                    reverse,
+                };
+                check_car_move(heading_rad, &mv.waypoints, mv.end_heading_rad, &limits)?
+            }
+            _ => Vec::new(),
+        };
         safety::check_move_of(
             &self.scenario.field,
             &self.obstacles,
@@ -297,6 +317,7 @@ impl<'a> Recorder<'a> {
             agent,
             &body.position,
             &mv.waypoints,
+            &chord_errors_m,
             MAX_WAYPOINTS,
         )?;
         safety::check_move_against_moving(
@@ -305,7 +326,6 @@ impl<'a> Recorder<'a> {
             &body.position,
             &mv.waypoints,
         )?;
-        let spec = &self.scenario.agents[agent];
         if let Some(max_m) = spec.max_step_m {
             let length_m = polyline_length_m(&mv.waypoints);
             if length_m > max_m + SAFETY_TOLERANCE_M {

@@ -149,13 +149,15 @@ impl Scenario {
                         .then(|| a.kinematics.name().to_string()),
                     max_turn_rad: match a.kinematics {
                         Kinematics::Unicycle { max_turn_rad, .. } => Some(max_turn_rad),
-                        Kinematics::Holonomic => None,
+                        Kinematics::Holonomic | Kinematics::Car { .. } => None,
                     },
-                    reverse: match a.kinematics {
-                        Kinematics::Unicycle { reverse, .. } => Some(reverse),
-                        Kinematics::Holonomic => None,
+                    reverse: a.kinematics.has_heading().then(|| a.kinematics.reverse()),
+                    turning_radius_m: match a.kinematics {
+                        Kinematics::Car {
+                            turning_radius_m, ..
+                        } => Some(turning_radius_m),
+                        _ => None,
                     },
-                    turning_radius_m: None,
                     heading_deg: match a.kinematics.has_heading() {
                         true => Some(degrees_for(a.heading_offset_rad).ok_or_else(|| {
                             not_in_degrees(

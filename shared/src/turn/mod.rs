@@ -14,7 +14,7 @@ use std::borrow::Cow;
 
 use crate::cbf::{CbfController, ZcbfLogSumExpController};
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, polyline_prefix};
-use crate::kinematics::{UnicycleLimits, drive_unicycle};
+use crate::kinematics::{CarLimits, UnicycleLimits, drive_unicycle};
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaController;
 use crate::vocabulary::{
@@ -22,10 +22,12 @@ use crate::vocabulary::{
 };
 
 mod best_point_controller;
+mod car;
 mod escape;
 mod look_ahead;
 
 pub use best_point_controller::BestPointController;
+pub use car::GOAL_HEADINGS;
 pub use look_ahead::{
     LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_TURNS, LOOKAHEAD_TRIGGER_TURNS, LOOKAHEAD_TURNS,
     SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
@@ -203,6 +205,13 @@ impl TurnController {
         heading_rad: f64,
         others: &[Body],
     ) -> Move {
+        if let Kinematics::Car {
+            turning_radius_m,
+            reverse,
+        } = self.spec.kinematics
+        {
+            return self.plan_car_turn(centre, me, heading_rad, others, turning_radius_m, reverse);
+        }
         let Kinematics::Unicycle {
             max_turn_rad,
             reverse,
@@ -259,6 +268,79 @@ impl TurnController {
         mv.end_heading_rad = Some(driven.end_heading_rad);
         if !driven.complete {
             mv.status = MoveStatus::UnderWay;
+        }
+        mv
+    }
+
+    /// A car's turn ([`car`]): the best point as for a holonomic agent, then the
+    /// shortest clear drivable path to it, cut at the top speed; standing when none is
+    /// clear.
+    fn plan_car_turn(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        heading_rad: f64,
+        others: &[Body],
+        turning_radius_m: f64,
+        reverse: bool,
+    ) -> Move {
+        let others = &*self.sensed_bodies(me, others);
+        let mut mv = self.plan_move_within(centre, me, others, None);
+        let stand = |mut mv: Move| {
+            mv.best = *me;
+            mv.waypoints = vec![*me];
+            mv.end_heading_rad = Some(heading_rad);
+            if mv.status != MoveStatus::NoFreePoint {
+                mv.status = MoveStatus::Stayed;
+            }
+            mv
+        };
+        // Validation gives a car a top speed.
+        let (Some(max_step_m), Some(&goal)) = (self.spec.max_step_m, mv.waypoints.last()) else {
+            return stand(mv);
+        };
+        if mv.waypoints.len() < 2 {
+            mv.end_heading_rad = Some(heading_rad);
+            return mv;
+        }
+        let goal_headings: Vec<f64> = if self.spec.align_heading {
+            vec![centre.heading_rad]
+        } else {
+            std::iter::once(centre.heading_rad)
+                .chain(
+                    (0..car::GOAL_HEADINGS)
+                        .map(|k| std::f64::consts::TAU * k as f64 / car::GOAL_HEADINGS as f64),
+                )
+                .chain([heading_rad])
+                .collect()
+        };
+        let limits = CarLimits {
+            max_step_m,
+            turning_radius_m,
+            reverse,
+        };
+        let world = car::CarWorld {
+            field: &self.field,
+            obstacles: &self.obstacles,
+            others,
+            reach_m: self.spec.radius_m + PLANNING_MARGIN_M,
+            margin_m: PLANNING_MARGIN_M,
+        };
+        let start = Pose::new(me.x, me.y, heading_rad);
+        let Some(drive) = car::plan_car_drive(&start, &goal, &goal_headings, 1, &limits, &world)
+        else {
+            return stand(mv);
+        };
+        if !drive.complete {
+            mv.status = MoveStatus::UnderWay;
+        }
+        mv.waypoints = drive.waypoints;
+        mv.end_heading_rad = Some(drive.end_heading_rad);
+        if let Some(end) = mv.waypoints.last_mut()
+            && mv.status != MoveStatus::UnderWay
+        {
+            // The path ends at the best point up to rounding: exactly there.
+            *end = mv.best;
         }
         mv
     }

@@ -1,4 +1,5 @@
-//! How an agent can move: in any direction at once, or along a heading it must turn.
+//! How an agent can move: in any direction at once, turning in place, or along curves
+//! no tighter than a turning radius.
 
 /// An agent's kinematic model.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -13,6 +14,14 @@ pub enum Kinematics {
         /// The largest heading change in one step, radians.
         max_turn_rad: f64,
         /// Whether it may drive backwards.
+        reverse: bool,
+    },
+    /// A car-like robot: it cannot turn in place; its path bends no tighter than
+    /// `turning_radius_m` anywhere, driven at most the top speed per step.
+    Car {
+        /// The smallest radius its path may bend with, metres.
+        turning_radius_m: f64,
+        /// Whether it may drive backwards (Reeds-Shepp paths; Dubins without).
         reverse: bool,
     },
 }
@@ -34,6 +43,15 @@ impl Kinematics {
         match self {
             Self::Holonomic => "holonomic",
             Self::Unicycle { .. } => "unicycle",
+            Self::Car { .. } => "car",
+        }
+    }
+
+    /// Whether it may drive backwards (a holonomic agent has no backwards).
+    pub fn reverse(&self) -> bool {
+        match self {
+            Self::Holonomic => false,
+            Self::Unicycle { reverse, .. } | Self::Car { reverse, .. } => *reverse,
         }
     }
 }

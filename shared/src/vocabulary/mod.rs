@@ -9,7 +9,7 @@
 //! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
 //! - [`AgentSpec`]: one agent of a scenario (its slot, radius, top speed and sensing
 //!   radius);
-//! - [`Kinematics`]: how an agent can move (holonomic, or a unicycle with a heading);
+//! - [`Kinematics`]: how an agent can move (holonomic, a unicycle or a car with a heading);
 //! - [`Named`]: the values files and the command line spell by name, read and written
 //!   through one helper;
 //! - [`TurnMode`]: one mover at a time, or parallel groups;

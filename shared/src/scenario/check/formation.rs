@@ -122,12 +122,12 @@ impl Checker<'_> {
                     ));
                 }
             }
-            let kinematics = self.kinematics(raw, i, max_step_m)?;
+            let kinematics = self.kinematics(raw, i, max_step_m, radius_m, field)?;
             let heading_offset_rad = match s.heading_deg {
                 Some(_) if !kinematics.has_heading() => {
                     return Err(self.invalid(
                         format!("{name}.heading_deg"),
-                        "a heading belongs to agents with one (kinematics = \"unicycle\"); this agent is holonomic",
+                        "a heading belongs to agents with one (kinematics = \"unicycle\" or \"car\"); this agent is holonomic",
                     ));
                 }
                 Some(h) => self
@@ -146,6 +146,18 @@ impl Checker<'_> {
             });
         }
         // A formation-wide key of a model no agent has would be silently unused.
+        let any = |model: &str| agents.iter().any(|a| a.kinematics.name() == model);
+        for (key, given, model) in [
+            ("max_turn_rad", raw.max_turn_rad.is_some(), "unicycle"),
+            ("turning_radius_m", raw.turning_radius_m.is_some(), "car"),
+        ] {
+            if given && !any(model) {
+                return Err(self.invalid(
+                    format!("formation.{key}"),
+                    format!("belongs to kinematics = \"{model}\"; no agent here is one"),
+                ));
+            }
+        }
         if !agents.iter().any(|a| a.kinematics.has_heading()) {
             for (key, given) in [
                 ("max_turn_rad", raw.max_turn_rad.is_some()),
@@ -155,7 +167,7 @@ impl Checker<'_> {
                 if given {
                     return Err(self.invalid(
                         format!("formation.{key}"),
-                        "belongs to agents with a heading (kinematics = \"unicycle\"); every agent here is holonomic",
+                        "belongs to agents with a heading (kinematics = \"unicycle\" or \"car\"); every agent here is holonomic",
                     ));
                 }
             }
@@ -182,15 +194,17 @@ impl Checker<'_> {
     }
 
     /// Slot `i`'s kinematic model: its own keys over the formation's, checked; its top
-    /// speed is `max_step_m`.
+    /// speed is `max_step_m`, its radius `radius_m`, in `field`.
     fn kinematics(
         &self,
         raw: &FormationFile,
         i: usize,
         max_step_m: Option<f64>,
+        radius_m: f64,
+        field: &Field,
     ) -> Result<Kinematics, ScenarioError> {
         let slot = &raw.slots[i];
-        let (field, name) = match (&slot.kinematics, &raw.kinematics) {
+        let (kinematics_field, name) = match (&slot.kinematics, &raw.kinematics) {
             (Some(k), _) => (format!("formation.slots[{i}].kinematics"), k.as_str()),
             (None, Some(k)) => ("formation.kinematics".to_string(), k.as_str()),
             (None, None) => ("formation.kinematics".to_string(), "holonomic"),
@@ -207,22 +221,10 @@ impl Checker<'_> {
                         format!("belongs to another kinematic model; agent {i} is holonomic"),
                     ));
                 }
-                if raw.turning_radius_m.is_some() {
-                    return Err(self.invalid(
-                        "formation.turning_radius_m",
-                        "belongs to kinematics = \"car\", which is not supported yet",
-                    ));
-                }
                 Ok(Kinematics::Holonomic)
             }
             "unicycle" => {
-                if let Some(key) = at_slot("turning_radius_m", slot.turning_radius_m.is_some())
-                    .or_else(|| {
-                        raw.turning_radius_m
-                            .is_some()
-                            .then(|| "formation.turning_radius_m".to_string())
-                    })
-                {
+                if let Some(key) = at_slot("turning_radius_m", slot.turning_radius_m.is_some()) {
                     return Err(self.invalid(
                         key,
                         "belongs to kinematics = \"car\"; a unicycle turns in place (max_turn_rad)",
@@ -230,7 +232,7 @@ impl Checker<'_> {
                 }
                 if max_step_m.is_none() {
                     return Err(self.invalid(
-                        field,
+                        kinematics_field,
                         format!(
                             "a unicycle needs a top speed (formation.max_step_m or formation.slots[{i}].max_step_m): its turning and driving share one step"
                         ),
@@ -259,13 +261,58 @@ impl Checker<'_> {
                     reverse: slot.reverse.or(raw.reverse).unwrap_or(false),
                 })
             }
-            "car" => Err(self.invalid(
-                field,
-                "kinematics = \"car\" is not supported yet (holonomic, unicycle)",
-            )),
+            "car" => {
+                if let Some(key) = at_slot("max_turn_rad", slot.max_turn_rad.is_some()) {
+                    return Err(self.invalid(
+                        key,
+                        "belongs to kinematics = \"unicycle\"; a car cannot turn in place (turning_radius_m)",
+                    ));
+                }
+                if max_step_m.is_none() {
+                    return Err(self.invalid(
+                        kinematics_field,
+                        format!(
+                            "a car needs a top speed (formation.max_step_m or formation.slots[{i}].max_step_m): its moves are cut at it"
+                        ),
+                    ));
+                }
+                let (radius_field, turning_radius_m) = match (
+                    slot.turning_radius_m,
+                    raw.turning_radius_m,
+                ) {
+                    (Some(v), _) => (format!("formation.slots[{i}].turning_radius_m"), v),
+                    (None, Some(v)) => ("formation.turning_radius_m".to_string(), v),
+                    (None, None) => {
+                        return Err(self.invalid(
+                                "formation.turning_radius_m",
+                                format!(
+                                    "a car needs turning_radius_m (formation.turning_radius_m or formation.slots[{i}].turning_radius_m): the tightest it bends"
+                                ),
+                            ));
+                    }
+                };
+                let turning_radius_m = self.positive(&radius_field, turning_radius_m, f64::MAX)?;
+                // Its turning circle, with its body, must fit in the field.
+                let across_m = 2.0 * (turning_radius_m + radius_m);
+                let room_m = field.width_m.min(field.height_m);
+                if across_m > room_m {
+                    return Err(self.invalid(
+                        radius_field,
+                        format!(
+                            "a turning circle {} m across (with the body) does not fit in a field {} m across",
+                            num(across_m),
+                            num(room_m)
+                        ),
+                    ));
+                }
+                Ok(Kinematics::Car {
+                    turning_radius_m,
+                    reverse: slot.reverse.or(raw.reverse).unwrap_or(false),
+                })
+            }
             other => Err(self.invalid(
-                field,
-                format!("unknown kinematic model {other:?} (holonomic, unicycle)"),
+                kinematics_field,
+                format!("unknown kinematic model {other:?} (holonomic, unicycle, car)"),
             )),
         }
     }

@@ -1,0 +1,368 @@
+//! A car-like agent's turn: a drivable path to the best point.
+//!
+//! The best point is the holonomic one (Theorem 1: the closest reachable point to the
+//! slot for a disk that moves any way). A car reaches a position with any heading, so it
+//! looks for the shortest Reeds-Shepp path (Dubins without reverse) from its pose to the
+//! best point facing each of [`GOAL_HEADINGS`] world headings, the centre's heading and
+//! its own, shortest first, and takes the first whose swept disk keeps clear of every
+//! inflated body and inside the field (checked exactly along each arc); with
+//! `align_heading`, the centre's heading only. That path, cut at the top speed, is the
+//! move. When none is clear the car stands: unlike the holonomic guarantee, a car is not
+//! promised to reach its best point (a heuristic, documented in `docs/algorithms.md`).
+
+use std::ops::ControlFlow;
+
+use crate::curve::CurvePath;
+use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, distance_point_segment};
+use crate::hybrid_astar::{self, HybridAStarSettings};
+use crate::kinematics::{CarLimits, CarPiece, car_piece, car_waypoints, curve_prefix};
+use crate::vocabulary::Body;
+use crate::{dubins, reeds_shepp};
+
+/// The world headings a car tries to reach its best point with (besides the centre's
+/// and its own): every eighth of a turn.
+pub const GOAL_HEADINGS: usize = 8;
+
+/// The largest chord error of a car's published chords, as a share of the planning
+/// margin: the chords' checks add it, and it stays well inside the margin.
+const CHORD_ERROR_SHARE: f64 = 0.1;
+
+/// An arc turning less than this along one chord is taken as straight, radians.
+const STRAIGHT_TURN_RAD: f64 = 1e-9;
+
+/// The world a car plans in: what it must keep clear of.
+pub(super) struct CarWorld<'a> {
+    /// The field.
+    pub field: &'a Field,
+    /// The static obstacles, true radii.
+    pub obstacles: &'a DiskGrid,
+    /// The other agents it senses.
+    pub others: &'a [Body],
+    /// Its own radius plus the planning margin, metres.
+    pub reach_m: f64,
+    /// The planning margin, metres.
+    pub margin_m: f64,
+}
+
+/// A car's planned drive this step.
+pub(super) struct CarDrive {
+    /// The chords driven this step, from the start.
+    pub waypoints: Vec<Point>,
+    /// The heading where they end.
+    pub end_heading_rad: f64,
+    /// Whether the path reaches the goal this step.
+    pub complete: bool,
+}
+
+/// The car's drive from `start` towards `goal` this step, or `None` when no path to it
+/// (ending with any of `goal_headings`) keeps clear of `world`. The paths to the first
+/// `preferred` headings are tried first, in order; then the others, shortest first.
+pub(super) fn plan_car_drive(
+    start: &Pose,
+    goal: &Point,
+    goal_headings: &[f64],
+    preferred: usize,
+    limits: &CarLimits,
+    world: &CarWorld<'_>,
+) -> Option<CarDrive> {
+    let rho_m = limits.turning_radius_m;
+    let mut candidates: Vec<(bool, CurvePath)> = goal_headings
+        .iter()
+        .enumerate()
+        .map(|(k, h)| {
+            let to = Pose::new(goal.x, goal.y, *h);
+            let path = if limits.reverse {
+                reeds_shepp::shortest_path(start, &to, rho_m)
+            } else {
+                dubins::shortest_path(start, &to, rho_m)
+            };
+            (k >= preferred, path)
+        })
+        .filter(|(_, p)| p.length_m().is_finite())
+        .collect();
+    // The preferred ones first, then the shortest; on a tie the earlier heading.
+    candidates.sort_by(|(a_later, a), (b_later, b)| {
+        a_later
+            .cmp(b_later)
+            .then(a.length_m().total_cmp(&b.length_m()))
+    });
+    let max_error_m = CHORD_ERROR_SHARE * world.margin_m;
+    let searched = || searched_path(start, goal, goal_headings, limits, world);
+    for path in candidates
+        .into_iter()
+        .map(|(_, p)| p)
+        .chain(std::iter::from_fn({
+            let mut once = Some(searched);
+            move || once.take().and_then(|f| f())
+        }))
+    {
+        let (whole, _) = car_waypoints(start, &path, max_error_m);
+        if !chords_clear(start.heading_rad, &whole, world) {
+            continue;
+        }
+        let complete = path.length_m() <= limits.max_step_m;
+        let cut = if complete {
+            path
+        } else {
+            curve_prefix(&path, limits.max_step_m)
+        };
+        let (waypoints, end_heading_rad) = car_waypoints(start, &cut, max_error_m);
+        return Some(CarDrive {
+            waypoints,
+            end_heading_rad,
+            complete,
+        });
+    }
+    None
+}
+
+/// Expansions a car's local search may take before it gives up (and the car stands).
+pub const SEARCH_EXPANSIONS: usize = 20_000;
+
+/// When no direct path is clear: the project's Hybrid A* from `start` to the goal facing
+/// the first of `goal_headings`, among the obstacles and the other agents (each kept at
+/// the car's radius plus the margin), its dense poses joined by the shortest paths
+/// between consecutive ones (so the whole is exact arcs and lines of the turning radius).
+fn searched_path(
+    start: &Pose,
+    goal: &Point,
+    goal_headings: &[f64],
+    limits: &CarLimits,
+    world: &CarWorld<'_>,
+) -> Option<CurvePath> {
+    let heading_rad = *goal_headings.first()?;
+    let mut disks: Vec<Disk> = world.obstacles.disks().to_vec();
+    disks.extend(
+        world
+            .others
+            .iter()
+            .map(|b| Disk::new(b.position.x, b.position.y, b.radius_m)),
+    );
+    let mut settings =
+        HybridAStarSettings::new(limits.turning_radius_m, world.reach_m, limits.reverse);
+    settings.max_expansions = SEARCH_EXPANSIONS;
+    let to = Pose::new(goal.x, goal.y, heading_rad);
+    let poses = hybrid_astar::plan(world.field, &disks, start, &to, &settings).ok()?;
+    let mut segments = Vec::new();
+    for w in poses.windows(2) {
+        let piece = if limits.reverse {
+            reeds_shepp::shortest_path(&w[0], &w[1], limits.turning_radius_m)
+        } else {
+            dubins::shortest_path(&w[0], &w[1], limits.turning_radius_m)
+        };
+        // Consecutive poses of the search lie on one arc or line, a short way apart:
+        // a joining path much longer than their distance (a loop) means they do not.
+        let apart_m = (w[1].position() - w[0].position()).norm();
+        let length_m = piece.length_m();
+        if length_m.is_nan() || length_m > 2.0 * apart_m + 1e-9 {
+            return None;
+        }
+        segments.extend(piece.segments);
+    }
+    Some(CurvePath {
+        segments,
+        turning_radius_m: limits.turning_radius_m,
+    })
+}
+
+/// Whether the arcs that the chords `points` stand for, driven from `heading_rad`,
+/// keep `world.reach_m` from every body and the field's edges: exactly, along each arc.
+fn chords_clear(heading_rad: f64, points: &[Point], world: &CarWorld<'_>) -> bool {
+    let Some(start) = points.first() else {
+        return true;
+    };
+    // A car that starts nearer a body (or an edge) than the reach, as it may after the
+    // formation closed in round it, must only not come nearer than it starts.
+    let need_m =
+        |centre: &Point, radius_m: f64| (radius_m + world.reach_m).min((start - centre).norm());
+    let edge_m = world.reach_m.min(world.field.signed_inset_m(start));
+    let mut heading_rad = heading_rad;
+    points.windows(2).all(|w| {
+        let (a, b) = (&w[0], &w[1]);
+        let piece = car_piece(heading_rad, a, b);
+        let arc = Arc::of(heading_rad, a, b, &piece);
+        heading_rad += piece.turn_rad;
+        if arc.least_inset_m(world.field) < edge_m {
+            return false;
+        }
+        let grow = nalgebra::Vector2::repeat(world.reach_m + piece.chord_error_m);
+        let min = Point::new(a.x.min(b.x), a.y.min(b.y)) - grow;
+        let max = Point::new(a.x.max(b.x), a.y.max(b.y)) + grow;
+        let hit = world.obstacles.visit_box(&min, &max, |_, o| {
+            if arc.distance_m(&o.centre) < need_m(&o.centre, o.radius_m) {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        hit.is_continue()
+            && world
+                .others
+                .iter()
+                .all(|o| arc.distance_m(&o.position) >= need_m(&o.position, o.radius_m))
+    })
+}
+
+/// One chord's arc (less than a half turn), or the chord itself when straight.
+enum Arc {
+    /// A straight chord.
+    Straight(Point, Point),
+    /// An arc round `centre` of `radius_m` from `from` to `to`.
+    Round {
+        centre: Point,
+        radius_m: f64,
+        from: Point,
+        to: Point,
+    },
+}
+
+impl Arc {
+    /// The arc from `a`, tangent to `heading_rad`, to `b` that `piece` reads; a chord
+    /// whose arc turns less than [`STRAIGHT_TURN_RAD`] is taken as straight (its bulge
+    /// is below a nanometre a metre, and its centre too far out to compute with).
+    fn of(heading_rad: f64, a: &Point, b: &Point, piece: &CarPiece) -> Self {
+        if piece.turn_rad.is_nan() || piece.turn_rad.abs() < STRAIGHT_TURN_RAD {
+            return Self::Straight(*a, *b);
+        }
+        let way = if piece.reverse { -1.0 } else { 1.0 };
+        let m = nalgebra::Vector2::new(heading_rad.cos(), heading_rad.sin()) * way;
+        // Left of the way driven for a counter-clockwise turn of the motion, else right.
+        let side = nalgebra::Vector2::new(-m.y, m.x) * piece.turn_rad.signum();
+        Self::Round {
+            centre: a + side * piece.radius_m,
+            radius_m: piece.radius_m,
+            from: *a,
+            to: *b,
+        }
+    }
+
+    /// Whether the direction `d` from the centre lies within the arc's sweep.
+    fn sweeps(centre: &Point, from: &Point, to: &Point, d: &nalgebra::Vector2<f64>) -> bool {
+        let (u, v) = (from - centre, to - centre);
+        let cross = |p: &nalgebra::Vector2<f64>, q: &nalgebra::Vector2<f64>| p.x * q.y - p.y * q.x;
+        let turn = cross(&u, &v);
+        cross(&u, d) * turn >= 0.0 && cross(d, &v) * turn >= 0.0 && u.dot(d) + v.dot(d) > 0.0
+    }
+
+    /// The distance from `q` to the arc, metres.
+    fn distance_m(&self, q: &Point) -> f64 {
+        match self {
+            Self::Straight(a, b) => distance_point_segment(q, a, b),
+            Self::Round {
+                centre,
+                radius_m,
+                from,
+                to,
+            } => {
+                let d = q - centre;
+                if Self::sweeps(centre, from, to, &d) {
+                    (d.norm() - radius_m).abs()
+                } else {
+                    (q - from).norm().min((q - to).norm())
+                }
+            }
+        }
+    }
+
+    /// The least inset of the arc's points in `field` (negative outside).
+    fn least_inset_m(&self, field: &Field) -> f64 {
+        let (a, b) = match self {
+            Self::Straight(a, b) | Self::Round { from: a, to: b, .. } => (a, b),
+        };
+        let mut least_m = field.signed_inset_m(a).min(field.signed_inset_m(b));
+        if let Self::Round {
+            centre,
+            radius_m,
+            from,
+            to,
+        } = self
+        {
+            // The arc's point farthest towards each edge, where it lies within the sweep.
+            for d in [(-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0)] {
+                let d = nalgebra::Vector2::new(d.0, d.1);
+                if Self::sweeps(centre, from, to, &d) {
+                    least_m = least_m.min(field.signed_inset_m(&(centre + d * *radius_m)));
+                }
+            }
+        }
+        least_m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points along the arc a chord stands for, closely spaced (the test's oracle).
+    fn dense(heading_rad: f64, a: &Point, b: &Point) -> Vec<Point> {
+        let piece = car_piece(heading_rad, a, b);
+        let path = CurvePath {
+            segments: vec![crate::curve::Segment {
+                steer: if piece.turn_rad.abs() < 1e-15 {
+                    crate::curve::Steer::Straight
+                } else if (piece.turn_rad > 0.0) != piece.reverse {
+                    crate::curve::Steer::Left
+                } else {
+                    crate::curve::Steer::Right
+                },
+                length_m: if piece.reverse {
+                    -piece.length_m
+                } else {
+                    piece.length_m
+                },
+            }],
+            turning_radius_m: if piece.radius_m.is_finite() {
+                piece.radius_m
+            } else {
+                1.0
+            },
+        };
+        let start = Pose::new(a.x, a.y, heading_rad);
+        let end = path.end_pose(&start).position();
+        assert!(
+            (end - b).norm() < 1e-9,
+            "the oracle arc ends at the chord's end"
+        );
+        path.sample(&start, 1e-4)
+            .iter()
+            .map(|p| p.position())
+            .collect()
+    }
+
+    #[test]
+    fn the_distance_to_an_arc_is_that_of_its_nearest_point() {
+        let field = Field::new(10.0, 10.0);
+        for (h, a, b) in [
+            (0.0, Point::new(5.0, 5.0), Point::new(5.7, 5.3)),
+            (0.7, Point::new(5.0, 5.0), Point::new(5.2, 5.5)),
+            (0.0, Point::new(5.0, 5.0), Point::new(4.3, 5.3)),
+            (2.0, Point::new(5.0, 5.0), Point::new(5.4, 4.2)),
+            (-2.5, Point::new(5.0, 5.0), Point::new(4.9, 4.6)),
+        ] {
+            let piece = car_piece(h, &a, &b);
+            let arc = Arc::of(h, &a, &b, &piece);
+            let points = dense(h, &a, &b);
+            for k in 0..60 {
+                let t = k as f64 * 0.37;
+                let q = Point::new(
+                    5.0 + 0.9 * t.cos() * (1.0 + 0.1 * k as f64 % 3.0),
+                    5.0 + 0.9 * t.sin(),
+                );
+                let want = points
+                    .iter()
+                    .map(|p| (p - q).norm())
+                    .fold(f64::INFINITY, f64::min);
+                let got = arc.distance_m(&q);
+                assert!(
+                    (got - want).abs() < 1e-4,
+                    "h {h} a {a} b {b} q {q}: {got} vs {want}"
+                );
+            }
+            let want = points
+                .iter()
+                .map(|p| field.signed_inset_m(p))
+                .fold(f64::INFINITY, f64::min);
+            assert!((arc.least_inset_m(&field) - want).abs() < 1e-6);
+        }
+    }
+}
