@@ -599,6 +599,42 @@ mod tests {
                 proptest::prop_assert!((got - share).abs() < 1e-9);
             }
         }
+
+        /// On random polylines from a random heading, the monitor's car check (its own
+        /// arithmetic) and the library's agree: both take the move or both refuse it,
+        /// and where they take it they give the same chord errors.
+        #[test]
+        fn the_car_check_agrees_with_the_kinematics_module(
+            start in -3.2f64..3.2,
+            end_off in proptest::prop_oneof![proptest::strategy::Just(0.0), -0.1f64..0.1],
+            rho_m in 0.1f64..2.0,
+            reverse in proptest::bool::ANY,
+            xs in proptest::collection::vec((-0.3f64..0.3, -0.3f64..0.3), 0..4),
+        ) {
+            let mut path = vec![Point::origin()];
+            path.extend(xs.iter().map(|&(x, y)| Point::new(x, y)));
+            // The end heading the chords give, give or take `end_off`.
+            let mut heading = start;
+            for w in path.windows(2) {
+                heading += shared::kinematics::car_piece(heading, &w[0], &w[1]).turn_rad;
+            }
+            let end = heading + end_off;
+            let limits = shared::kinematics::CarLimits {
+                max_step_m: 1.5,
+                turning_radius_m: rho_m,
+                reverse,
+            };
+            let library = shared::kinematics::check_car_move(start, &path, Some(end), &limits);
+            let kinematics = Kinematics::Car { turning_radius_m: rho_m, reverse };
+            let monitor = check_kinematics(kinematics, Some(start), &path, Some(end), Some(1.5));
+            proptest::prop_assert_eq!(library.is_ok(), monitor.is_ok(), "{:?} {:?}", library, monitor);
+            if let (Ok(a), Ok(b)) = (library, monitor) {
+                proptest::prop_assert_eq!(a.len(), b.len());
+                for (x, y) in a.iter().zip(&b) {
+                    proptest::prop_assert!((x - y).abs() < 1e-12);
+                }
+            }
+        }
     }
 
     #[test]

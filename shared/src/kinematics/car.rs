@@ -15,6 +15,11 @@
 use crate::curve::{CurvePath, Segment, Steer};
 use crate::geometry::{Point, Pose, wrap_angle_rad};
 
+/// Segments shorter than this are left out when a path is drawn: a chord of a few
+/// nanometres has no direction to speak of (its ends are known to about 1e-15 m), and
+/// leaving the segment out moves the rest of the path by no more than its length.
+pub const MIN_SEGMENT_M: f64 = 1e-7;
+
 /// Chords shorter than this carry no direction: they are read as standing still.
 const DEGENERATE_CHORD_M: f64 = 1e-12;
 
@@ -25,6 +30,9 @@ pub const CAR_CHORD_TURN_RAD: f64 = std::f64::consts::FRAC_PI_4;
 /// How much more a chord's arc may turn than its turning radius allows, radians: the
 /// rounding of a short chord's direction (a chord of 0.1 mm is known to about 1e-11 m).
 pub const CAR_TURN_TOLERANCE_RAD: f64 = 1e-7;
+
+/// How much longer than the top speed a move's arcs may be, metres: rounding only.
+const LENGTH_TOLERANCE_M: f64 = 1e-9;
 
 /// How far a move's end heading may differ from the heading its chords give, radians.
 pub const CAR_HEADING_TOLERANCE_RAD: f64 = 1e-6;
@@ -206,7 +214,7 @@ pub fn check_car_move(
     if off_rad.is_nan() || off_rad > CAR_HEADING_TOLERANCE_RAD {
         return Err(CarMoveError::EndHeading { off_rad });
     }
-    if length_m > limits.max_step_m + crate::safety::SAFETY_TOLERANCE_M {
+    if length_m > limits.max_step_m + LENGTH_TOLERANCE_M {
         return Err(CarMoveError::TooLong {
             length_m,
             max_m: limits.max_step_m,
@@ -253,7 +261,8 @@ pub fn curve_prefix(path: &CurvePath, max_length_m: f64) -> CurvePath {
 
 /// `path` followed from `start` as chords: one per straight segment, and along each arc
 /// as many equal chords as keep each one's turning within [`CAR_CHORD_TURN_RAD`] and its
-/// chord error within `max_chord_error_m`; and the heading at the end.
+/// chord error within `max_chord_error_m`, segments shorter than [`MIN_SEGMENT_M`] left
+/// out; and the heading at the end (of the path so drawn).
 ///
 /// ```
 /// use shared::curve::{CurvePath, Segment, Steer};
@@ -276,7 +285,11 @@ pub fn car_waypoints(start: &Pose, path: &CurvePath, max_chord_error_m: f64) -> 
     let per_chord_rad = CAR_CHORD_TURN_RAD.min(by_error_rad).max(1e-6);
     let mut points = vec![start.position()];
     let mut pose = *start;
-    for s in &path.segments {
+    for s in path
+        .segments
+        .iter()
+        .filter(|s| s.length_m.abs() >= MIN_SEGMENT_M)
+    {
         let pieces = match s.steer {
             Steer::Straight => 1,
             Steer::Left | Steer::Right => {

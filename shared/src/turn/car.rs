@@ -31,6 +31,7 @@ const CHORD_ERROR_SHARE: f64 = 0.1;
 const STRAIGHT_TURN_RAD: f64 = 1e-9;
 
 /// The world a car plans in: what it must keep clear of.
+#[derive(Clone, Copy)]
 pub(super) struct CarWorld<'a> {
     /// The field.
     pub field: &'a Field,
@@ -86,50 +87,89 @@ pub(super) fn plan_car_drive(
             .cmp(b_later)
             .then(a.length_m().total_cmp(&b.length_m()))
     });
-    let max_error_m = CHORD_ERROR_SHARE * world.margin_m;
-    let searched = || searched_path(start, goal, goal_headings, limits, world);
-    for path in candidates
-        .into_iter()
-        .map(|(_, p)| p)
-        .chain(std::iter::from_fn({
-            let mut once = Some(searched);
-            move || once.take().and_then(|f| f())
-        }))
-    {
-        let (whole, _) = car_waypoints(start, &path, max_error_m);
-        if !chords_clear(start.heading_rad, &whole, world) {
-            continue;
-        }
-        let complete = path.length_m() <= limits.max_step_m;
-        let cut = if complete {
-            path
+    let shortest = |to: &Pose| {
+        if limits.reverse {
+            reeds_shepp::shortest_path(start, to, rho_m)
         } else {
-            curve_prefix(&path, limits.max_step_m)
-        };
-        let (waypoints, end_heading_rad) = car_waypoints(start, &cut, max_error_m);
-        return Some(CarDrive {
-            waypoints,
-            end_heading_rad,
-            complete,
-        });
+            dubins::shortest_path(start, to, rho_m)
+        }
+    };
+    if let Some(drive) = candidates
+        .into_iter()
+        .find_map(|(_, path)| drive_along(start, path, true, limits, world))
+    {
+        return Some(drive);
     }
-    None
+    // None is clear: follow the search's way, by the shortest path to one of its poses
+    // four, two or one steps ahead (the farthest that is clear).
+    let (poses, reach_m) = searched_path(start, goal, goal_headings, limits, world)?;
+    let world = CarWorld { reach_m, ..*world };
+    let mut along_m = vec![0.0];
+    for w in poses.windows(2) {
+        let last = along_m.last().copied().unwrap_or(0.0);
+        along_m.push(last + (w[1].position() - w[0].position()).norm());
+    }
+    [4.0, 2.0, 1.0].iter().find_map(|steps| {
+        let k = along_m
+            .iter()
+            .position(|s| *s >= steps * limits.max_step_m)
+            .unwrap_or(poses.len() - 1);
+        let path = shortest(&poses[k]);
+        path.length_m()
+            .is_finite()
+            .then_some(())
+            .and_then(|()| drive_along(start, path, k + 1 == poses.len(), limits, &world))
+    })
 }
+
+/// The drive this step along `path` from `start`, if its swept disk keeps clear of
+/// `world` all along; `to_goal`: the path ends at the goal.
+fn drive_along(
+    start: &Pose,
+    path: CurvePath,
+    to_goal: bool,
+    limits: &CarLimits,
+    world: &CarWorld<'_>,
+) -> Option<CarDrive> {
+    let max_error_m = CHORD_ERROR_SHARE * world.margin_m;
+    let (whole, _) = car_waypoints(start, &path, max_error_m);
+    if !chords_clear(start.heading_rad, &whole, world) {
+        return None;
+    }
+    let complete = to_goal && path.length_m() <= limits.max_step_m;
+    let cut = if path.length_m() <= limits.max_step_m {
+        path
+    } else {
+        curve_prefix(&path, limits.max_step_m)
+    };
+    let (waypoints, end_heading_rad) = car_waypoints(start, &cut, max_error_m);
+    Some(CarDrive {
+        waypoints,
+        end_heading_rad,
+        complete,
+    })
+}
+
+/// How much nearer than its start's clearance a car's searched path may keep: the
+/// search must find its start free.
+const START_SLACK_M: f64 = 1e-6;
 
 /// Expansions a car's local search may take before it gives up (and the car stands).
 pub const SEARCH_EXPANSIONS: usize = 20_000;
 
 /// When no direct path is clear: the project's Hybrid A* from `start` to the goal facing
-/// the first of `goal_headings`, among the obstacles and the other agents (each kept at
-/// the car's radius plus the margin), its dense poses joined by the shortest paths
-/// between consecutive ones (so the whole is exact arcs and lines of the turning radius).
+/// the first of `goal_headings`, among the obstacles and the other agents: its dense
+/// poses, with the reach it keeps from every body and
+/// edge: the car's radius plus the margin, or less where the car starts nearer than
+/// that (as it may, once the others closed in), but never less than its radius plus
+/// a fifth of the margin.
 fn searched_path(
     start: &Pose,
     goal: &Point,
     goal_headings: &[f64],
     limits: &CarLimits,
     world: &CarWorld<'_>,
-) -> Option<CurvePath> {
+) -> Option<(Vec<Pose>, f64)> {
     let heading_rad = *goal_headings.first()?;
     let mut disks: Vec<Disk> = world.obstacles.disks().to_vec();
     disks.extend(
@@ -138,31 +178,20 @@ fn searched_path(
             .iter()
             .map(|b| Disk::new(b.position.x, b.position.y, b.radius_m)),
     );
-    let mut settings =
-        HybridAStarSettings::new(limits.turning_radius_m, world.reach_m, limits.reverse);
+    let start_clearance_m = disks
+        .iter()
+        .map(|d| (start.position() - d.centre).norm() - d.radius_m)
+        .fold(world.field.signed_inset_m(&start.position()), f64::min);
+    let reach_m = world
+        .reach_m
+        .min(start_clearance_m - START_SLACK_M)
+        // Above its radius by twice the chords' largest bulge, which the checks add.
+        .max(world.reach_m - (1.0 - 2.0 * CHORD_ERROR_SHARE) * world.margin_m);
+    let mut settings = HybridAStarSettings::new(limits.turning_radius_m, reach_m, limits.reverse);
     settings.max_expansions = SEARCH_EXPANSIONS;
     let to = Pose::new(goal.x, goal.y, heading_rad);
     let poses = hybrid_astar::plan(world.field, &disks, start, &to, &settings).ok()?;
-    let mut segments = Vec::new();
-    for w in poses.windows(2) {
-        let piece = if limits.reverse {
-            reeds_shepp::shortest_path(&w[0], &w[1], limits.turning_radius_m)
-        } else {
-            dubins::shortest_path(&w[0], &w[1], limits.turning_radius_m)
-        };
-        // Consecutive poses of the search lie on one arc or line, a short way apart:
-        // a joining path much longer than their distance (a loop) means they do not.
-        let apart_m = (w[1].position() - w[0].position()).norm();
-        let length_m = piece.length_m();
-        if length_m.is_nan() || length_m > 2.0 * apart_m + 1e-9 {
-            return None;
-        }
-        segments.extend(piece.segments);
-    }
-    Some(CurvePath {
-        segments,
-        turning_radius_m: limits.turning_radius_m,
-    })
+    (poses.len() >= 2).then_some((poses, reach_m))
 }
 
 /// Whether the arcs that the chords `points` stand for, driven from `heading_rad`,

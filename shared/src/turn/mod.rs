@@ -336,11 +336,13 @@ impl TurnController {
         }
         mv.waypoints = drive.waypoints;
         mv.end_heading_rad = Some(drive.end_heading_rad);
-        if let Some(end) = mv.waypoints.last_mut()
+        if let Some(end) = mv.waypoints.last()
             && mv.status != MoveStatus::UnderWay
         {
-            // The path ends at the best point up to rounding: exactly there.
-            *end = mv.best;
+            // The path ends at the best point up to the rounding of its word (about
+            // 1e-9 m): the best point is where it ends (moving the end instead would bend
+            // its last, perhaps short, chord).
+            mv.best = *end;
         }
         mv
     }

@@ -1,0 +1,68 @@
+//! Properties of a car agent's moves: the chords drawn along any Reeds-Shepp or Dubins
+//! path, whole or cut at a top speed, are accepted by the car check (each chord's arc
+//! no tighter than the turning radius, reversed only on a Reeds-Shepp path, no longer
+//! than the cut, ending at the path's heading), and every chord's error stays within
+//! the one asked for; the same chords are refused for a wider turning radius (when the
+//! path turns), for a car that may not reverse (when the path reverses), and with an
+//! end heading turned in place.
+
+use std::f64::consts::PI;
+
+use proptest::prelude::*;
+use shared::geometry::Pose;
+use shared::kinematics::{CarLimits, CarMoveError, car_waypoints, check_car_move, curve_prefix};
+use shared::{dubins, reeds_shepp};
+
+fn pose() -> impl Strategy<Value = Pose> {
+    (-4.0..4.0, -4.0..4.0, -PI..PI).prop_map(|(x, y, h)| Pose::new(x, y, h))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    #[test]
+    fn the_chords_of_a_curvature_bounded_path_pass_the_car_check(
+        from in pose(),
+        to in pose(),
+        rho_m in 0.2..2.0f64,
+        reverse in any::<bool>(),
+        cut_share in 0.05..1.2f64,
+    ) {
+        let path = if reverse {
+            reeds_shepp::shortest_path(&from, &to, rho_m)
+        } else {
+            dubins::shortest_path(&from, &to, rho_m)
+        };
+        let max_step_m = (cut_share * path.length_m()).max(1e-3);
+        let cut = curve_prefix(&path, max_step_m);
+        let max_error_m = 1e-4;
+        let (points, end_rad) = car_waypoints(&from, &cut, max_error_m);
+        let limits = CarLimits { max_step_m, turning_radius_m: rho_m, reverse };
+        let errors = check_car_move(from.heading_rad, &points, Some(end_rad), &limits)
+            .map_err(|e| TestCaseError::fail(format!("{e}")))?;
+        prop_assert!(errors.iter().all(|e| *e <= max_error_m * (1.0 + 1e-9)));
+        // The end is the cut path's end.
+        let end = cut.end_pose(&from);
+        prop_assert!((points.last().unwrap() - end.position()).norm() < 1e-6, "segments under 1e-7 m are left out");
+
+        // Turned in place at the end: refused.
+        let turned = check_car_move(from.heading_rad, &points, Some(end_rad + 0.01), &limits);
+        prop_assert!(matches!(turned, Err(CarMoveError::EndHeading { .. })), "{:?}", turned);
+        // Tighter than a wider car can: refused, where the cut turns at all.
+        let turns = cut
+            .segments
+            .iter()
+            .any(|s| s.steer != shared::curve::Steer::Straight && s.length_m.abs() > 1e-3);
+        if turns {
+            let wider = CarLimits { turning_radius_m: rho_m * 1.01, ..limits };
+            let tight = check_car_move(from.heading_rad, &points, Some(end_rad), &wider);
+            prop_assert!(matches!(tight, Err(CarMoveError::TooTight { .. })), "{:?}", tight);
+        }
+        // Reversing, for a car that may not: refused.
+        if cut.segments.iter().any(|s| s.length_m < -1e-6) {
+            let forwards = CarLimits { reverse: false, ..limits };
+            let back = check_car_move(from.heading_rad, &points, Some(end_rad), &forwards);
+            prop_assert!(matches!(back, Err(CarMoveError::Reverse { .. })), "{:?}", back);
+        }
+    }
+}
