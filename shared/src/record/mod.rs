@@ -45,7 +45,7 @@ pub struct AgentStep {
     /// The polyline it followed this step (its position alone when it did not move).
     pub waypoints: Vec<Point>,
     /// Where it faces, radians in `(-pi, pi]`, for an agent with a heading
-    /// ([`Kinematics::Unicycle`](crate::vocabulary::Kinematics)); `None` for a holonomic
+    /// (a unicycle or a car, [`Kinematics`](crate::vocabulary::Kinematics)); `None` for a holonomic
     /// one.
     pub heading_rad: Option<f64>,
 }

@@ -3,12 +3,15 @@
 //! The best point is the holonomic one (Theorem 1: the closest reachable point to the
 //! slot for a disk that moves any way). A car reaches a position with any heading, so it
 //! looks for the shortest Reeds-Shepp path (Dubins without reverse) from its pose to the
-//! best point facing each of [`GOAL_HEADINGS`] world headings, the centre's heading and
-//! its own, shortest first, and takes the first whose swept disk keeps clear of every
-//! inflated body and inside the field (checked exactly along each arc); with
-//! `align_heading`, the centre's heading only. That path, cut at the top speed, is the
-//! move. When none is clear the car stands: unlike the holonomic guarantee, a car is not
-//! promised to reach its best point (a heuristic, documented in `docs/algorithms.md`).
+//! best point facing the centre's heading first (the way its slot moves), then facing
+//! each of [`GOAL_HEADINGS`] world headings or its own, shortest first, and takes the
+//! first whose swept disk keeps clear of every inflated body and inside the field
+//! (checked exactly along each arc); with `align_heading`, the centre's heading only.
+//! When none is clear, the project's Hybrid A* searches a way among the obstacles and
+//! the other agents, and the car takes the shortest clear path to the search's pose
+//! four, two or one steps ahead. That path, cut at the top speed, is the move; without
+//! one the car stands. Unlike the holonomic guarantee, a car is not promised to reach
+//! its best point (a heuristic: `docs/method.md`, reachability by kinematic model).
 
 use std::ops::ControlFlow;
 

@@ -195,8 +195,10 @@ impl TurnController {
     /// in place sweeps nothing new, so the path's safety holds for it), then follows it by
     /// turning in place and driving straight, as far as one step's time allows
     /// ([`drive_unicycle`]); it ends facing the centre's heading when the scenario asks
-    /// for it (`align_heading`). A move cut short is [`MoveStatus::UnderWay`]. The move
-    /// carries the heading it ends at. A holonomic agent ignores `heading_rad`.
+    /// for it (`align_heading`). A car agent drives the shortest clear Dubins or
+    /// Reeds-Shepp path to the holonomic best point, cut at the top speed, and stands
+    /// when it finds none (`car.rs`). A move cut short is [`MoveStatus::UnderWay`]. The
+    /// move carries the heading it ends at. A holonomic agent ignores `heading_rad`.
     pub fn plan_turn_with_heading(
         &self,
         step: usize,

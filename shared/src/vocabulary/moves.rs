@@ -89,7 +89,7 @@ pub struct Move {
     /// or short of it when under way (a single point when the agent stays).
     pub waypoints: Vec<Point>,
     /// The agent's heading where the move ends, radians, for an agent with a heading
-    /// ([`Kinematics::Unicycle`](crate::vocabulary::Kinematics)); `None` for a holonomic
+    /// (a unicycle or a car, [`Kinematics`](crate::vocabulary::Kinematics)); `None` for a holonomic
     /// agent.
     pub end_heading_rad: Option<f64>,
 }
