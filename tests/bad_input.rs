@@ -416,18 +416,6 @@ fn coordinator_run_refuses_every_corpus_file_before_creating_anything() {
 }
 
 #[test]
-fn agents_with_a_heading_are_refused_by_compare_whose_baselines_are_holonomic() {
-    // Valid for `run` and `simulate`, which move them; not for the baselines.
-    let case = Case {
-        path: support::repo_root().join("scenarios/paper-unicycle.toml"),
-        expect: "formation.kinematics".into(),
-    };
-    Scenario::load(&case.path).expect("a valid scenario");
-    let problems = command_problems("compare", &case);
-    assert_no_problems("coordinator compare on unicycles", 1, &problems);
-}
-
-#[test]
 fn a_missing_file_and_a_directory_are_refused_as_unreadable() {
     let dir = tempfile::tempdir().expect("temporary folder");
     let folder = dir.path().join("a-folder.toml");

@@ -282,3 +282,46 @@ fn compare_refuses_a_folder_holding_something_unless_forced() {
         .collect();
     assert_eq!(left, ["cmp"], "no temporary folder left");
 }
+
+/// Agents with a heading: every controller's move is driven through the agent's
+/// kinematics (a unicycle turns in place and drives, a car drives arcs), so the baselines
+/// run on the same robots; the monitor keeps every one of them safe.
+#[test]
+fn compare_runs_the_baselines_on_cars_through_their_kinematics() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cmp");
+    let scenario = support::repo_root().join("scenarios/paper-car.toml");
+    let output = Command::new(support::coordinator_bin())
+        .args(["compare", "--controllers", "best-point,orca", "--out"])
+        .arg(&out)
+        .arg(&scenario)
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        .output()
+        .expect("coordinator compare");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
+    let headers = reader.headers().expect("headers").clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
+    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
+    assert_eq!(rows.len(), 2, "two controllers");
+    for r in &rows {
+        assert_eq!(&r[col("collisions")], "0");
+        assert_eq!(&r[col("completed")], "true");
+        // A car moves no farther than its top speed along its arcs, so its chords too.
+        assert!(r[col("max_move_m")].parse::<f64>().expect("max move") <= 0.5 + 1e-9);
+    }
+    // Each run's trajectory carries the headings.
+    let trajectory = std::fs::read_to_string(out.join("paper-car-orca").join("trajectory.csv"))
+        .expect("trajectory.csv of the ORCA run");
+    assert!(
+        trajectory
+            .lines()
+            .next()
+            .expect("header")
+            .contains("heading_rad")
+    );
+}

@@ -14,7 +14,7 @@ use crate::cli::CompareArgs;
 use crate::error::CliError;
 use crate::output;
 use crate::turns::{RunOptions, run_scenario};
-use crate::validate::{Loaded, load_and_plan};
+use crate::validate::load_and_plan;
 
 /// One row of the comparison table.
 #[derive(Clone, Debug, Serialize)]
@@ -175,25 +175,6 @@ fn run_folder_name(
     name
 }
 
-/// Refuse a scenario with agents that have a heading: the baselines `compare` runs
-/// (RVO2, the CBF-QP filter) move holonomic disks, so the comparison would not be like
-/// for like.
-fn refuse_headings(loaded: &Loaded) -> Result<(), CliError> {
-    match loaded
-        .scenario
-        .agents
-        .iter()
-        .position(|a| a.kinematics.has_heading())
-    {
-        Some(i) => Err(CliError::Usage(format!(
-            "{}: formation.kinematics: agent {i} is a {}: `coordinator compare` runs holonomic baselines only; run it with `coordinator run` or `simulate`",
-            loaded.source,
-            loaded.scenario.agents[i].kinematics.name()
-        ))),
-        None => Ok(()),
-    }
-}
-
 /// Carry out `compare`: every scenario is validated and the output folder checked before any
 /// agent starts. One line per run on stderr, then the table; each run's files (its
 /// `summary.json` with the refused moves in `faults`, its resolved `scenario.toml`, ...)
@@ -213,9 +194,6 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
             .map(|f| load_and_plan(Some(f)))
             .collect::<Result<Vec<_>, _>>()?
     };
-    for l in &loaded {
-        refuse_headings(l)?;
-    }
     // Each mode once, in the order given.
     let mut modes: Vec<TurnMode> = Vec::new();
     for &m in &args.turns {
