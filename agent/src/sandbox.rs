@@ -39,6 +39,8 @@ pub struct Sandbox {
 pub struct SandboxedAgent {
     child: Child,
     cgroup: Option<CgroupDirs>,
+    /// The thread passing its stderr on (and saying at the end how much it dropped).
+    stderr_relay: Option<std::thread::JoinHandle<()>>,
 }
 
 impl SandboxedAgent {
@@ -68,6 +70,17 @@ impl Drop for SandboxedAgent {
             Some(_) => ORPHANS_TIMEOUT,
             None => std::time::Duration::ZERO,
         });
+        // Let the stderr relay drain what the agent wrote and report what it dropped
+        // before this process goes; not for ever (a child it left may hold the pipe).
+        if let Some(relay) = self.stderr_relay.take() {
+            let until = std::time::Instant::now() + ORPHANS_TIMEOUT;
+            while !relay.is_finished() && std::time::Instant::now() < until {
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+            if relay.is_finished() {
+                let _ = relay.join();
+            }
+        }
     }
 }
 
@@ -163,16 +176,17 @@ pub fn spawn_sandboxed(
     let mut child = command
         .spawn()
         .with_context(|| format!("starting the sandboxed agent as user {uid}"))?;
-    if let Some(stderr) = child.stderr.take() {
+    let stderr_relay = child.stderr.take().map(|stderr| {
         let pid = child.id();
-        std::thread::spawn(move || pass_on_bounded(stderr, pid, MAX_AGENT_LOG_BYTES));
-    }
+        std::thread::spawn(move || pass_on_bounded(stderr, pid, MAX_AGENT_LOG_BYTES))
+    });
     drop(socket);
     drop(procs);
     drop(exe_file);
     Ok(SandboxedAgent {
         child,
         cgroup: sandbox.cgroup.clone(),
+        stderr_relay,
     })
 }
 
