@@ -235,6 +235,30 @@ fn unicycle_agent_processes_match_the_reference_headings_and_all() {
     );
 }
 
+/// The barrier baseline on the Robotarium's robots over real processes: each agent
+/// steers the point ahead of it and drives and turns at once (its move is an arc, drawn
+/// as chords); the run equals the reference to the bit, with no move refused.
+#[test]
+fn the_barrier_baseline_on_unicycle_processes_matches_the_reference() {
+    let file = support::repo_root().join("scenarios/robotarium-unicycle.toml");
+    let scenario = Scenario::load(&file)
+        .expect("robotarium-unicycle.toml")
+        .with_controller(shared::vocabulary::ControllerKind::Cbf);
+    let run = run_and_compare(&scenario);
+    assert!(run.faults.is_empty(), "{:?}", run.faults);
+    let arcs = run
+        .steps
+        .windows(2)
+        .flat_map(|w| w[0].agents.iter().zip(&w[1].agents))
+        .filter(|(before, after)| {
+            after.waypoints.len() >= 2
+                && after.heading_rad != before.heading_rad
+                && after.position != before.position
+        })
+        .count();
+    assert!(arcs > 0, "some moves drive and turn at once");
+}
+
 /// A changing world with limited sensing: each agent process is sent only the agents
 /// it senses and plans around only the moving obstacles it senses, its escapes too; the
 /// run still equals the reference to the bit.

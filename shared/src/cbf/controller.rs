@@ -57,8 +57,19 @@ impl CbfController {
     /// the four field edges, then every sensed obstacle, then every sensed agent of
     /// `others` (half responsibility).
     pub fn constraints(&self, me: &Point, others: &[Body]) -> Vec<HalfPlane> {
+        self.constraints_for_disk(me, self.radius_m, others)
+    }
+
+    /// [`Self::constraints`] for a disk of `radius_m` at `me` (the projected point of a
+    /// unicycle agent stands for a disk larger than the agent: `projection.rs`).
+    pub(super) fn constraints_for_disk(
+        &self,
+        me: &Point,
+        radius_m: f64,
+        others: &[Body],
+    ) -> Vec<HalfPlane> {
         let gamma = self.settings.gamma_per_s;
-        let inset_m = self.radius_m + CBF_MARGIN_M;
+        let inset_m = radius_m + CBF_MARGIN_M;
         let mut rows = vec![
             HalfPlane::new(Vector::new(-1.0, 0.0), gamma * (me.x - inset_m)),
             HalfPlane::new(
@@ -71,11 +82,11 @@ impl CbfController {
                 gamma * (self.field.height_m - inset_m - me.y),
             ),
         ];
-        for (centre, radius_m, is_agent) in
+        for (centre, body_radius_m, is_agent) in
             sensed(&self.obstacles, others, me, self.settings.sensing_radius_m)
         {
             let away = me - centre;
-            let reach_m = self.radius_m + radius_m + CBF_MARGIN_M;
+            let reach_m = radius_m + body_radius_m + CBF_MARGIN_M;
             let distance_m = away.norm();
             // (d - R)(d + R) keeps its precision near the boundary, unlike d^2 - R^2.
             let h = (distance_m - reach_m) * (distance_m + reach_m);

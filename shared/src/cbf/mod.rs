@@ -41,6 +41,12 @@
 //! lies straight behind an obstacle slows down in front of it and stops (see
 //! [`is_deadlocked`]); off the axis it slides around the obstacle.
 //!
+//! # Differential-drive agents (`projection.rs`)
+//!
+//! For a unicycle agent the same barrier acts on a point a projection distance ahead of
+//! the robot, whose velocity maps to a forward speed and a turn rate at once (the
+//! Robotarium's way: [`CbfController::plan_unicycle_move`]).
+//!
 //! # The failed barrier ([`ZcbfLogSumExpController`])
 //!
 //! The paper used a single barrier `h_i = -max_j (r_i + r_j - ||x_i - s_j||)` with the
@@ -49,10 +55,12 @@
 
 mod controller;
 mod logsumexp;
+mod projection;
 mod qp;
 
 pub use controller::CbfController;
 pub use logsumexp::ZcbfLogSumExpController;
+pub use projection::{ARC_CHORD_TURN_RAD, unicycle_arc};
 pub use qp::{HalfPlane, QpError, solve_qp_2d};
 
 use std::ops::ControlFlow;

@@ -29,3 +29,126 @@ fn parallel_rows_and_single_point_sets() {
     ];
     assert_eq!(solve_qp_2d(&u, &empty), Err(QpError::Infeasible));
 }
+
+mod unicycle {
+    use super::*;
+    use crate::formation::Slot;
+    use crate::geometry::{Disk, Field, Pose};
+    use crate::kinematics::{UnicycleLimits, unicycle_step_share};
+    use crate::vocabulary::AgentSpec;
+
+    /// A GRITSbot-like agent (radius 0.055 m) whose slot is the centre itself, so the
+    /// slot is wherever the centre pose puts it.
+    fn controller(obstacles: &[Disk]) -> CbfController {
+        let spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.055);
+        CbfController::new(
+            Field::new(3.2, 2.0),
+            obstacles,
+            &spec,
+            CbfSettings::default(),
+        )
+        .expect("settings")
+    }
+
+    const LIMITS: UnicycleLimits = UnicycleLimits {
+        max_step_m: 0.0066,
+        max_turn_rad: 0.1188,
+        reverse: false,
+    };
+
+    #[test]
+    fn the_arc_lies_on_its_circle_and_ends_turned_by_its_turn() {
+        let from = Point::new(1.0, 2.0);
+        let (h, d, a) = (0.4_f64, 0.9, -1.3);
+        let arc = unicycle_arc(&from, h, d, a);
+        // Round the centre a radius d / a to the left of the heading (right for a < 0).
+        let radius_m = d / a;
+        let centre = from + Vector::new(-h.sin(), h.cos()) * radius_m;
+        assert_eq!(
+            arc.len(),
+            1 + (a.abs() / ARC_CHORD_TURN_RAD).ceil() as usize
+        );
+        for p in &arc {
+            assert!(((p - centre).norm() - radius_m.abs()).abs() < 1e-12, "{p}");
+        }
+        // The last chord's direction is the end heading less half a chord's turn.
+        let k = arc.len();
+        let last = arc[k - 1] - arc[k - 2];
+        let chord_turn = a / (k - 1) as f64;
+        let want = h + a - 0.5 * chord_turn;
+        assert!((last.y.atan2(last.x) - want).abs() < 1e-9);
+        // Straight, and standing still.
+        let straight = unicycle_arc(&from, h, 0.5, 0.0);
+        assert_eq!(straight.len(), 2);
+        assert!((straight[1] - (from + 0.5 * Vector::new(h.cos(), h.sin()))).norm() < 1e-15);
+        assert_eq!(unicycle_arc(&from, h, 0.0, 1.0), vec![from]);
+    }
+
+    #[test]
+    fn a_robot_with_its_slot_ahead_to_the_left_drives_and_turns_in_the_same_step() {
+        let c = controller(&[]);
+        let me = Point::new(1.0, 1.0);
+        // The slot is ahead and to the left; the robot faces +x.
+        let centre = Pose::new(1.2, 1.4, 0.0);
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS);
+        let end_rad = mv.end_heading_rad.expect("a heading");
+        let driven_m = crate::geometry::polyline_length_m(&mv.waypoints);
+        assert!(driven_m > 1e-4, "it drives: {driven_m}");
+        assert!(end_rad > 1e-3, "it turns towards the slot: {end_rad}");
+        let share = unicycle_step_share(0.0, &mv.waypoints, end_rad, &LIMITS);
+        assert!(share <= 1.0 + 1e-9, "within one step: {share}");
+        assert!(share > 0.99, "at the top of its limits: {share}");
+        assert!(mv.waypoints.windows(2).all(|w| (w[1] - w[0]).x > 0.0));
+    }
+
+    #[test]
+    fn a_robot_with_its_slot_behind_turns_in_place_or_backs_up_if_it_may() {
+        let c = controller(&[]);
+        let me = Point::new(1.0, 1.0);
+        let centre = Pose::new(0.8, 1.1, 0.0);
+        // Forwards only: it turns in place, towards the slot (left).
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS);
+        assert_eq!(mv.waypoints, vec![me]);
+        assert!(mv.end_heading_rad.expect("a heading") > 0.1);
+        // With reverse it backs towards the slot while it turns.
+        let limits = UnicycleLimits {
+            reverse: true,
+            ..LIMITS
+        };
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &limits);
+        let end = mv.waypoints.last().expect("a point");
+        assert!(end.x < me.x - 1e-4, "{end}");
+        let end_rad = mv.end_heading_rad.expect("a heading");
+        let share = unicycle_step_share(0.0, &mv.waypoints, end_rad, &limits);
+        assert!(share <= 1.0 + 1e-9, "within one step: {share}");
+        // The point ahead of it (what the barrier steers) comes nearer its nominal goal,
+        // the slot's offset from the centre carried to it: it swings left.
+        assert!(end_rad > 0.0, "{end_rad}");
+        let ahead = |p: &Point, h: f64| p + 0.055 * Vector::new(h.cos(), h.sin());
+        let goal = Point::new(0.8, 1.1) + 0.055 * Vector::new(1.0, 0.0);
+        assert!((ahead(end, end_rad) - goal).norm() < (ahead(&me, 0.0) - goal).norm());
+    }
+
+    #[test]
+    fn the_barrier_holds_the_projected_disk_off_an_obstacle_ahead() {
+        // An obstacle right ahead, the slot beyond it: the robot must not drive on.
+        let post = Disk::new(1.3, 1.0, 0.1);
+        let c = controller(&[post]);
+        let mut me = Point::new(1.0, 1.0);
+        let mut heading_rad = 0.0;
+        let centre = Pose::new(1.8, 1.0, 0.0);
+        // The projected disk (radius + projection = 0.11 m round the point 0.055 m ahead)
+        // is kept off the post for a thousand steps, and so is the robot.
+        for _ in 0..1000 {
+            let mv = c.plan_unicycle_move(&centre, &me, heading_rad, &[], &LIMITS);
+            for p in &mv.waypoints {
+                let clearance_m = (p - post.centre).norm() - post.radius_m - 0.055;
+                assert!(clearance_m > 0.0, "{p}: {clearance_m}");
+            }
+            me = mv.best;
+            heading_rad = mv.end_heading_rad.expect("a heading");
+        }
+        let ahead = me + 0.055 * Vector::new(heading_rad.cos(), heading_rad.sin());
+        assert!((ahead - post.centre).norm() >= post.radius_m + 0.11 - 1e-6);
+    }
+}

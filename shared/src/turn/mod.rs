@@ -195,7 +195,8 @@ impl TurnController {
     /// in place sweeps nothing new, so the path's safety holds for it), then follows it by
     /// turning in place and driving straight, as far as one step's time allows
     /// ([`drive_unicycle`]); it ends facing the centre's heading when the scenario asks
-    /// for it (`align_heading`). A car agent drives the shortest clear Dubins or
+    /// for it (`align_heading`); with the barrier controller it drives and turns at once
+    /// ([`CbfController::plan_unicycle_move`]). A car agent drives the shortest clear Dubins or
     /// Reeds-Shepp path to the holonomic best point, cut at the top speed, and stands
     /// when it finds none (`car.rs`). A move cut short is [`MoveStatus::UnderWay`]. The
     /// move carries the heading it ends at. A holonomic agent ignores `heading_rad`.
@@ -225,6 +226,17 @@ impl TurnController {
         let Some(max_step_m) = self.spec.max_step_m else {
             return self.plan_turn(step, centre, me, others);
         };
+        let limits = UnicycleLimits {
+            max_step_m,
+            max_turn_rad,
+            reverse,
+        };
+        // The barrier controller drives a unicycle the Robotarium's way: speed and turn
+        // rate at once, from the barrier on a point ahead of it.
+        if let Controller::Cbf(p) = &self.controller {
+            let others = &*self.sensed_bodies(me, others);
+            return p.plan_unicycle_move(centre, me, heading_rad, others, &limits);
+        }
         // The path is cut at the top speed (on an arc, at a free point), further than
         // the agent can drive this step, and drawn with chords of at most a quarter of it:
         // where the step's time runs out inside a chord that cuts into a disk's margin,
@@ -238,11 +250,6 @@ impl TurnController {
                 UNICYCLE_CHORD_SHARE * max_step_m,
             ),
             _ => self.plan_move_within(centre, me, others, None),
-        };
-        let limits = UnicycleLimits {
-            max_step_m,
-            max_turn_rad,
-            reverse,
         };
         let align = self.spec.align_heading.then_some(centre.heading_rad);
         let driven = drive_unicycle(heading_rad, &mv.waypoints, align, &limits);
