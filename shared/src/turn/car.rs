@@ -69,19 +69,11 @@ pub(super) fn plan_car_drive(
     limits: &CarLimits,
     world: &CarWorld<'_>,
 ) -> Option<CarDrive> {
-    let rho_m = limits.turning_radius_m;
+    let shortest = |to: &Pose| shortest_car_path(start, to, limits);
     let mut candidates: Vec<(bool, CurvePath)> = goal_headings
         .iter()
         .enumerate()
-        .map(|(k, h)| {
-            let to = Pose::new(goal.x, goal.y, *h);
-            let path = if limits.reverse {
-                reeds_shepp::shortest_path(start, &to, rho_m)
-            } else {
-                dubins::shortest_path(start, &to, rho_m)
-            };
-            (k >= preferred, path)
-        })
+        .map(|(k, h)| (k >= preferred, shortest(&Pose::new(goal.x, goal.y, *h))))
         .filter(|(_, p)| p.length_m().is_finite())
         .collect();
     // The preferred ones first, then the shortest; on a tie the earlier heading.
@@ -90,13 +82,6 @@ pub(super) fn plan_car_drive(
             .cmp(b_later)
             .then(a.length_m().total_cmp(&b.length_m()))
     });
-    let shortest = |to: &Pose| {
-        if limits.reverse {
-            reeds_shepp::shortest_path(start, to, rho_m)
-        } else {
-            dubins::shortest_path(start, to, rho_m)
-        }
-    };
     if let Some(drive) = candidates
         .into_iter()
         .find_map(|(_, path)| drive_along(start, path, true, limits, world))
@@ -123,6 +108,16 @@ pub(super) fn plan_car_drive(
             .then_some(())
             .and_then(|()| drive_along(start, path, k + 1 == poses.len(), limits, &world))
     })
+}
+
+/// The shortest path a car within `limits` drives from `from` to `to`: Reeds-Shepp when
+/// it may reverse, Dubins when not.
+fn shortest_car_path(from: &Pose, to: &Pose, limits: &CarLimits) -> CurvePath {
+    if limits.reverse {
+        reeds_shepp::shortest_path(from, to, limits.turning_radius_m)
+    } else {
+        dubins::shortest_path(from, to, limits.turning_radius_m)
+    }
 }
 
 /// The drive this step along `path` from `start`, if its swept disk keeps clear of
