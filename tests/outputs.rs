@@ -192,3 +192,88 @@ fn unrelated_folders_and_files_are_never_replaced_without_force() {
     assert!(mine.join("summary.json").is_file());
     assert_eq!(names(work.path()), ["empty", "file", "mine"]);
 }
+
+/// With agents that have a heading, `moves.csv` gives each waypoint's primitive: driving
+/// the arc it names from the waypoint before lands on the waypoint, a car never turns in
+/// place nor bends tighter than its turning radius, and a unicycle drives straight.
+#[test]
+fn moves_csv_gives_the_exact_arc_that_reaches_each_waypoint() {
+    use shared::vocabulary::Kinematics;
+    for name in [
+        "paper-car.toml",
+        "narrow-reversing-car.toml",
+        "paper-unicycle.toml",
+    ] {
+        let file = support::repo_root().join("scenarios").join(name);
+        let scenario = Scenario::load(&file).expect("shipped scenario");
+        let run = shared::simulate::simulate(&scenario).expect("simulate");
+        let bytes = coordinator::output::moves_csv(&scenario, &run).expect("moves.csv");
+        let mut reader = csv::Reader::from_reader(bytes.as_slice());
+        let headers = reader.headers().expect("headers").clone();
+        let col = |n: &str| headers.iter().position(|h| h == n).expect(n);
+        let (x, y, h, d, k) = (
+            col("x"),
+            col("y"),
+            col("heading_rad"),
+            col("drive_m"),
+            col("curvature_per_m"),
+        );
+        let num = |r: &csv::StringRecord, c: usize| r[c].parse::<f64>().expect("a number");
+        let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
+        let (mut arcs, mut curved, mut reversed) = (0, 0, 0);
+        for w in rows.windows(2) {
+            let (before, row) = (&w[0], &w[1]);
+            if &row[col("index")] == "0" {
+                assert!(
+                    row[d].is_empty() && row[k].is_empty(),
+                    "{name}: no arc at index 0"
+                );
+                continue;
+            }
+            let agent: usize = row[col("agent")].parse().expect("agent");
+            let (drive_m, curvature_per_m) = (num(row, d), num(row, k));
+            let length_m = drive_m.abs();
+            let start_rad = num(row, h) - curvature_per_m * length_m;
+            let half_rad = 0.5 * curvature_per_m * length_m;
+            let sinc = if half_rad.abs() < 1e-8 {
+                1.0
+            } else {
+                half_rad.sin() / half_rad
+            };
+            let along = drive_m * sinc;
+            let (ex, ey) = (
+                num(before, x) + along * (start_rad + half_rad).cos(),
+                num(before, y) + along * (start_rad + half_rad).sin(),
+            );
+            let off_m = (ex - num(row, x)).hypot(ey - num(row, y));
+            assert!(
+                off_m < 1e-9,
+                "{name}: the arc lands {off_m} m off its waypoint"
+            );
+            let turned_in_place = shared::geometry::wrap_angle_rad(start_rad - num(before, h));
+            match scenario.agents[agent].kinematics {
+                Kinematics::Car {
+                    turning_radius_m, ..
+                } => {
+                    assert!(
+                        turned_in_place.abs() < 1e-6,
+                        "{name}: a car turned in place"
+                    );
+                    assert!(curvature_per_m.abs() <= (1.0 + 1e-6) / turning_radius_m);
+                }
+                Kinematics::Unicycle { .. } => assert_eq!(curvature_per_m, 0.0),
+                Kinematics::Holonomic => unreachable!("every agent has a heading"),
+            }
+            arcs += 1;
+            curved += usize::from(curvature_per_m != 0.0);
+            reversed += usize::from(drive_m < 0.0);
+        }
+        assert!(arcs > 100, "{name}: {arcs} arcs");
+        if name.contains("car") {
+            assert!(curved > 0, "{name}: the cars drive arcs");
+        }
+        if name == "narrow-reversing-car.toml" || name == "paper-car.toml" {
+            assert!(reversed > 0, "{name}: the cars reverse");
+        }
+    }
+}

@@ -101,7 +101,7 @@ fn the_log_is_read_by_the_mcap_reader_and_every_foxglove_message_fits_its_schema
     assert!(run.completed);
     for (name, bytes) in [
         ("trajectory.csv", trajectory_csv(&run).expect("csv")),
-        ("moves.csv", moves_csv(&run).expect("csv")),
+        ("moves.csv", moves_csv(&scenario, &run).expect("csv")),
     ] {
         assert!(
             std::fs::read(out.join(name)).expect(name) == bytes,
@@ -266,7 +266,7 @@ fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_ki
             let want = first_steps(&reference, last);
             for (file_name, bytes) in [
                 ("trajectory.csv", trajectory_csv(&want).expect("csv")),
-                ("moves.csv", moves_csv(&want).expect("csv")),
+                ("moves.csv", moves_csv(&scenario, &want).expect("csv")),
             ] {
                 assert!(
                     std::fs::read(out.join(file_name)).expect(file_name) == bytes,

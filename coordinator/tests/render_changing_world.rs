@@ -360,6 +360,11 @@ fn docs_outputs_md_names_every_summary_key_and_every_csv_column() {
             );
             header.extend(["heading_rad".to_string(), "heading_error_rad".to_string()]);
         }
+        if file == "moves.csv" {
+            // So do the primitives' columns.
+            assert!(!header.iter().any(|c| c == "heading_rad"), "{header:?}");
+            header.extend(["heading_rad", "drive_m", "curvature_per_m"].map(String::from));
+        }
         assert_eq!(
             documented_names(&doc, &format!("### `{file}`")),
             header,

@@ -111,7 +111,7 @@ pub fn write_run(
     let files = [
         ("scenario.toml", scenario_text.as_bytes().to_vec()),
         ("trajectory.csv", trajectory_csv(run)?),
-        ("moves.csv", moves_csv(run)?),
+        ("moves.csv", moves_csv(scenario, run)?),
         ("path.csv", path_csv(&run.centre_path)?),
         ("plans.csv", plans_csv(first_plan, run)?),
         ("obstacles.csv", obstacles_csv(scenario, run)?),

@@ -89,6 +89,18 @@ pub struct MoveRow {
     /// The waypoint, in metres.
     #[serde(with = "display_f64")]
     pub y: f64,
+    /// The heading on reaching the waypoint, radians: a column only in runs with agents
+    /// that have a heading (`None`), empty for a holonomic agent among them (`Some(None)`).
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "cell_f64")]
+    pub heading_rad: Option<Option<f64>>,
+    /// The length of the arc driven from the waypoint before to this one, metres,
+    /// negative when driven in reverse: a column as `heading_rad`, empty at index 0.
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "cell_f64")]
+    pub drive_m: Option<Option<f64>>,
+    /// That arc's curvature, 1/m, positive when the heading turns counter-clockwise as
+    /// the agent drives it (0: straight): a column as `heading_rad`, empty at index 0.
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "cell_f64")]
+    pub curvature_per_m: Option<Option<f64>>,
 }
 
 /// A row of `plans.csv`: one pose of one plan of the formation centre.
@@ -427,6 +439,9 @@ mod tests {
                 index: 0,
                 x: v,
                 y: v,
+                heading_rad: Some(Some(v)),
+                drive_m: Some(Some(v)),
+                curvature_per_m: Some(Some(v)),
             }]),
             csv_bytes([ObstacleRow {
                 step: None,

@@ -1,9 +1,11 @@
 //! The CSV files of a run folder, made from a run: its rows ([`super::rows`]) in order,
 //! each file with its header.
 
-use shared::geometry::Pose;
+use shared::geometry::{Point, Pose, wrap_angle_rad};
+use shared::kinematics::{car_piece, driving_headings};
 use shared::record::Run;
 use shared::scenario::Scenario;
+use shared::vocabulary::Kinematics;
 
 use super::rows::{
     MoveRow, ObstacleKind, ObstacleRow, PathRow, PlanReason, PlanRow, TrajectoryRow, csv_bytes,
@@ -63,22 +65,114 @@ pub fn trajectory_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
 }
 
 /// Every move's polyline as CSV: `step,agent,index,x,y` ([`MoveRow`], one row per
-/// waypoint).
-pub fn moves_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
-    csv_bytes(run.steps.iter().flat_map(|s| {
-        s.agents.iter().enumerate().flat_map(move |(agent, a)| {
-            a.waypoints
-                .iter()
-                .enumerate()
-                .map(move |(index, p)| MoveRow {
+/// waypoint), and, when some agent of `scenario` has a heading, the exact primitive that
+/// reaches each waypoint: the heading there, the signed length and the curvature of the
+/// arc from the waypoint before (a unicycle drives straight segments, turning in place
+/// between them; each chord of a car stands for exactly one arc,
+/// [`shared::kinematics::car_piece`]).
+pub fn moves_csv(scenario: &Scenario, run: &Run) -> anyhow::Result<Vec<u8>> {
+    let headings = scenario.agents.iter().any(|a| a.kinematics.has_heading());
+    let columns = header::<MoveRow>().len() - if headings { 0 } else { 3 };
+    let mut rows = Vec::new();
+    for (i, s) in run.steps.iter().enumerate() {
+        for (agent, a) in s.agents.iter().enumerate() {
+            // The heading it started the step with: where it faced at the step before.
+            let start_rad = i
+                .checked_sub(1)
+                .and_then(|b| run.steps[b].agents.get(agent))
+                .and_then(|b| b.heading_rad)
+                .or(a.heading_rad);
+            let kinematics = scenario.agents.get(agent).map(|spec| spec.kinematics);
+            let primitives = match (headings, kinematics, start_rad) {
+                (true, Some(k), Some(h)) if i > 0 => {
+                    move_primitives(&k, h, &a.waypoints, a.heading_rad)
+                }
+                _ => Vec::new(),
+            };
+            for (index, p) in a.waypoints.iter().enumerate() {
+                let primitive = primitives.get(index).copied();
+                // At step 0 (no move yet) its first heading.
+                let heading_rad = primitive
+                    .map(|m| m.heading_rad)
+                    .or(start_rad.filter(|_| index == 0));
+                rows.push(MoveRow {
                     step: s.step,
                     agent,
                     index,
                     x: p.x,
                     y: p.y,
-                })
-        })
-    }))
+                    heading_rad: headings.then_some(heading_rad),
+                    drive_m: headings.then(|| primitive.and_then(|m| m.drive_m)),
+                    curvature_per_m: headings.then(|| primitive.and_then(|m| m.curvature_per_m)),
+                });
+            }
+        }
+    }
+    csv_bytes_with_columns(rows, columns)
+}
+
+/// The primitive that reaches one waypoint of a move ([`move_primitives`]).
+#[derive(Clone, Copy)]
+struct Primitive {
+    heading_rad: f64,
+    /// Absent at the move's start.
+    drive_m: Option<f64>,
+    curvature_per_m: Option<f64>,
+}
+
+/// The primitive reaching each of `waypoints`, driven by an agent of `kinematics` from
+/// `start_rad` and ending facing `end_rad` (empty for a holonomic agent).
+fn move_primitives(
+    kinematics: &Kinematics,
+    start_rad: f64,
+    waypoints: &[Point],
+    end_rad: Option<f64>,
+) -> Vec<Primitive> {
+    let first = Primitive {
+        heading_rad: wrap_angle_rad(start_rad),
+        drive_m: None,
+        curvature_per_m: None,
+    };
+    match *kinematics {
+        Kinematics::Holonomic => Vec::new(),
+        Kinematics::Car { .. } => {
+            let mut heading_rad = start_rad;
+            let mut out = vec![first];
+            for w in waypoints.windows(2) {
+                let piece = car_piece(heading_rad, &w[0], &w[1]);
+                heading_rad += piece.turn_rad;
+                let sign = if piece.reverse { -1.0 } else { 1.0 };
+                out.push(Primitive {
+                    heading_rad: wrap_angle_rad(heading_rad),
+                    drive_m: Some(sign * piece.length_m),
+                    curvature_per_m: Some(if piece.length_m > 0.0 {
+                        piece.turn_rad / piece.length_m
+                    } else {
+                        0.0
+                    }),
+                });
+            }
+            out
+        }
+        Kinematics::Unicycle { reverse, .. } => {
+            let (segment_headings, _) = driving_headings(start_rad, waypoints, end_rad, reverse);
+            let mut heading_rad = wrap_angle_rad(start_rad);
+            let mut out = vec![first];
+            for (w, h) in waypoints.windows(2).zip(segment_headings) {
+                let d = w[1] - w[0];
+                if let Some(h) = h {
+                    heading_rad = h;
+                }
+                let ahead = d.x * heading_rad.cos() + d.y * heading_rad.sin();
+                out.push(Primitive {
+                    heading_rad,
+                    drive_m: Some(if ahead < 0.0 { -d.norm() } else { d.norm() }),
+                    curvature_per_m: Some(0.0),
+                });
+            }
+            out
+        }
+    }
 }
 
 /// The centre's plans as CSV, one row per pose: `plan,step,reason,x_m,y_m,heading_rad`
