@@ -105,19 +105,25 @@ pub fn is_deadlocked(mv: &Move, me: &Point) -> bool {
     (mv.best - me).norm() <= DEADLOCK_STEP_M && (mv.slot - mv.best).norm() > AT_SLOT_TOLERANCE_M
 }
 
+/// The status of a barrier step from `me` to `best` towards `slot`: at the slot, stayed
+/// (no motion), or deviated.
+pub(super) fn step_status(slot: &Point, me: &Point, best: &Point) -> MoveStatus {
+    if (slot - best).norm() <= AT_SLOT_TOLERANCE_M {
+        MoveStatus::AtSlot
+    } else if best == me {
+        MoveStatus::Stayed
+    } else {
+        MoveStatus::Deviated
+    }
+}
+
 /// The move of an agent at `me` with velocity `u` (or staying when `u` is `None`).
 pub(super) fn step_move(slot: Point, me: &Point, u: Option<Vector>, dt_s: f64) -> Move {
     let best = match u {
         Some(u) if u != Vector::zeros() => me + dt_s * u,
         _ => *me,
     };
-    let status = if (slot - best).norm() <= AT_SLOT_TOLERANCE_M {
-        MoveStatus::AtSlot
-    } else if best == *me {
-        MoveStatus::Stayed
-    } else {
-        MoveStatus::Deviated
-    };
+    let status = step_status(&slot, me, &best);
     let waypoints = if best == *me {
         vec![*me]
     } else {

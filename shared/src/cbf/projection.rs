@@ -28,9 +28,9 @@
 
 use crate::geometry::{Point, Pose, Vector, wrap_angle_rad};
 use crate::kinematics::UnicycleLimits;
-use crate::vocabulary::{Body, Move, MoveStatus};
+use crate::vocabulary::{Body, Move};
 
-use super::{AT_SLOT_TOLERANCE_M, CbfController, HalfPlane, solve_qp_2d};
+use super::{CbfController, HalfPlane, solve_qp_2d, step_status};
 
 /// The most the arc of a unicycle's barrier step turns along one published chord,
 /// radians: its chords come within `c/2 tan(a/4)` of the arc (about 1 % of the chord).
@@ -44,7 +44,7 @@ impl CbfController {
     /// Plan the move of a unicycle agent standing at `me` facing `heading_rad` while every
     /// `other` body stands still: the barrier on its projected point, mapped to a speed
     /// and a turn rate, for one step within `limits` (see the module documentation). It
-    /// stays ([`MoveStatus::Stayed`]) when the QP is infeasible.
+    /// stays ([`crate::vocabulary::MoveStatus::Stayed`]) when the QP is infeasible.
     pub fn plan_unicycle_move(
         &self,
         centre: &Pose,
@@ -59,18 +59,11 @@ impl CbfController {
             .unwrap_or((0.0, 0.0));
         let waypoints = unicycle_arc(me, heading_rad, drive_m, turn_rad);
         let best = waypoints.last().copied().unwrap_or(*me);
-        let status = if (slot - best).norm() <= AT_SLOT_TOLERANCE_M {
-            MoveStatus::AtSlot
-        } else if best == *me {
-            MoveStatus::Stayed
-        } else {
-            MoveStatus::Deviated
-        };
         Move {
             end_heading_rad: Some(wrap_angle_rad(heading_rad + turn_rad)),
             slot,
             best,
-            status,
+            status: step_status(&slot, me, &best),
             waypoints,
         }
     }
