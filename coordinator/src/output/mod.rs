@@ -7,7 +7,8 @@
 //!
 //! One concept per file:
 //! - `rows`: one serde struct per CSV file's row, written here and read by
-//!   [`crate::render`], and the number format of the files;
+//!   [`crate::render`];
+//! - `csv_format`: the number format of the CSV files' cells, and a file's bytes;
 //! - `tables`: the CSV files made from a run;
 //! - `summary`: `summary.json`, as written and as read back;
 //! - `out_dir`: the output folder, checked, staged and put in place.
@@ -21,6 +22,7 @@ use shared::geometry::Pose;
 use shared::record::Run;
 use shared::scenario::Scenario;
 
+mod csv_format;
 mod out_dir;
 pub mod rows;
 mod summary;

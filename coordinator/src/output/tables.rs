@@ -7,9 +7,9 @@ use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::vocabulary::Kinematics;
 
+use super::csv_format::{csv_bytes, csv_bytes_with_columns, header};
 use super::rows::{
-    MoveRow, ObstacleKind, ObstacleRow, PathRow, PlanReason, PlanRow, TrajectoryRow, csv_bytes,
-    csv_bytes_with_columns, header,
+    MoveRow, ObstacleKind, ObstacleRow, PathRow, PlanReason, PlanRow, TrajectoryRow,
 };
 
 /// The centre path as CSV: `step,x_m,y_m,heading_rad` ([`PathRow`]), full precision

@@ -21,6 +21,11 @@
 //! differential drive follows exactly (turning in place at each vertex by as much as the
 //! arc turns between chords); the safety checks read those chords.
 //!
+//! With `align_heading`, a robot within the projection distance of its slot turns in
+//! place towards the centre's heading instead (as far as a step allows; turning in place
+//! sweeps nothing new): the point ahead cannot settle the heading, and so close the
+//! position error is already below the robot's radius.
+//!
 //! The barrier's guarantee holds in continuous time; over a step the projected point
 //! moves along a curve, not the straight segment the holonomic argument covers, so a
 //! move may cut into a margin: the recorder and the safety monitor check every move and
@@ -44,7 +49,9 @@ impl CbfController {
     /// Plan the move of a unicycle agent standing at `me` facing `heading_rad` while every
     /// `other` body stands still: the barrier on its projected point, mapped to a speed
     /// and a turn rate, for one step within `limits` (see the module documentation). It
-    /// stays ([`crate::vocabulary::MoveStatus::Stayed`]) when the QP is infeasible.
+    /// stays ([`crate::vocabulary::MoveStatus::Stayed`]) when the QP is infeasible. With
+    /// `align` (the centre's heading, for `align_heading`), within the projection
+    /// distance of its slot it turns in place towards `align` instead.
     pub fn plan_unicycle_move(
         &self,
         centre: &Pose,
@@ -52,11 +59,21 @@ impl CbfController {
         heading_rad: f64,
         others: &[Body],
         limits: &UnicycleLimits,
+        align: Option<f64>,
     ) -> Move {
         let slot = self.slot_position(centre);
-        let (drive_m, turn_rad) = self
-            .unicycle_step(&slot, me, heading_rad, others, limits)
-            .unwrap_or((0.0, 0.0));
+        let (drive_m, turn_rad) = match align {
+            Some(goal_rad) if (slot - me).norm() <= self.radius_m => {
+                let most_rad = STEP_SHARE * limits.max_turn_rad;
+                (
+                    0.0,
+                    wrap_angle_rad(goal_rad - heading_rad).clamp(-most_rad, most_rad),
+                )
+            }
+            _ => self
+                .unicycle_step(&slot, me, heading_rad, others, limits)
+                .unwrap_or((0.0, 0.0)),
+        };
         let waypoints = unicycle_arc(me, heading_rad, drive_m, turn_rad);
         let best = waypoints.last().copied().unwrap_or(*me);
         Move {

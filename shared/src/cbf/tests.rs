@@ -90,7 +90,7 @@ mod unicycle {
         let me = Point::new(1.0, 1.0);
         // The slot is ahead and to the left; the robot faces +x.
         let centre = Pose::new(1.2, 1.4, 0.0);
-        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS);
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS, None);
         let end_rad = mv.end_heading_rad.expect("a heading");
         let driven_m = crate::geometry::polyline_length_m(&mv.waypoints);
         assert!(driven_m > 1e-4, "it drives: {driven_m}");
@@ -102,12 +102,53 @@ mod unicycle {
     }
 
     #[test]
+    fn with_align_heading_a_robot_at_its_slot_turns_in_place_to_the_centres_heading() {
+        let c = controller(&[]);
+        let me = Point::new(1.0, 1.0);
+        // The slot 0.02 m ahead (within the projection distance), the centre facing +y.
+        let centre = Pose::new(1.02, 1.0, std::f64::consts::FRAC_PI_2);
+        let (mut heading_rad, mut steps) = (0.0_f64, 0);
+        while (heading_rad - centre.heading_rad).abs() > 1e-12 {
+            let mv = c.plan_unicycle_move(
+                &centre,
+                &me,
+                heading_rad,
+                &[],
+                &LIMITS,
+                Some(centre.heading_rad),
+            );
+            assert_eq!(mv.waypoints, vec![me], "it turns in place");
+            let end_rad = mv.end_heading_rad.expect("a heading");
+            assert!(
+                (end_rad - heading_rad).abs() <= LIMITS.max_turn_rad,
+                "within a step's turn"
+            );
+            heading_rad = end_rad;
+            steps += 1;
+            assert!(steps <= 14, "a quarter turn takes 14 steps of 0.1188 rad");
+        }
+        assert_eq!(steps, 14);
+        // Without it, the barrier steers the point ahead to the slot: the robot drives.
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS, None);
+        assert!(
+            mv.waypoints.len() > 1 && mv.end_heading_rad == Some(0.0),
+            "{mv:?}"
+        );
+        // Farther than the projection distance, align_heading changes nothing.
+        let far = Pose::new(1.2, 1.0, std::f64::consts::FRAC_PI_2);
+        assert_eq!(
+            c.plan_unicycle_move(&far, &me, 0.0, &[], &LIMITS, Some(far.heading_rad)),
+            c.plan_unicycle_move(&far, &me, 0.0, &[], &LIMITS, None)
+        );
+    }
+
+    #[test]
     fn a_robot_with_its_slot_behind_turns_in_place_or_backs_up_if_it_may() {
         let c = controller(&[]);
         let me = Point::new(1.0, 1.0);
         let centre = Pose::new(0.8, 1.1, 0.0);
         // Forwards only: it turns in place, towards the slot (left).
-        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS);
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &LIMITS, None);
         assert_eq!(mv.waypoints, vec![me]);
         assert!(mv.end_heading_rad.expect("a heading") > 0.1);
         // With reverse it backs towards the slot while it turns.
@@ -115,7 +156,7 @@ mod unicycle {
             reverse: true,
             ..LIMITS
         };
-        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &limits);
+        let mv = c.plan_unicycle_move(&centre, &me, 0.0, &[], &limits, None);
         let end = mv.waypoints.last().expect("a point");
         assert!(end.x < me.x - 1e-4, "{end}");
         let end_rad = mv.end_heading_rad.expect("a heading");
@@ -140,7 +181,7 @@ mod unicycle {
         // The projected disk (radius + projection = 0.11 m round the point 0.055 m ahead)
         // is kept off the post for a thousand steps, and so is the robot.
         for _ in 0..1000 {
-            let mv = c.plan_unicycle_move(&centre, &me, heading_rad, &[], &LIMITS);
+            let mv = c.plan_unicycle_move(&centre, &me, heading_rad, &[], &LIMITS, None);
             for p in &mv.waypoints {
                 let clearance_m = (p - post.centre).norm() - post.radius_m - 0.055;
                 assert!(clearance_m > 0.0, "{p}: {clearance_m}");

@@ -1,5 +1,5 @@
-//! Plane geometry shared by every controller: points, disks, polylines, the rectangular
-//! field, and a uniform-grid spatial index over disks.
+//! Plane geometry shared by every controller: points, disks, polylines, simple polygons,
+//! the rectangular field, and a uniform-grid spatial index over disks.
 //!
 //! Everything is `f64` and uses nalgebra's `Point2`/`Vector2`, the same types parry2d-f64
 //! uses, so there is one vector type in the whole system.
@@ -14,6 +14,7 @@ mod disk_grid;
 mod field;
 mod free_space;
 mod intersections;
+mod polygon;
 mod polyline;
 mod pose;
 
@@ -22,6 +23,7 @@ pub use disk_grid::DiskGrid;
 pub use field::Field;
 pub use free_space::FreeSpace;
 pub use intersections::{circle_circle_intersections, circle_line_intersections};
+pub use polygon::{Polygon, PolygonError};
 pub use polyline::{
     distance_polyline_polyline, distance_segment_segment, polyline_length_m, polyline_prefix,
 };

@@ -143,3 +143,120 @@ fn circle_line_intersections_lie_on_circle_and_line() {
     );
     assert!(circle_line_intersections(&c, 2.0, &c, &Vector::zeros()).is_none());
 }
+
+mod polygons {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    /// A star-shaped polygon round `c`: simple by construction, its corners at increasing
+    /// angles (anticlockwise) or decreasing ones.
+    fn star(c: Point, radii: &[f64], clockwise: bool) -> Vec<Point> {
+        let n = radii.len() as f64;
+        let mut v: Vec<Point> = radii
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let a = std::f64::consts::TAU * k as f64 / n;
+                c + *r * Vector::new(a.cos(), a.sin())
+            })
+            .collect();
+        if clockwise {
+            v.reverse();
+        }
+        v
+    }
+
+    /// Whether `p` is in the triangle `a b c` (anticlockwise), boundary included.
+    fn in_triangle(p: &Point, a: &Point, b: &Point, c: &Point) -> bool {
+        let s = |u: &Point, w: &Point| (w - u).perp(&(p - u));
+        s(a, b) >= 0.0 && s(b, c) >= 0.0 && s(c, a) >= 0.0
+    }
+
+    proptest! {
+        #[test]
+        fn star_shaped_polygons_are_simple_and_their_fans_agree(
+            radii in proptest::collection::vec(0.5f64..3.0, 3..24),
+            clockwise in any::<bool>(),
+            probes in proptest::collection::vec((-3.5f64..3.5, -3.5f64..3.5), 32),
+        ) {
+            let c = Point::new(1.0, -2.0);
+            let given = star(c, &radii, clockwise);
+            let polygon = Polygon::new(given.clone()).unwrap();
+            // Stored anticlockwise: the same corners, reversed if given clockwise.
+            let mut expected = given;
+            if clockwise {
+                expected.reverse();
+            }
+            prop_assert_eq!(polygon.vertices(), &expected[..]);
+            // Area and containment against the fan of triangles from the centre.
+            let fan: Vec<(Point, Point)> = polygon.sides().collect();
+            let area: f64 = fan.iter().map(|(a, b)| 0.5 * (a - c).perp(&(b - c))).sum();
+            prop_assert!((polygon.area_m2() - area).abs() < 1e-9);
+            for (x, y) in probes {
+                let p = c + Vector::new(x, y);
+                let inside = fan.iter().any(|(a, b)| in_triangle(&p, &c, a, b));
+                let near_edge = fan.iter().any(|(a, b)| distance_point_segment(&p, a, b) < 1e-9);
+                if !near_edge {
+                    prop_assert_eq!(polygon.contains(&p), inside);
+                    prop_assert_eq!(polygon.distance_m(&p) == 0.0, inside);
+                }
+            }
+        }
+
+        #[test]
+        fn swapping_two_corners_of_a_convex_polygon_crosses_it(
+            n in 5usize..16,
+            k in 0usize..16,
+        ) {
+            // A regular polygon with corners k and k + 2 swapped: sides cross.
+            let mut v = star(Point::origin(), &vec![1.0; n], false);
+            let k = k % n;
+            v.swap(k, (k + 2) % n);
+            prop_assert!(
+                matches!(Polygon::new(v), Err(PolygonError::SelfIntersecting { .. })),
+                "n = {}, k = {}", n, k
+            );
+        }
+    }
+
+    #[test]
+    fn degenerate_corners_are_refused_naming_the_vertex() {
+        let p = |x, y| Point::new(x, y);
+        let cases: [(Vec<Point>, &str); 5] = [
+            (vec![p(0.0, 0.0), p(1.0, 0.0)], "at least 3 vertices, got 2"),
+            (
+                vec![p(0.0, 0.0), p(1.0, 0.0), p(1.0, 0.0), p(0.0, 1.0)],
+                "vertex 1 repeats",
+            ),
+            (
+                vec![p(0.0, 0.0), p(f64::NAN, 0.0), p(0.0, 1.0)],
+                "vertex 1 is not finite",
+            ),
+            (
+                vec![p(0.0, 0.0), p(1.0, 0.0), p(2.0, 0.0)],
+                "crosses itself",
+            ),
+            // A spike folding back along its own side.
+            (
+                vec![p(0.0, 0.0), p(2.0, 0.0), p(1.0, 0.0), p(1.0, 1.0)],
+                "side 0 (vertices 0-1) meets side 1",
+            ),
+        ];
+        for (v, says) in cases {
+            let e = Polygon::new(v.clone()).unwrap_err().to_string();
+            assert!(e.contains(says), "{v:?}: {e}");
+        }
+        // Convex corners of an L: all but the inner one.
+        let l = Polygon::new(vec![
+            p(0.0, 0.0),
+            p(2.0, 0.0),
+            p(2.0, 1.0),
+            p(1.0, 1.0),
+            p(1.0, 2.0),
+            p(0.0, 2.0),
+        ])
+        .unwrap();
+        assert_eq!(l.convex_corners().collect::<Vec<_>>(), [0, 1, 2, 4, 5]);
+    }
+}

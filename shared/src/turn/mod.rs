@@ -235,7 +235,8 @@ impl TurnController {
         // rate at once, from the barrier on a point ahead of it.
         if let Controller::Cbf(p) = &self.controller {
             let others = &*self.sensed_bodies(me, others);
-            return p.plan_unicycle_move(centre, me, heading_rad, others, &limits);
+            let align = self.spec.align_heading.then_some(centre.heading_rad);
+            return p.plan_unicycle_move(centre, me, heading_rad, others, &limits, align);
         }
         // The path is cut at the top speed (on an arc, at a free point), further than
         // the agent can drive this step, and drawn with chords of at most a quarter of it:
