@@ -520,3 +520,89 @@ fn a_valid_file_passes_validate_so_the_refusals_mean_something() {
     Scenario::load(&support::repo_root().join("scenarios").join("paper.toml"))
         .unwrap_or_else(|e| panic!("the shipped paper scenario must be valid: {e}"));
 }
+
+/// `coordinator validate MAP.yaml` reads a real map and says what it holds; a map with
+/// one thing wrong (in the YAML or in its image) is refused with exit code 2 and one line
+/// naming the file and the field, as a scenario is.
+#[test]
+fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
+    let maps = support::repo_root().join("shared/tests/data/maps");
+    let mut cmd = Command::new(support::coordinator_bin());
+    cmd.arg("validate").arg(maps.join("depot.yaml"));
+    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("604 x 307 cells of 0.05 m") && stderr.contains("5947 occupied"),
+        "{stderr}"
+    );
+
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let good = "image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n\
+                occupied_thresh: 0.65\nfree_thresh: 0.25\n";
+    std::fs::write(dir.path().join("m.pgm"), b"P5 2 2 255\n\x00\xfe\xfe\xfe").expect("pgm");
+    std::fs::write(dir.path().join("short.pgm"), b"P5 2 2 255\n\x00\xfe").expect("pgm");
+    let image = |name: &str| dir.path().join(name).display().to_string();
+    let cases = [
+        (
+            "missing-key.yaml",
+            good.replace("negate: 0\n", ""),
+            "negate",
+            None,
+        ),
+        (
+            "unknown-key.yaml",
+            format!("{good}colour: red\n"),
+            "line 7",
+            None,
+        ),
+        (
+            "thresholds.yaml",
+            good.replace("0.25", "0.9"),
+            "free_thresh",
+            None,
+        ),
+        (
+            "rotated.yaml",
+            good.replace("0.0, 0.0, 0.0", "0, 0, 0.5"),
+            "origin",
+            None,
+        ),
+        (
+            "no-image.yaml",
+            good.replace("m.pgm", "none.pgm"),
+            "(image)",
+            Some("none.pgm"),
+        ),
+        (
+            "short.yaml",
+            good.replace("m.pgm", "short.pgm"),
+            "(image)",
+            Some("short.pgm"),
+        ),
+    ];
+    let mut problems = Vec::new();
+    for (name, text, field, in_image) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("write a bad map");
+        // Image errors name the image; the others the YAML file.
+        let named = Case {
+            path: in_image.map_or(path.clone(), |i| PathBuf::from(image(i))),
+            expect: field.to_string(),
+        };
+        let mut cmd = Command::new(support::coordinator_bin());
+        cmd.arg("validate").arg(&path);
+        match run_bounded(cmd) {
+            Ok(output) => problems.extend(refusal_problems("validate", &named, &output)),
+            Err(e) => problems.push(e),
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // The control map of the bad ones passes.
+    let path = dir.path().join("good.yaml");
+    std::fs::write(&path, good).expect("write the good map");
+    let mut cmd = Command::new(support::coordinator_bin());
+    cmd.arg("validate").arg(&path);
+    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+}

@@ -22,7 +22,8 @@ pub struct Cli {
 /// The commands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Check a scenario file (including that the centre has a path); plan nothing else.
+    /// Check a scenario file (including that the centre has a path), or a map's YAML file
+    /// (ROS map_server: the YAML and its image); plan nothing else.
     Validate(ValidateArgs),
     /// Plan the formation centre's path with Hybrid A* and write it as CSV.
     Plan(PlanArgs),
@@ -350,7 +351,7 @@ pub(crate) fn parse_misbehave(s: &str) -> Result<(usize, Misbehave), String> {
 /// Arguments of `validate`.
 #[derive(Debug, Args)]
 pub struct ValidateArgs {
-    /// The scenario file (TOML).
+    /// The scenario file (TOML), or a map's YAML file (`.yaml` or `.yml`).
     pub scenario: PathBuf,
 }
 

@@ -1,6 +1,7 @@
 //! The coordinator's errors and their exit codes (`docs/outputs.md`): 2 for bad input,
 //! 1 for anything else.
 
+use shared::occupancy::MapError;
 use shared::scenario::ScenarioError;
 
 /// Why a command failed.
@@ -9,6 +10,9 @@ pub enum CliError {
     /// The scenario file is unreadable or invalid (exit code 2).
     #[error("{0}")]
     Scenario(#[from] ScenarioError),
+    /// A map (its YAML file or its image) is unreadable or invalid (exit code 2).
+    #[error("{0}")]
+    Map(#[from] MapError),
     /// A command-line value is invalid (exit code 2).
     #[error("{0}")]
     Usage(String),
@@ -21,7 +25,7 @@ impl CliError {
     /// The process exit code for this error.
     pub fn exit_code(&self) -> u8 {
         match self {
-            Self::Scenario(_) | Self::Usage(_) => 2,
+            Self::Scenario(_) | Self::Map(_) | Self::Usage(_) => 2,
             Self::Other(_) => 1,
         }
     }
