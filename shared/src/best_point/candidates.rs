@@ -6,6 +6,7 @@ use std::ops::ControlFlow;
 
 use crate::geometry::{
     Disk, Field, FreeSpace, Point, Vector, circle_circle_intersections, circle_line_intersections,
+    line_line_intersection,
 };
 
 /// How far, in metres, a candidate may sit inside a disk or outside the field and still
@@ -48,10 +49,15 @@ pub(super) struct CandidateSearch<'s> {
     /// The candidates owed to the field alone (clamp, edge projections, corners), each
     /// taken into `pending` once a ring reaches it.
     field_candidates: [Option<Candidate>; 9],
-    /// Disks whose candidates have been enumerated.
+    /// Disks whose candidates have been enumerated, the corner circles of the gathered
+    /// polygons among them.
     gathered: Vec<Disk>,
-    /// The `(layer, index)` of the gathered disks, sorted.
+    /// The `(layer, index)` of the gathered disks of the layers, sorted.
     gathered_ids: Vec<(usize, usize)>,
+    /// The offset sides of the gathered polygons, `(start, end)`.
+    gathered_sides: Vec<(Point, Point)>,
+    /// The indices of the gathered polygons, sorted.
+    gathered_polygons: Vec<usize>,
     /// The query itself, when it is free and not yet handed out.
     free_query: Option<Candidate>,
     /// Candidates not tried yet, sorted farthest first (the nearest is popped).
@@ -72,13 +78,9 @@ impl<'s> CandidateSearch<'s> {
         if !field_is_valid || !query.x.is_finite() || !query.y.is_finite() {
             return None;
         }
-        // How deep the query is in the disks: the same test as `FreeSpace::is_free`, and
-        // a lower bound on the distance to any free point.
-        let mut depth_m: f64 = 0.0;
-        let _ = space.visit_near(query, 0.0, |_, disk| {
-            depth_m = depth_m.max(-disk.signed_distance_m(query));
-            ControlFlow::<()>::Continue(())
-        });
+        // How deep the query is in the obstacles: the same test as `FreeSpace::is_free`,
+        // and a lower bound on the distance to any free point.
+        let depth_m = space.depth_m(query);
         let query_is_free =
             field.contains(query, FEASIBILITY_TOLERANCE_M) && depth_m <= FEASIBILITY_TOLERANCE_M;
         let lower_bound_m = depth_m.max((query - field.clamp(query)).norm());
@@ -103,6 +105,8 @@ impl<'s> CandidateSearch<'s> {
             field_candidates: [None; 9],
             gathered: Vec::new(),
             gathered_ids: Vec::new(),
+            gathered_sides: Vec::new(),
+            gathered_polygons: Vec::new(),
             // At distance 0 the only candidate is the query itself.
             free_query: query_is_free.then_some(Candidate {
                 distance_m: 0.0,
@@ -182,6 +186,7 @@ impl<'s> CandidateSearch<'s> {
             }
         }
         let new_from = self.gathered.len();
+        let new_sides_from = self.gathered_sides.len();
         if let Some((min, max)) = self.ring_box(reach_m) {
             let query = self.query;
             let (gathered, gathered_ids) = (&mut self.gathered, &mut self.gathered_ids);
@@ -200,9 +205,29 @@ impl<'s> CandidateSearch<'s> {
                 ControlFlow::<()>::Continue(())
             });
             gathered_ids.sort_unstable();
+            // A polygon is gathered whole: its corner circles with the disks, its offset
+            // sides apart. Every piece of its boundary lies in its bounding box.
+            let (gathered, sides, polygons) = (
+                &mut self.gathered,
+                &mut self.gathered_sides,
+                &mut self.gathered_polygons,
+            );
+            let earlier = polygons.len();
+            let _ = self.space.visit_polygons_box(&min, &max, |i, polygon| {
+                if polygon.radius_m() > 0.0 && polygons[..earlier].binary_search(&i).is_err() {
+                    gathered.extend(polygon.corner_disks());
+                    sides.extend(polygon.offset_sides());
+                    polygons.push(i);
+                }
+                ControlFlow::<()>::Continue(())
+            });
+            polygons.sort_unstable();
         }
         for i in new_from..self.gathered.len() {
-            self.push_disk_candidates(i);
+            self.push_disk_candidates(i, new_sides_from);
+        }
+        for k in new_sides_from..self.gathered_sides.len() {
+            self.push_side_candidates(k);
         }
         self.searched_m = radius_m;
         self.rings += 1;
@@ -253,9 +278,10 @@ impl<'s> CandidateSearch<'s> {
     }
 
     /// The candidates owed to gathered disk `i`: the radial projection of the query onto
-    /// its circle, its crossings with the edge lines, and its crossings with every disk
-    /// gathered before it.
-    fn push_disk_candidates(&mut self, i: usize) {
+    /// its circle, its crossings with the edge lines, with every disk gathered before it
+    /// and with the first `sides` offset sides (the later ones cross it in
+    /// [`Self::push_side_candidates`]).
+    fn push_disk_candidates(&mut self, i: usize, sides: usize) {
         let disk = self.gathered[i];
         let outward = self.query - disk.centre;
         let outward_m = outward.norm();
@@ -299,7 +325,79 @@ impl<'s> CandidateSearch<'s> {
                 crossings.into_iter().for_each(|p| self.push(p));
             }
         }
+
+        for k in 0..sides {
+            let (a, b) = self.gathered_sides[k];
+            self.push_circle_side_crossings(&disk, &a, &b);
+        }
     }
+
+    /// Queue the crossings of the circle of `disk` with the segment `a`-`b`.
+    fn push_circle_side_crossings(&mut self, disk: &Disk, a: &Point, b: &Point) {
+        if let Some(crossings) = circle_line_intersections(&disk.centre, disk.radius_m, a, &(b - a))
+        {
+            for p in crossings {
+                if on_segment(&p, a, b) {
+                    self.push(p);
+                }
+            }
+        }
+    }
+
+    /// The candidates owed to gathered offset side `k`: the projection of the query onto
+    /// it, its crossings with the edge lines, with every gathered circle and with every
+    /// offset side gathered before it.
+    fn push_side_candidates(&mut self, k: usize) {
+        let (a, b) = self.gathered_sides[k];
+        let along = b - a;
+        let length2 = along.norm_squared();
+        if length2 <= 0.0 || !length2.is_finite() {
+            return;
+        }
+        let t = ((self.query - a).dot(&along) / length2).clamp(0.0, 1.0);
+        self.push(a + t * along);
+
+        let field = self.space.field;
+        let edge_lines = [
+            (Point::new(0.0, 0.0), Vector::y()),
+            (Point::new(field.width_m, 0.0), Vector::y()),
+            (Point::new(0.0, 0.0), Vector::x()),
+            (Point::new(0.0, field.height_m), Vector::x()),
+        ];
+        for (line_point, line_direction) in edge_lines {
+            if let Some((p, t, _)) =
+                line_line_intersection(&a, &along, &line_point, &line_direction)
+                && within_unit(t)
+            {
+                self.push(p);
+            }
+        }
+        for i in 0..self.gathered.len() {
+            let disk = self.gathered[i];
+            self.push_circle_side_crossings(&disk, &a, &b);
+        }
+        for j in 0..k {
+            let (c, d) = self.gathered_sides[j];
+            if let Some((p, t1, t2)) = line_line_intersection(&a, &along, &c, &(d - c))
+                && within_unit(t1)
+                && within_unit(t2)
+            {
+                self.push(p);
+            }
+        }
+    }
+}
+
+/// Whether a parameter along a segment lies on it, with room for rounding.
+fn within_unit(t: f64) -> bool {
+    const SLACK: f64 = 1e-9;
+    (-SLACK..=1.0 + SLACK).contains(&t)
+}
+
+/// Whether `p`, known to lie on the line through `a`-`b`, lies on the segment.
+fn on_segment(p: &Point, a: &Point, b: &Point) -> bool {
+    let along = b - a;
+    within_unit((p - a).dot(&along) / along.norm_squared())
 }
 
 /// The candidates owed to the field alone: the clamp of `query` into the field, its

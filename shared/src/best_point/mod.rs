@@ -13,6 +13,11 @@
 //! - a crossing of two circles, of a circle and an edge line, or a field corner (two
 //!   constraints active).
 //!
+//! A grown polygon ([`InflatedPolygon`](crate::geometry::InflatedPolygon)) adds two
+//! kinds of boundary piece: circles round its convex corners, treated as disks above, and
+//! its offset sides, which add the projection of `x*` onto each side (clamped to it) and
+//! the crossings of each side with the edge lines, the circles and the other sides.
+//!
 //! The same holds for the nearest point of any one connected component of `F` (a
 //! component is closed, and near its nearest point it coincides with `F`), which is what
 //! [`nearest_reachable_free_point`] relies on.

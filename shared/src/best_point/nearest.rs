@@ -15,8 +15,8 @@ pub enum BestPointError {
 
 /// Theorem 1: the free point of `space` nearest to `query`.
 ///
-/// Free means inside the field and at distance `>= radius` from every disk centre, up to
-/// [`FEASIBILITY_TOLERANCE_M`]. `query` may lie anywhere, also outside the field or inside
+/// Free means inside the field, at distance `>= radius` from every disk centre and from
+/// every polygon by its radius, up to [`FEASIBILITY_TOLERANCE_M`]. `query` may lie anywhere, also outside the field or inside
 /// disks. Ties between equally near points are broken deterministically (smallest `x`,
 /// then smallest `y`, among the candidates).
 ///

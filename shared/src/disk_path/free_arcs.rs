@@ -2,12 +2,18 @@
 //!
 //! The part of a circle that lies strictly inside another disk, or outside a field edge,
 //! is an open angular interval (from the circle-circle or circle-line intersection
-//! angles); an arc is free iff it enters none of them.
+//! angles). The part inside a grown polygon is a union of open intervals between the
+//! angles where the circle crosses the polygon's boundary pieces (its offset sides and
+//! corner circles), each interval tested at its middle. An arc is free iff it enters
+//! none of them.
 
 use std::f64::consts::TAU;
 
 use super::tolerance::FREE_TOLERANCE_M;
-use crate::geometry::{Disk, Field, Vector};
+use crate::geometry::{
+    Disk, Field, InflatedPolygon, Point, Vector, circle_circle_intersections,
+    circle_line_intersections,
+};
 
 /// Non-negative remainder of `x` modulo a full turn, in `[0, 2 pi)`.
 pub(super) fn turn_rem(x: f64) -> f64 {
@@ -17,7 +23,12 @@ pub(super) fn turn_rem(x: f64) -> f64 {
 
 /// Open angular intervals `(start, width)` of a circle that lie strictly inside other disks
 /// or outside the field (beyond tolerance). A width of a full turn blocks the whole circle.
-pub(super) fn blocked_intervals(k: usize, circles: &[Disk], field: &Field) -> Vec<(f64, f64)> {
+pub(super) fn blocked_intervals(
+    k: usize,
+    circles: &[Disk],
+    polygons: &[InflatedPolygon],
+    field: &Field,
+) -> Vec<(f64, f64)> {
     let ck = circles[k].centre;
     let rk = circles[k].radius_m;
     let mut out = Vec::new();
@@ -71,7 +82,65 @@ pub(super) fn blocked_intervals(k: usize, circles: &[Disk], field: &Field) -> Ve
             (h + FREE_TOLERANCE_M - m.dot(&ck.coords)) / rk,
         );
     }
+    let reach = Vector::new(rk, rk);
+    for polygon in polygons {
+        if polygon.box_meets(&(ck - reach), &(ck + reach)) {
+            push_polygon_intervals(&circles[k], polygon, &mut out);
+        }
+    }
     out
+}
+
+/// Push the open angular intervals of the circle of `disk` that lie inside `polygon`
+/// beyond the tolerance (inside the polygon grown by its radius less the tolerance).
+fn push_polygon_intervals(disk: &Disk, polygon: &InflatedPolygon, out: &mut Vec<(f64, f64)>) {
+    let shrunk = polygon.inflated(-FREE_TOLERANCE_M.min(polygon.radius_m()));
+    let (c, rho) = (disk.centre, disk.radius_m);
+    let angle_of = |p: &Point| {
+        let v = p - c;
+        turn_rem(v.y.atan2(v.x))
+    };
+    let mut angles = Vec::new();
+    for (a, b) in shrunk.offset_sides() {
+        let along = b - a;
+        if let Some(points) = circle_line_intersections(&c, rho, &a, &along) {
+            for p in points {
+                let t = (p - a).dot(&along) / along.norm_squared();
+                if (0.0..=1.0).contains(&t) {
+                    angles.push(angle_of(&p));
+                }
+            }
+        }
+    }
+    for corner in shrunk.corner_disks() {
+        if let Some(points) = circle_circle_intersections(&c, rho, &corner.centre, corner.radius_m)
+        {
+            angles.extend(points.iter().map(angle_of));
+        }
+    }
+    angles.sort_unstable_by(f64::total_cmp);
+    angles.dedup();
+    let inside = |angle: f64| {
+        let p = c + rho * Vector::new(angle.cos(), angle.sin());
+        shrunk.signed_distance_m(&p) < 0.0
+    };
+    if angles.is_empty() {
+        if inside(0.0) {
+            out.push((0.0, TAU));
+        }
+        return;
+    }
+    for (i, &start) in angles.iter().enumerate() {
+        let end = if i + 1 < angles.len() {
+            angles[i + 1]
+        } else {
+            angles[0] + TAU
+        };
+        let width = end - start;
+        if width > 0.0 && inside(start + 0.5 * width) {
+            out.push((start, width));
+        }
+    }
 }
 
 /// How far (unsigned angle) one can travel around a circle from `angle_rad` in `sense`

@@ -8,6 +8,12 @@
 //! convex, so the path never bends at a wall, but every segment and every arc must stay
 //! inside it.
 //!
+//! Polygons grown by the agent's radius
+//! ([`InflatedPolygon`](crate::geometry::InflatedPolygon)) take part too: a path bends
+//! round one only on the circles of its convex corners, so those circles join the tangent
+//! graph, segments are checked against the polygons, and an arc is checked against the
+//! angles where its circle crosses a polygon's offset sides and corner circles.
+//!
 //! # Method
 //!
 //! - **Fast path.** If the straight segment is free, it is the answer.

@@ -107,7 +107,7 @@ fn candidate_disks(space: &FreeSpace, s: &Point, t: &Point, limit_m: f64) -> Vec
         (mid.y + half_m).min(field.height_m + r_max),
     );
     let mut out = Vec::new();
-    let _ = space.visit_box(&min, &max, |_, d| {
+    let mut keep = |d: &Disk| {
         let usable = d.radius_m > 0.0 && d.radius_m.is_finite();
         let meets_field = usable && (field.clamp(&d.centre) - d.centre).norm() <= d.radius_m;
         if meets_field
@@ -115,6 +115,14 @@ fn candidate_disks(space: &FreeSpace, s: &Point, t: &Point, limit_m: f64) -> Vec
         {
             out.push(*d);
         }
+    };
+    let _ = space.visit_box(&min, &max, |_, d| {
+        keep(d);
+        ControlFlow::<()>::Continue(())
+    });
+    // A path bends round a grown polygon only on the circles of its convex corners.
+    let _ = space.visit_polygons_box(&min, &max, |_, polygon| {
+        polygon.corner_disks().for_each(|d| keep(&d));
         ControlFlow::<()>::Continue(())
     });
     out

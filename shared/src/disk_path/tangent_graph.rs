@@ -183,7 +183,8 @@ impl<'a, 's> Planner<'a, 's> {
     fn intervals(&mut self, k: usize) -> &[(f64, f64)] {
         let circles = self.circles;
         let field = self.space.field;
-        self.blocked[k].get_or_insert_with(|| blocked_intervals(k, circles, &field))
+        let polygons = self.space.polygons;
+        self.blocked[k].get_or_insert_with(|| blocked_intervals(k, circles, polygons, &field))
     }
 
     /// The edge from `node` to `target`, if the tangent exists (not checked for freedom).

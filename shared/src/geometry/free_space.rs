@@ -2,33 +2,62 @@
 
 use std::ops::ControlFlow;
 
-use super::{Disk, DiskGrid, Field, Point, Vector};
+use super::{Disk, DiskGrid, Field, InflatedPolygon, Point, Vector};
 
 /// The free space a point agent moves in: the field minus the union of one or more
-/// indexed disk layers (static obstacles, other agents), every disk already inflated.
+/// indexed disk layers (static obstacles, other agents) and of grown polygons, every
+/// obstacle already inflated.
 ///
-/// A point is *free* when it lies in the field and at distance `>= radius` from every
-/// disk centre (the boundary is free: touching is allowed, overlapping is not).
+/// A point is *free* when it lies in the field, at distance `>= radius` from every disk
+/// centre and at distance `>= radius` from every polygon (the boundary is free: touching
+/// is allowed, overlapping is not).
 #[derive(Clone, Copy, Debug)]
 pub struct FreeSpace<'a> {
     /// The playing field.
     pub field: Field,
     /// The blocking disks, in layers (for example static obstacles and other agents).
     pub layers: &'a [&'a DiskGrid],
+    /// The blocking polygons, already grown by the agent's radius.
+    pub polygons: &'a [InflatedPolygon],
 }
 
 impl<'a> FreeSpace<'a> {
     /// Free space in `field` outside every disk of `layers`.
     pub fn new(field: Field, layers: &'a [&'a DiskGrid]) -> Self {
-        Self { field, layers }
+        Self {
+            field,
+            layers,
+            polygons: &[],
+        }
     }
 
-    /// Largest disk radius over all layers.
+    /// The same space, also outside every grown polygon of `polygons`.
+    pub fn with_polygons(self, polygons: &'a [InflatedPolygon]) -> Self {
+        Self { polygons, ..self }
+    }
+
+    /// Largest disk or polygon radius over all layers.
     pub fn max_radius_m(&self) -> f64 {
         self.layers
             .iter()
             .map(|g| g.max_radius_m())
+            .chain(self.polygons.iter().map(InflatedPolygon::radius_m))
             .fold(0.0, f64::max)
+    }
+
+    /// Visit every grown polygon whose bounding box meets `[min, max]`, with its index.
+    pub fn visit_polygons_box<B>(
+        &self,
+        min: &Point,
+        max: &Point,
+        mut visit: impl FnMut(usize, &InflatedPolygon) -> ControlFlow<B>,
+    ) -> ControlFlow<B> {
+        for (i, polygon) in self.polygons.iter().enumerate() {
+            if polygon.box_meets(min, max) {
+                visit(i, polygon)?;
+            }
+        }
+        ControlFlow::Continue(())
     }
 
     /// Visit every disk of every layer whose box meets `[min, max]`; the index passed is
@@ -56,15 +85,36 @@ impl<'a> FreeSpace<'a> {
         self.visit_box(&(p - d), &(p + d), visit)
     }
 
-    /// Smallest signed distance from `p` to any disk boundary (negative inside a disk),
-    /// looking only at disks within `reach_m`; `f64::INFINITY` if none is that close.
+    /// Smallest signed distance from `p` to any obstacle boundary (negative inside an
+    /// obstacle), looking only at obstacles within `reach_m`; `f64::INFINITY` if none is
+    /// that close.
     pub fn clearance_m(&self, p: &Point, reach_m: f64) -> f64 {
         let mut best = f64::INFINITY;
         let _ = self.visit_near(p, reach_m, |_, d| {
             best = best.min(d.signed_distance_m(p));
             ControlFlow::<()>::Continue(())
         });
+        let d = Vector::new(reach_m, reach_m);
+        let _ = self.visit_polygons_box(&(p - d), &(p + d), |_, polygon| {
+            best = best.min(polygon.signed_distance_m(p));
+            ControlFlow::<()>::Continue(())
+        });
         best
+    }
+
+    /// How deep `p` lies inside the obstacles: the largest depth below any one obstacle
+    /// boundary, 0 when it is in none. No free point is nearer to `p` than this.
+    pub fn depth_m(&self, p: &Point) -> f64 {
+        let mut depth_m: f64 = 0.0;
+        let _ = self.visit_near(p, 0.0, |_, disk| {
+            depth_m = depth_m.max(-disk.signed_distance_m(p));
+            ControlFlow::<()>::Continue(())
+        });
+        let _ = self.visit_polygons_box(p, p, |_, polygon| {
+            depth_m = depth_m.max(-polygon.signed_distance_m(p));
+            ControlFlow::<()>::Continue(())
+        });
+        depth_m
     }
 
     /// Whether `p` is free, allowing it to sit up to `tolerance_m` inside a disk or
@@ -81,6 +131,15 @@ impl<'a> FreeSpace<'a> {
             }
         })
         .is_continue()
+            && self
+                .visit_polygons_box(p, p, |_, polygon| {
+                    if polygon.signed_distance_m(p) < -tolerance_m {
+                        ControlFlow::Break(())
+                    } else {
+                        ControlFlow::Continue(())
+                    }
+                })
+                .is_continue()
     }
 
     /// Whether the whole segment `a`-`b` is free, with the same tolerance as
@@ -99,5 +158,14 @@ impl<'a> FreeSpace<'a> {
             }
         })
         .is_continue()
+            && self
+                .visit_polygons_box(&min, &max, |_, polygon| {
+                    if polygon.signed_distance_to_segment_m(a, b) < -tolerance_m {
+                        ControlFlow::Break(())
+                    } else {
+                        ControlFlow::Continue(())
+                    }
+                })
+                .is_continue()
     }
 }

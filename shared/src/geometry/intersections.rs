@@ -61,3 +61,25 @@ pub fn circle_line_intersections(
         foot + half_chord * line_direction,
     ])
 }
+
+/// The point where the line through `p1` with direction `d1` crosses the line through
+/// `p2` with direction `d2`, with its parameters `(t1, t2)` along each direction
+/// (`p1 + t1 d1 = p2 + t2 d2`).
+///
+/// `None` when the lines are parallel (or a direction is zero), or the inputs are not
+/// finite.
+pub fn line_line_intersection(
+    p1: &Point,
+    d1: &Vector,
+    p2: &Point,
+    d2: &Vector,
+) -> Option<(Point, f64, f64)> {
+    let cross = d1.perp(d2);
+    if cross == 0.0 || !cross.is_finite() {
+        return None;
+    }
+    let between = p2 - p1;
+    let t1 = between.perp(d2) / cross;
+    let t2 = between.perp(d1) / cross;
+    (t1.is_finite() && t2.is_finite()).then(|| (p1 + t1 * d1, t1, t2))
+}

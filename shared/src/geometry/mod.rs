@@ -1,4 +1,5 @@
-//! Plane geometry shared by every controller: points, disks, polylines, simple polygons,
+//! Plane geometry shared by every controller: points, disks, polylines, simple polygons
+//! and polygons grown by a radius,
 //! the rectangular field, and a uniform-grid spatial index over disks.
 //!
 //! Everything is `f64` and uses nalgebra's `Point2`/`Vector2`, the same types parry2d-f64
@@ -13,6 +14,7 @@ mod disk;
 mod disk_grid;
 mod field;
 mod free_space;
+mod inflated_polygon;
 mod intersections;
 mod polygon;
 mod polyline;
@@ -22,7 +24,10 @@ pub use disk::{Disk, distance_point_segment};
 pub use disk_grid::DiskGrid;
 pub use field::Field;
 pub use free_space::FreeSpace;
-pub use intersections::{circle_circle_intersections, circle_line_intersections};
+pub use inflated_polygon::InflatedPolygon;
+pub use intersections::{
+    circle_circle_intersections, circle_line_intersections, line_line_intersection,
+};
 pub use polygon::{Polygon, PolygonError};
 pub use polyline::{
     distance_polyline_polyline, distance_segment_segment, polyline_length_m, polyline_prefix,
