@@ -606,3 +606,30 @@ fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
     let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(output.status.code(), Some(0), "{output:?}");
 }
+
+/// A controller that does not plan round polygons yet, asked for by name on a scenario
+/// with polygons, is refused before anything runs: exit 2, one line, no folder.
+#[test]
+fn a_controller_that_does_not_see_polygons_is_refused_on_a_polygon_scenario() {
+    let scenario = support::repo_root().join("scenarios/polygon-corridor.toml");
+    let dir = tempfile::tempdir().expect("temporary folder");
+    for command in ["run", "simulate"] {
+        let out = dir.path().join(command);
+        let mut cmd = Command::new(support::coordinator_bin());
+        cmd.arg(command)
+            .arg(&scenario)
+            .args(["--controller", "orca"]);
+        if command == "run" {
+            cmd.arg("--out").arg(&out);
+        }
+        let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{command}: {stderr}");
+        assert_eq!(stderr.trim_end().lines().count(), 1, "{command}: {stderr}");
+        assert!(
+            stderr.contains("controller orca") && stderr.contains("polygon"),
+            "{stderr}"
+        );
+        assert!(!out.exists(), "{command}: nothing written");
+    }
+}

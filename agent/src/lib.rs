@@ -316,7 +316,8 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
             controller = Some(
                 TurnController::new(&mission.controller, mission.field, obstacles, spec)
                     .context("the mission's controller settings")?
-                    .with_moving(&mission.moving, obstacles),
+                    .with_moving(&mission.moving, obstacles)
+                    .with_polygons(&mission.polygons),
             );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
         }
@@ -379,6 +380,7 @@ mod tests {
             mission: MissionView {
                 field: scenario.field,
                 obstacles: scenario.static_obstacles(),
+                polygons: scenario.polygons.clone(),
                 moving: scenario.moving.clone(),
                 agents: scenario.agents.clone(),
                 controller: scenario.controller,

@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use shared::geometry::{Disk, Field, Point, Pose};
+use shared::geometry::{Disk, Field, Point, Polygon, Pose};
 use shared::moving_obstacle::MovingObstacle;
 use shared::vocabulary::{AgentSpec, ControllerSpec, Move};
 
@@ -14,6 +14,8 @@ pub struct MissionView {
     /// Every static obstacle, true radii: those the centre knows and those it finds on
     /// the way (an agent senses both alike).
     pub obstacles: Vec<Disk>,
+    /// The static polygon obstacles.
+    pub polygons: Vec<Polygon>,
     /// The moving obstacles; where they stand follows from the turn's step.
     pub moving: Vec<MovingObstacle>,
     /// Every agent, in agent order.
@@ -29,6 +31,7 @@ impl MissionView {
         Self {
             field: scenario.field,
             obstacles: scenario.static_obstacles(),
+            polygons: scenario.polygons,
             moving: scenario.moving,
             agents: scenario.agents,
             controller: scenario.controller,

@@ -215,6 +215,21 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
             Ok((l, scenarios))
         })
         .collect::<Result<Vec<_>, ScenarioError>>()?;
+    // A controller asked for by name must be able to run every scenario; by default the
+    // ones a scenario refuses (beside polygons) are left out of it, said on stderr.
+    if !args.controllers.is_empty()
+        && let Some(why) = loaded
+            .iter()
+            .flat_map(|l| {
+                controllers
+                    .iter()
+                    .map(|&k| l.scenario.refuses_controller(k))
+            })
+            .flatten()
+            .next()
+    {
+        return Err(CliError::Usage(why));
+    }
     let out = output::OutDir::check(
         args.out
             .clone()
@@ -233,6 +248,10 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
     for (l, scenarios) in &runs {
         for (in_mode, asked) in scenarios {
             for &controller in &controllers {
+                if let Some(why) = in_mode.refuses_controller(controller) {
+                    eprintln!("left out: {why}");
+                    continue;
+                }
                 let scenario = in_mode.with_controller(controller);
                 let folder = run_folder_name(&scenario.name, controller, *asked, &mut taken);
                 // The turn mode is named wherever it was asked for.

@@ -190,7 +190,12 @@ struct Prepared {
 fn prepare_new(args: &RunArgs) -> Result<Prepared, CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let scenario = match args.controller {
-        Some(kind) => loaded.scenario.with_controller(kind),
+        Some(kind) => {
+            if let Some(why) = loaded.scenario.refuses_controller(kind) {
+                return Err(CliError::Usage(why));
+            }
+            loaded.scenario.with_controller(kind)
+        }
         None => loaded.scenario.clone(),
     };
     let record = RecordOptions {

@@ -37,7 +37,12 @@ struct SimulateReport {
 pub fn execute(args: &SimulateArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let scenario = match args.controller {
-        Some(kind) => loaded.scenario.with_controller(kind),
+        Some(kind) => {
+            if let Some(why) = loaded.scenario.refuses_controller(kind) {
+                return Err(CliError::Usage(why));
+            }
+            loaded.scenario.with_controller(kind)
+        }
         None => loaded.scenario.clone(),
     };
     let mut run_s = Vec::new();

@@ -7,7 +7,9 @@
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{Disk, DiskGrid, Field, Point, Vector, distance_point_segment};
+use crate::geometry::{
+    Disk, DiskGrid, Field, Point, Polygon, Vector, distance_point_segment, distance_segment_segment,
+};
 use crate::vocabulary::Body;
 
 /// How far a body may overlap another before it counts as a collision, in metres.
@@ -58,6 +60,16 @@ pub enum Violation {
     HitsMovingObstacle {
         /// Index of the moving obstacle, in scenario order.
         obstacle: usize,
+        /// Overlap depth.
+        overlap_m: f64,
+    },
+    /// The body would overlap a polygon obstacle.
+    #[error("segment {segment} overlaps polygon {polygon} by {overlap_m} m")]
+    HitsPolygon {
+        /// Index of the segment.
+        segment: usize,
+        /// Index of the polygon.
+        polygon: usize,
         /// Overlap depth.
         overlap_m: f64,
     },
@@ -326,6 +338,64 @@ pub fn check_move_against_moving(
         }
     }
     Ok(())
+}
+
+/// Check that a body of radius `radius_m` following `waypoints` (already checked by
+/// [`check_move`] or [`check_move_of`]: finite, at least one) never overlaps one of
+/// `polygons` beyond [`SAFETY_TOLERANCE_M`]: the exact distance of every segment to
+/// every polygon, inside counting as overlap by at least the radius.
+pub fn check_move_against_polygons(
+    polygons: &[Polygon],
+    radius_m: f64,
+    waypoints: &[Point],
+) -> Result<(), Violation> {
+    let single = [waypoints.first().copied().unwrap_or(Point::origin()); 2];
+    let segments: &[Point] = if waypoints.len() < 2 {
+        &single
+    } else {
+        waypoints
+    };
+    for (segment, w) in segments.windows(2).enumerate() {
+        for (polygon, shape) in polygons.iter().enumerate() {
+            let overlap_m = radius_m - distance_segment_polygon_m(&w[0], &w[1], shape);
+            if overlap_m > SAFETY_TOLERANCE_M {
+                return Err(Violation::HitsPolygon {
+                    segment,
+                    polygon,
+                    overlap_m,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Smallest distance from the segment `a`-`b` to `polygon`, 0 when it enters it.
+pub fn distance_segment_polygon_m(a: &Point, b: &Point, polygon: &Polygon) -> f64 {
+    if polygon.contains(a) || polygon.contains(b) {
+        return 0.0;
+    }
+    polygon
+        .sides()
+        .map(|(c, d)| distance_segment_segment(a, b, &c, &d))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Clearance of `body` (distance minus radius) to the nearest of `polygons`,
+/// `f64::INFINITY` when there is none; negative inside one.
+pub fn clearance_to_polygons_m(body: &Body, polygons: &[Polygon]) -> f64 {
+    polygons
+        .iter()
+        .map(|p| {
+            let inside = p.contains(&body.position);
+            let edge_m = p
+                .sides()
+                .map(|(a, b)| distance_point_segment(&body.position, &a, &b))
+                .fold(f64::INFINITY, f64::min);
+            if inside { -edge_m } else { edge_m }
+        })
+        .map(|d| d - body.radius_m)
+        .fold(f64::INFINITY, f64::min)
 }
 
 #[cfg(test)]

@@ -22,9 +22,10 @@ pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
     let p = &scenario.path;
     let settings =
         HybridAStarSettings::new(p.turning_radius_m, p.centre_clearance_m, p.allow_reverse);
-    let dense = hybrid_astar::plan(
+    let (dense, _) = hybrid_astar::plan_among_polygons(
         &scenario.field,
         &scenario.obstacles,
+        &scenario.polygons,
         &p.start,
         &p.goal,
         &settings,
@@ -41,8 +42,10 @@ pub fn agent_controllers(scenario: &Scenario) -> Result<Vec<TurnController>, Cbf
         .agents
         .iter()
         .map(|a| {
-            TurnController::new(&scenario.controller, scenario.field, &obstacles, a)
-                .map(|p| p.with_moving(&scenario.moving, &obstacles))
+            TurnController::new(&scenario.controller, scenario.field, &obstacles, a).map(|p| {
+                p.with_moving(&scenario.moving, &obstacles)
+                    .with_polygons(&scenario.polygons)
+            })
         })
         .collect()
 }

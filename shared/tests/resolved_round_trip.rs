@@ -85,7 +85,11 @@ fn every_shipped_scenario_resolves_to_a_file_that_loads_to_the_same_scenario() {
         let s = Scenario::load(file).unwrap_or_else(|e| panic!("{e}"));
         let original = Scenario::read(file).expect("read");
         generated += usize::from(original.contains("[obstacles.random]"));
-        for kind in ControllerKind::ALL {
+        // Beside polygons only the best-point controller is accepted.
+        let kinds = ControllerKind::ALL
+            .into_iter()
+            .filter(|k| s.polygons.is_empty() || *k == ControllerKind::BestPoint);
+        for kind in kinds {
             let text = round_trip(&s.with_controller(kind), &what);
             assert!(text.contains(&what), "{what}: the source is named");
         }

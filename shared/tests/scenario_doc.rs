@@ -389,30 +389,31 @@ fn the_key_table_matches_the_parser() {
         }
     }
     // Keys the complete example cannot hold beside its other keys (agents with a heading
-    // refuse moving obstacles) are checked in the second complete example, a block
-    // opening with `# complete example`.
-    let second: Option<Table> = toml_blocks(&text)
+    // refuse moving obstacles, polygons refuse both) are checked in further complete
+    // examples, blocks opening with `# complete example`: each key in the first that
+    // holds it.
+    let others: Vec<Table> = toml_blocks(&text)
         .into_iter()
         .skip(1)
-        .find(|(_, b)| b.trim_start().starts_with("# complete example"))
-        .map(|(_, b)| toml::from_str(&b).expect("the second complete example is TOML"));
-    if let Some(second) = &second {
-        parse(second, "doc.toml").expect("the second complete example parses");
+        .filter(|(_, b)| b.trim_start().starts_with("# complete example"))
+        .map(|(_, b)| toml::from_str(&b).expect("a further complete example is TOML"))
+        .collect();
+    for other in &others {
+        parse(other, "doc.toml").expect("a further complete example parses");
         let mut keys = BTreeSet::new();
-        all_keys(second, "", &mut keys);
+        all_keys(other, "", &mut keys);
         for key in keys.difference(&documented) {
             problems.push(format!(
-                "{key}: in the second complete example but not in the key table"
+                "{key}: in a further complete example but not in the key table"
             ));
         }
     }
     for row in &rows {
-        match &second {
-            Some(second) if count_key(&example, &row.key) == 0 => {
-                check_row(second, row, &mut problems);
-            }
-            _ => check_row(&example, row, &mut problems),
-        }
+        let holder = std::iter::once(&example)
+            .chain(&others)
+            .find(|t| count_key(t, &row.key) > 0)
+            .unwrap_or(&example);
+        check_row(holder, row, &mut problems);
     }
     assert!(
         problems.is_empty(),

@@ -75,6 +75,7 @@ fn recheck_every_move(scenario: &Scenario, run: &Run) {
                 .unwrap_or_else(|v| {
                     panic!("{}: step {} agent {i}: {v}", scenario.name, after.step)
                 });
+                assert_clear_of_polygons(scenario, bodies[i].radius_m, &a.waypoints, i, after.step);
                 assert_eq!(*a.waypoints.last().unwrap(), a.position);
                 if let Some(max_m) = scenario.agents[i].max_step_m {
                     let length_m = polyline_length_m(&a.waypoints);
@@ -98,6 +99,31 @@ fn recheck_every_move(scenario: &Scenario, run: &Run) {
             }
             for &i in group {
                 bodies[i].position = after.agents[i].position;
+            }
+        }
+    }
+}
+
+/// Every point of `waypoints`, sampled every millimetre, keeps `radius_m` from every
+/// polygon (its plain distance, not the grown shape the planner uses).
+fn assert_clear_of_polygons(
+    scenario: &Scenario,
+    radius_m: f64,
+    waypoints: &[shared::geometry::Point],
+    agent: usize,
+    step: usize,
+) {
+    for w in waypoints.windows(2) {
+        let n = ((w[1] - w[0]).norm() / 1e-3).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let p = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
+            for (j, polygon) in scenario.polygons.iter().enumerate() {
+                let d = polygon.distance_m(&p);
+                assert!(
+                    d >= radius_m - SAFETY_TOLERANCE_M,
+                    "{}: step {step} agent {agent}: {d} m from polygon {j} at {p:?}",
+                    scenario.name
+                );
             }
         }
     }
@@ -167,6 +193,9 @@ fn the_barrier_function_controller_never_breaks_clearance_on_any_shipped_static_
         let scenario = Scenario::load(&file)
             .unwrap()
             .with_controller(ControllerKind::Cbf);
+        if !scenario.polygons.is_empty() {
+            continue; // refused beside polygons: it does not plan round them yet
+        }
         let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
         if scenario.changes() {
             // A reactive baseline is not claimed safe against moving obstacles: it gets
@@ -189,6 +218,9 @@ fn orca_never_breaks_clearance_or_its_top_speed_on_any_shipped_static_scenario()
         let scenario = Scenario::load(&file)
             .unwrap()
             .with_controller(ControllerKind::Orca);
+        if !scenario.polygons.is_empty() {
+            continue; // refused beside polygons: it does not plan round them yet
+        }
         let run = simulate(&scenario).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
         if scenario.changes() {
             // A reactive baseline is not claimed safe against moving obstacles: it gets

@@ -4,11 +4,12 @@
 //! kinematic model is in `kinematics.rs`.
 
 use nalgebra::{Isometry2, Vector2};
-use parry2d_f64::bounding_volume::Aabb;
+use parry2d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use parry2d_f64::query;
-use parry2d_f64::shape::{Ball, Segment};
-use shared::geometry::{Disk, Field, Point};
+use parry2d_f64::shape::{Ball, Polyline, Segment};
+use parry2d_f64::utils::point_in_poly2d;
+use shared::geometry::{Disk, Field, Point, Polygon};
 use shared::safety::SAFETY_TOLERANCE_M;
 use shared::vocabulary::Body;
 
@@ -71,6 +72,14 @@ pub enum Refusal {
         /// Obstacle index.
         obstacle: usize,
     },
+    /// The agent would overlap a polygon obstacle.
+    #[error("segment {segment} overlaps polygon {polygon}")]
+    Polygon {
+        /// Segment index.
+        segment: usize,
+        /// Polygon index.
+        polygon: usize,
+    },
     /// The agent would overlap a moving obstacle where it stands during the turn.
     #[error("segment {segment} overlaps moving obstacle {obstacle}")]
     MovingObstacle {
@@ -118,6 +127,8 @@ pub struct SafetyMonitor {
     bvh: Bvh,
     /// The moving obstacles where they stand now ([`Self::move_obstacles`]).
     moving: Vec<Disk>,
+    /// The polygon obstacles: corners, closed boundary as a parry polyline, box.
+    polygons: Vec<(Vec<Point>, Polyline, Aabb)>,
 }
 
 impl SafetyMonitor {
@@ -135,7 +146,25 @@ impl SafetyMonitor {
             obstacles: obstacles.to_vec(),
             bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &leaves),
             moving: Vec::new(),
+            polygons: Vec::new(),
         }
+    }
+
+    /// The same monitor, also keeping every move clear of `polygons` (checked with
+    /// parry's own segment-polyline distance and point-in-polygon test).
+    pub fn with_polygons(mut self, polygons: &[Polygon]) -> Self {
+        self.polygons = polygons
+            .iter()
+            .map(|p| {
+                let corners = p.vertices().to_vec();
+                let n = corners.len() as u32;
+                let ring = (0..n).map(|i| [i, (i + 1) % n]).collect();
+                let line = Polyline::new(corners.clone(), Some(ring));
+                let aabb = Aabb::from_points(corners.iter().copied());
+                (corners, line, aabb)
+            })
+            .collect();
+        self
     }
 
     /// The moving obstacles drive along `sweeps` (one polyline each, from where they
@@ -261,6 +290,16 @@ impl SafetyMonitor {
                     });
                 }
             }
+            for (polygon, (corners, line, aabb)) in self.polygons.iter().enumerate() {
+                if !aabb.intersects(&sweep) {
+                    continue;
+                }
+                let inside = point_in_poly2d(a, corners) || point_in_poly2d(b, corners);
+                let distance_m = query::distance(&identity, &shape, &identity, line).unwrap_or(0.0);
+                if inside || distance_m < radius_m - SAFETY_TOLERANCE_M {
+                    return Err(Refusal::Polygon { segment, polygon });
+                }
+            }
             for (obstacle, o) in self.moving.iter().enumerate() {
                 // Outside the segment's box grown by the radii sum: cannot meet it.
                 let out = o.radius_m + radius_m + PREFILTER_SLACK_M;
@@ -377,6 +416,53 @@ mod tests {
         assert_eq!(distance_between_moves_m(&path, &across), 0.0);
         let beside = [Point::new(10.0, 4.0)];
         assert!((distance_between_moves_m(&path, &beside) - 7.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
+        // A U open upwards: its notch (4..6 x 3..8) is free.
+        let u = Polygon::new(vec![
+            Point::new(3.0, 2.0),
+            Point::new(7.0, 2.0),
+            Point::new(7.0, 8.0),
+            Point::new(6.0, 8.0),
+            Point::new(6.0, 3.0),
+            Point::new(4.0, 3.0),
+            Point::new(4.0, 8.0),
+            Point::new(3.0, 8.0),
+        ])
+        .expect("simple");
+        let m = SafetyMonitor::new(Field::new(10.0, 10.0), &[]).with_polygons(&[u]);
+        let lone = |p: Point| {
+            vec![Body {
+                position: p,
+                radius_m: 0.3,
+            }]
+        };
+        // Down into the notch, keeping 0.3 m from its walls: accepted.
+        let from = Point::new(5.0, 9.5);
+        let into = [from, Point::new(5.0, 3.3)];
+        assert_eq!(
+            m.check(0, &from, &into, &into[1], false, &lone(from), &[], 8),
+            Ok(())
+        );
+        // 0.1 m too deep, or through a wall, or standing inside: refused.
+        for end in [Point::new(5.0, 3.2), Point::new(8.5, 5.0)] {
+            let mv = [from, end];
+            assert_eq!(
+                m.check(0, &from, &mv, &end, false, &lone(from), &[], 8),
+                Err(Refusal::Polygon {
+                    segment: 0,
+                    polygon: 0
+                }),
+                "{end:?}"
+            );
+        }
+        let inside = Point::new(3.5, 5.0);
+        assert!(matches!(
+            m.check(0, &inside, &[inside], &inside, false, &lone(inside), &[], 8),
+            Err(Refusal::Polygon { .. })
+        ));
     }
 
     #[test]

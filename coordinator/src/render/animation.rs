@@ -300,6 +300,7 @@ impl<'a> Animation<'a> {
         let chart = scene::map_chart(&panel, &close_up)?;
         let p = Painter::new(&chart, &close_up);
         p.obstacles(&self.data.scenario.obstacles, self.margin_m)?;
+        p.polygons(&self.data.scenario.polygons, self.margin_m)?;
         p.faint_centre_path(&self.data.centre)?;
         self.draw_world(&p, at, true)?;
         right.draw(&Text::new(
@@ -457,6 +458,7 @@ impl Figure for Background<'_, '_> {
         let p = Painter::new(&chart, &a.layout);
         let s = &a.data.scenario;
         p.obstacles(&s.obstacles, a.margin_m)?;
+        p.polygons(&s.polygons, a.margin_m)?;
         for m in &s.moving {
             p.route(m)?;
         }

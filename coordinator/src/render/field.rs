@@ -86,10 +86,15 @@ impl<'a> FieldFigure<'a> {
         let header = Header {
             title: header::title(format!("{}: obstacle field and centre path", s.name), s),
             subtitle: Some(format!(
-                "{} x {} m field, {} obstacles{}; {} centre steps of {} m, turning radius {} m{}",
+                "{} x {} m field, {} obstacles{}{}; {} centre steps of {} m, turning radius {} m{}",
                 fmt_m(s.field.width_m),
                 fmt_m(s.field.height_m),
                 s.obstacles.len(),
+                match s.polygons.len() {
+                    0 => String::new(),
+                    1 => " and 1 polygon".to_string(),
+                    n => format!(" and {n} polygons"),
+                },
                 changing_note(data),
                 data.centre.len().saturating_sub(1),
                 fmt_m(s.path.step_m),
@@ -226,6 +231,7 @@ impl MapFigure for FieldFigure<'_> {
     fn paint<DB: Backend>(&self, p: &Painter<'_, '_, DB>) -> anyhow::Result<()> {
         let s = &self.data.scenario;
         p.obstacles(&s.obstacles, self.margin_m)?;
+        p.polygons(&s.polygons, self.margin_m)?;
         self.draw_changing_world(p)?;
 
         let path: Vec<Xy> = self

@@ -164,6 +164,7 @@ impl MapFigure for FormationFigure<'_> {
         let start = s.path.start;
         let centre: Xy = (start.x_m, start.y_m);
         p.obstacles(&s.obstacles, self.margin_m)?;
+        p.polygons(&s.polygons, self.margin_m)?;
         let n = s.agents.len();
         for (pos, a) in self.positions.iter().zip(&s.agents) {
             if n <= SPOKES_UP_TO && a.slot.r_m > 0.0 {

@@ -10,7 +10,7 @@ use plotters::prelude::{
 };
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{Color, RGBAColor, RGBColor, ShapeStyle, TextStyle};
-use shared::geometry::{Disk, Point, Pose};
+use shared::geometry::{Disk, InflatedPolygon, Point, Polygon as PolygonObstacle, Pose};
 
 use super::canvas::Backend;
 use super::data::{CentrePose, UnknownRecord};
@@ -284,6 +284,47 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
                 Some(fill(solid(palette::OBSTACLE))),
                 None,
             )?;
+        }
+        Ok(())
+    }
+
+    /// The polygon obstacles, filled as the disks are, each with its safety margin (the
+    /// polygon grown by `margin_m`: its offset sides and the arcs round its convex
+    /// corners, dashed).
+    pub fn polygons(&self, polygons: &[PolygonObstacle], margin_m: f64) -> anyhow::Result<()> {
+        for polygon in polygons {
+            let corners: Vec<Xy> = polygon.vertices().iter().map(|v| (v.x, v.y)).collect();
+            self.polygon(&corners, fill(solid(palette::OBSTACLE)))?;
+            if margin_m <= 0.0 {
+                continue;
+            }
+            let grown = InflatedPolygon::from_polygon(polygon.clone(), margin_m);
+            let edge = line(solid(palette::SAFETY_MARGIN), 1);
+            for (a, b) in grown.offset_sides() {
+                self.dashed(&[(a.x, a.y), (b.x, b.y)], 4, 3, edge)?;
+            }
+            let n = corners.len();
+            let v = polygon.vertices();
+            for i in polygon.convex_corners() {
+                let (prev, here, next) = (v[(i + n - 1) % n], v[i], v[(i + 1) % n]);
+                // Outward normals of the sides before and after the corner.
+                let before = (here - prev).normalize();
+                let after = (next - here).normalize();
+                let from_rad = (-before.x).atan2(before.y);
+                let mut to_rad = (-after.x).atan2(after.y);
+                // Round a convex corner of an anticlockwise polygon the normal turns left.
+                if to_rad < from_rad {
+                    to_rad += std::f64::consts::TAU;
+                }
+                let steps = 12;
+                let arc: Vec<Xy> = (0..=steps)
+                    .map(|k| {
+                        let t = from_rad + (to_rad - from_rad) * k as f64 / steps as f64;
+                        (here.x + margin_m * t.cos(), here.y + margin_m * t.sin())
+                    })
+                    .collect();
+                self.dashed(&arc, 4, 3, edge)?;
+            }
         }
         Ok(())
     }

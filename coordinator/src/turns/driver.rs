@@ -181,7 +181,8 @@ impl Driver<'_, '_> {
         self.progress.turn_samples.reserve(n * centre_path.len());
 
         let mut monitor =
-            SafetyMonitor::new(self.scenario.field, &self.scenario.static_obstacles());
+            SafetyMonitor::new(self.scenario.field, &self.scenario.static_obstacles())
+                .with_polygons(&self.scenario.polygons);
         let bar = progress_bar(
             centre_path.len().saturating_sub(1),
             &self.scenario.name,

@@ -120,6 +120,14 @@ impl Polygon {
         Ok(Self { vertices })
     }
 
+    /// The same polygon moved by `by` (its corners in the same order: a translation keeps
+    /// it simple and anticlockwise).
+    pub fn translated(&self, by: &super::Vector) -> Self {
+        Self {
+            vertices: self.vertices.iter().map(|v| v + by).collect(),
+        }
+    }
+
     /// The corners, anticlockwise.
     pub fn vertices(&self) -> &[Point] {
         &self.vertices

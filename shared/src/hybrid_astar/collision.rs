@@ -5,7 +5,9 @@ use std::ops::ControlFlow;
 
 use super::primitive::Piece;
 use super::settings::HybridAStarSettings;
-use crate::geometry::{Disk, DiskGrid, Field, Point, distance_point_segment};
+use crate::geometry::{
+    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, distance_point_segment,
+};
 
 /// Exact collision checks against the obstacles inflated by the clearance and the field
 /// inset by it.
@@ -15,6 +17,8 @@ pub(super) struct Checker {
     pub(super) max: Point,
     spacing_m: f64,
     candidates: Vec<Disk>,
+    /// Polygon obstacles grown by the clearance.
+    polygons: Vec<InflatedPolygon>,
 }
 
 impl Checker {
@@ -26,7 +30,33 @@ impl Checker {
             max: Point::new(field.width_m - c, field.height_m - c),
             spacing_m: settings.sample_spacing_m,
             candidates: Vec::new(),
+            polygons: Vec::new(),
         }
+    }
+
+    /// The same checks, also against `polygons` grown by the clearance.
+    pub(super) fn with_polygons(
+        mut self,
+        polygons: &[Polygon],
+        settings: &HybridAStarSettings,
+    ) -> Self {
+        self.polygons = polygons
+            .iter()
+            .map(|p| InflatedPolygon::from_polygon(p.clone(), settings.clearance_m))
+            .collect();
+        self
+    }
+
+    /// Whether the segment `a`-`b` keeps `margin_m` beyond every grown polygon.
+    fn segment_clear_of_polygons(&self, a: &Point, b: &Point, margin_m: f64) -> bool {
+        let (min, max) = (
+            Point::new(a.x.min(b.x) - margin_m, a.y.min(b.y) - margin_m),
+            Point::new(a.x.max(b.x) + margin_m, a.y.max(b.y) + margin_m),
+        );
+        self.polygons
+            .iter()
+            .filter(|p| p.box_meets(&min, &max))
+            .all(|p| p.signed_distance_to_segment_m(a, b) >= margin_m)
     }
 
     pub(super) fn in_field(&self, p: &Point) -> bool {
@@ -35,6 +65,7 @@ impl Checker {
 
     pub(super) fn point_free(&self, p: &Point) -> bool {
         self.in_field(p)
+            && self.segment_clear_of_polygons(p, p, 0.0)
             && self
                 .grid
                 .visit_near(p, 0.0, |_, d| {
@@ -47,10 +78,45 @@ impl Checker {
                 .is_continue()
     }
 
+    /// Whether the piece and every chord it is drawn with stay clear of the polygons: a
+    /// straight piece exactly; an arc through its chords, each kept clear by the most the
+    /// arc bulges from it (its sagitta), so the arc is clear too.
+    fn piece_clear_of_polygons(&self, piece: &Piece) -> bool {
+        if piece.curvature_per_m == 0.0 {
+            return self.segment_clear_of_polygons(
+                &piece.start.position(),
+                &piece.end().position(),
+                0.0,
+            );
+        }
+        let n = piece.chords(self.spacing_m);
+        let radius_m = 1.0 / piece.curvature_per_m.abs();
+        let half_angle_rad = 0.5 * piece.length_m.abs() / n as f64 / radius_m;
+        let sagitta_m = radius_m * (1.0 - half_angle_rad.min(std::f64::consts::PI).cos());
+        let mut a = piece.start.position();
+        for i in 1..=n {
+            let b = if i == n {
+                piece.end().position()
+            } else {
+                piece
+                    .pose_at(piece.length_m * i as f64 / n as f64)
+                    .position()
+            };
+            if !self.segment_clear_of_polygons(&a, &b, sagitta_m) {
+                return false;
+            }
+            a = b;
+        }
+        true
+    }
+
     /// Whether the piece and every chord it is drawn with are free.
     pub(super) fn piece_free(&mut self, piece: &Piece) -> bool {
         let (min, max) = piece.bounding_box();
         if !(self.in_field(&min) && self.in_field(&max)) {
+            return false;
+        }
+        if !self.polygons.is_empty() && !self.piece_clear_of_polygons(piece) {
             return false;
         }
         self.candidates.clear();

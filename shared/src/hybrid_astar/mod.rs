@@ -63,7 +63,7 @@ mod search;
 mod settings;
 
 pub use error::PlanError;
-pub use plan::{plan, plan_with_stats};
+pub use plan::{plan, plan_among_polygons, plan_with_stats};
 pub use replan::{Replanner, first_blocked_pose};
 pub use resample::{path_length_m, resample};
 pub use search::PlanStats;

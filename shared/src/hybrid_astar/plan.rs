@@ -10,7 +10,7 @@ use super::primitive::dense_path;
 use super::resample::path_length_m;
 use super::search::{PlanStats, Search};
 use super::settings::HybridAStarSettings;
-use crate::geometry::{Disk, Field, Pose};
+use crate::geometry::{Disk, Field, Polygon, Pose};
 
 /// Plan a path for the formation centre from `start` to `goal`.
 ///
@@ -58,8 +58,23 @@ pub fn plan_with_stats(
     goal: &Pose,
     settings: &HybridAStarSettings,
 ) -> Result<(Vec<Pose>, PlanStats), PlanError> {
+    plan_among_polygons(field, obstacles, &[], start, goal, settings)
+}
+
+/// [`plan_with_stats`] among `polygons` too (true shapes): every piece of the path keeps
+/// the clearance from them as from the disks (an arc through its chords, each kept clear
+/// by the arc's bulge as well). The search's heuristic ignores the polygons, which keeps
+/// it a lower bound.
+pub fn plan_among_polygons(
+    field: &Field,
+    obstacles: &[Disk],
+    polygons: &[Polygon],
+    start: &Pose,
+    goal: &Pose,
+    settings: &HybridAStarSettings,
+) -> Result<(Vec<Pose>, PlanStats), PlanError> {
     validate_inputs(field, obstacles, settings)?;
-    let checker = Checker::new(field, obstacles, settings);
+    let checker = Checker::new(field, obstacles, settings).with_polygons(polygons, settings);
     plan_with_checker(field, checker, start, goal, settings, |checker| {
         Holonomic::new(field, checker, goal, settings)
     })

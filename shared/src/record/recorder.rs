@@ -326,6 +326,7 @@ impl<'a> Recorder<'a> {
             &body.position,
             &mv.waypoints,
         )?;
+        safety::check_move_against_polygons(&self.scenario.polygons, body.radius_m, &mv.waypoints)?;
         if let Some(max_m) = spec.max_step_m {
             let length_m = polyline_length_m(&mv.waypoints);
             if length_m > max_m + SAFETY_TOLERANCE_M {
@@ -484,6 +485,10 @@ impl<'a> Recorder<'a> {
             // look a little farther so clearance is reported for near misses too.
             let (to_static, to_other) =
                 safety::clearances_of_m(&self.bodies, i, &self.obstacles, reach_m + 10.0);
+            let to_static = to_static.min(safety::clearance_to_polygons_m(
+                &body,
+                &self.scenario.polygons,
+            ));
             let to_obstacle = if self.scenario.moving.is_empty() {
                 to_static
             } else {

@@ -84,6 +84,16 @@ pub(super) struct ObstaclesFile {
     /// `[[obstacles.unknown]]`: obstacles the centre's planner does not know at the start.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(super) unknown: Vec<DiskFile>,
+    /// `[[obstacles.polygon]]`: simple polygons, convex or not, either orientation.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(super) polygon: Vec<PolygonFile>,
+}
+
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct PolygonFile {
+    /// `[x_m, y_m]` pairs, checked by the [`Checker`] as `positions_m` is.
+    pub(super) vertices_m: Vec<Vec<f64>>,
 }
 
 impl Default for ObstaclesFile {
@@ -95,6 +105,7 @@ impl Default for ObstaclesFile {
             random: None,
             moving: Vec::new(),
             unknown: Vec::new(),
+            polygon: Vec::new(),
         }
     }
 }
@@ -288,10 +299,11 @@ fn table_given_as_array(document: &toml::Table) -> Option<String> {
         "path.start",
         "path.goal",
     ];
-    const ARRAYS_OF_TABLES: [&str; 4] = [
+    const ARRAYS_OF_TABLES: [&str; 5] = [
         "obstacles.disk",
         "obstacles.moving",
         "obstacles.unknown",
+        "obstacles.polygon",
         "formation.slots",
     ];
     let lookup = |path: &str| {

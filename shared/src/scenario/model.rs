@@ -1,6 +1,6 @@
 //! The validated scenario: what a run is made of.
 
-use crate::geometry::{Disk, Field, Pose};
+use crate::geometry::{Disk, Field, Polygon, Pose};
 use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode};
 
@@ -22,6 +22,8 @@ pub struct Scenario {
     /// each joins the known map the moment an agent senses it (agents plan around them as
     /// around any obstacle they sense).
     pub unknown: Vec<Disk>,
+    /// Static polygon obstacles, known from the start, in file order.
+    pub polygons: Vec<Polygon>,
     /// The agents, in turn order.
     pub agents: Vec<AgentSpec>,
     /// Formation centre path settings.
@@ -58,6 +60,18 @@ impl Scenario {
         let mut s = self.clone();
         s.controller.kind = kind;
         s
+    }
+
+    /// Why this scenario cannot be run by controller `kind` (`None`: it can): only the
+    /// best-point controller plans round polygon obstacles yet.
+    pub fn refuses_controller(&self, kind: ControllerKind) -> Option<String> {
+        (!self.polygons.is_empty() && kind != ControllerKind::BestPoint).then(|| {
+            format!(
+                "controller {}: scenario {:?} has polygon obstacles, which only best-point plans round yet",
+                kind.name(),
+                self.name
+            )
+        })
     }
 
     /// Whether anything in the world changes during a run: moving obstacles, obstacles

@@ -7,8 +7,8 @@
 use super::Scenario;
 use super::check::MAX_ANGLE_DEG;
 use super::file::{
-    CbfFile, DiskFile, FieldFile, FormationFile, MovingFile, ObstaclesFile, PathFile, PoseFile,
-    ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m, default_obstacle_radius_m,
+    CbfFile, DiskFile, FieldFile, FormationFile, MovingFile, ObstaclesFile, PathFile, PolygonFile,
+    PoseFile, ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m, default_obstacle_radius_m,
 };
 use crate::geometry::{Disk, Point, Pose};
 use crate::moving_obstacle::MovingObstacle;
@@ -115,6 +115,13 @@ impl Scenario {
             random: None,
             moving: self.moving.iter().map(moving_file).collect(),
             unknown: self.unknown.iter().map(disk_file).collect(),
+            polygon: self
+                .polygons
+                .iter()
+                .map(|p| PolygonFile {
+                    vertices_m: p.vertices().iter().map(|v| vec![v.x, v.y]).collect(),
+                })
+                .collect(),
         }
     }
 

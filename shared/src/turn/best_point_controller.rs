@@ -4,7 +4,9 @@
 use crate::best_point::{self, BestPointError};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
+use crate::geometry::{
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, Pose, Vector,
+};
 use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
 use super::PLANNING_MARGIN_M;
@@ -33,7 +35,19 @@ pub struct BestPointController {
     /// With limited sensing: the obstacles with their true radii in world coordinates
     /// (same order as `obstacles`), to pick the ones the agent senses each turn.
     sensed_from: Option<DiskGrid>,
+    /// Static polygon obstacles (boxed: most runs have none).
+    polygons: Box<PolygonObstacles>,
     spec: AgentSpec,
+}
+
+/// The polygon obstacles of one agent's controller.
+#[derive(Clone, Debug, Default)]
+struct PolygonObstacles {
+    /// Grown by the agent's radius and the planning margin, in the planning frame.
+    grown: Vec<InflatedPolygon>,
+    /// As given, in world coordinates (same order as `grown`), to pick the ones the agent
+    /// senses each turn.
+    given: Vec<Polygon>,
 }
 
 impl BestPointController {
@@ -61,8 +75,38 @@ impl BestPointController {
             sensed_from: spec
                 .sensing_radius_m
                 .map(|_| DiskGrid::new(obstacles.to_vec())),
+            polygons: Box::default(),
             spec: *spec,
         }
+    }
+
+    /// The same controller also planning round the static `polygons` (world
+    /// coordinates). With limited sensing, a polygon is planned round whole from the turn
+    /// any part of it comes within the sensing radius.
+    pub fn with_polygons(mut self, polygons: &[Polygon]) -> Self {
+        let grow_m = self.radius_m + PLANNING_MARGIN_M;
+        self.polygons = Box::new(PolygonObstacles {
+            grown: polygons
+                .iter()
+                .map(|p| InflatedPolygon::from_polygon(p.translated(&-self.offset), grow_m))
+                .collect(),
+            given: polygons.to_vec(),
+        });
+        self
+    }
+
+    /// The grown polygons (planning frame) the agent senses from `me`, in polygon order.
+    fn sensed_polygons(&self, me: &Point) -> Vec<InflatedPolygon> {
+        let Some(sensing_m) = self.spec.sensing_radius_m else {
+            return self.polygons.grown.clone();
+        };
+        self.polygons
+            .given
+            .iter()
+            .zip(&self.polygons.grown)
+            .filter(|(p, _)| p.distance_m(me) <= sensing_m)
+            .map(|(_, grown)| grown.clone())
+            .collect()
     }
 
     /// The inflated obstacles (planning frame) the agent senses from `me`, in obstacle
@@ -136,7 +180,14 @@ impl BestPointController {
         );
         let sensed = self.sensed_obstacles(me);
         let layers = [sensed.as_ref().unwrap_or(&self.obstacles), &agents];
-        let space = FreeSpace::new(self.field, &layers);
+        let sensed_polygons;
+        let polygons = if self.spec.sensing_radius_m.is_some() && !self.polygons.grown.is_empty() {
+            sensed_polygons = self.sensed_polygons(me);
+            &sensed_polygons[..]
+        } else {
+            &self.polygons.grown[..]
+        };
+        let space = FreeSpace::new(self.field, &layers).with_polygons(polygons);
         let (slot_p, me_p) = (slot - self.offset, me - self.offset);
         // Back to world coordinates, keeping the slot and the start bit-exact.
         let to_world = |p: &Point| -> Point {

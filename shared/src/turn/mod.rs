@@ -13,7 +13,7 @@
 use std::borrow::Cow;
 
 use crate::cbf::{CbfController, ZcbfLogSumExpController};
-use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, polyline_prefix};
+use crate::geometry::{Disk, DiskGrid, Field, Point, Polygon, Pose, polyline_prefix};
 use crate::kinematics::{CarLimits, UnicycleLimits, drive_unicycle};
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaController;
@@ -130,6 +130,16 @@ impl TurnController {
         if !moving.is_empty() {
             self.moving = moving.to_vec();
             self.statics = DiskGrid::new(obstacles.to_vec());
+        }
+        self
+    }
+
+    /// This controller also planning round the static `polygons` (only the best-point
+    /// controller plans round polygons; scenario validation refuses the others beside
+    /// them).
+    pub fn with_polygons(mut self, polygons: &[Polygon]) -> Self {
+        if let Controller::BestPoint(c) = self.controller {
+            self.controller = Controller::BestPoint(c.with_polygons(polygons));
         }
         self
     }

@@ -195,8 +195,10 @@ impl Checker<'_> {
         let unknown = self.unknown_obstacles(&raw.obstacles, &field, obstacles.len())?;
         let mut all_static = obstacles.clone();
         all_static.extend_from_slice(&unknown);
+        let polygons = self.polygons(&raw.obstacles, &field)?;
         self.start_and_goal_clear(&all_static, &field, &path)?;
         self.formation_fits_at_start(&agents, &all_static, &field, &path)?;
+        self.clear_of_polygons(&polygons, &agents, &path)?;
         let moving =
             self.moving_obstacles(&raw.obstacles, &field, &path, &agents, all_static.len())?;
         if !moving.is_empty()
@@ -210,6 +212,14 @@ impl Checker<'_> {
             ));
         }
         let controller = self.controller(raw.controller, raw.cbf.as_ref(), &agents, side_m)?;
+        self.polygons_supported(
+            &polygons,
+            &agents,
+            &controller,
+            raw.turns.mode,
+            &raw.obstacles,
+            path.max_lag_m,
+        )?;
         let turns = raw.turns.mode;
         if turns == TurnMode::Parallel
             && let Some(i) = agents.iter().position(|a| a.max_step_m.is_none())
@@ -229,6 +239,7 @@ impl Checker<'_> {
             obstacles,
             moving,
             unknown,
+            polygons,
             agents,
             path,
             controller,

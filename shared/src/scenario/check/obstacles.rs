@@ -2,12 +2,16 @@
 //! unknown ones, and the moving ones with their routes.
 
 use super::{Checker, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, num};
-use crate::geometry::{Disk, Field, distance_polyline_polyline};
+use crate::geometry::{Disk, Field, Polygon, distance_polyline_polyline};
 use crate::moving_obstacle::MovingObstacle;
 use crate::scenario::file::{MovingFile, ObstaclesFile};
 use crate::scenario::random::{Crowded, random_obstacles};
 use crate::scenario::{PathSpec, ScenarioError};
-use crate::vocabulary::{AgentSpec, MAX_OBSTACLES};
+use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_OBSTACLES, TurnMode};
+
+/// The most polygon corners a scenario may list, all polygons together (the validity
+/// check of a polygon is quadratic in its corners).
+pub(crate) const MAX_POLYGON_VERTICES: usize = 4096;
 
 impl Checker<'_> {
     /// The `[[obstacles.unknown]]` tables; `known` obstacles are already placed.
@@ -256,5 +260,135 @@ impl Checker<'_> {
             ));
         }
         Ok(obstacles)
+    }
+}
+
+impl Checker<'_> {
+    /// The `[[obstacles.polygon]]` tables: every corner a pair inside the field, the
+    /// polygon simple (it may be convex or not, given either way round).
+    pub(super) fn polygons(
+        &self,
+        raw: &ObstaclesFile,
+        field: &Field,
+    ) -> Result<Vec<Polygon>, ScenarioError> {
+        let vertices: usize = raw.polygon.iter().map(|p| p.vertices_m.len()).sum();
+        if vertices > MAX_POLYGON_VERTICES {
+            return Err(self.invalid(
+                "obstacles.polygon",
+                format!("{vertices} vertices in all exceed the limit of {MAX_POLYGON_VERTICES}"),
+            ));
+        }
+        let mut out = Vec::with_capacity(raw.polygon.len());
+        for (i, polygon) in raw.polygon.iter().enumerate() {
+            let name = format!("obstacles.polygon[{i}].vertices_m");
+            let mut corners = Vec::with_capacity(polygon.vertices_m.len());
+            for (k, xy) in polygon.vertices_m.iter().enumerate() {
+                let &[x_m, y_m] = xy.as_slice() else {
+                    return Err(self.invalid(
+                        format!("{name}[{k}]"),
+                        format!("must be a pair [x_m, y_m], got {} value(s)", xy.len()),
+                    ));
+                };
+                corners.push(self.point_in_field(
+                    &format!("{name}[{k}]"),
+                    "vertex ",
+                    (&format!("{name}[{k}][0]"), x_m),
+                    (&format!("{name}[{k}][1]"), y_m),
+                    field,
+                )?);
+            }
+            out.push(Polygon::new(corners).map_err(|e| self.invalid(&name, e.to_string()))?);
+        }
+        Ok(out)
+    }
+
+    /// The centre's start and goal keep their clearance from every polygon, and every
+    /// agent's slot at the start stands clear of them.
+    pub(super) fn clear_of_polygons(
+        &self,
+        polygons: &[Polygon],
+        agents: &[AgentSpec],
+        path: &PathSpec,
+    ) -> Result<(), ScenarioError> {
+        for (k, polygon) in polygons.iter().enumerate() {
+            for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
+                let p = pose.position();
+                let distance_m = polygon.distance_m(&p);
+                if distance_m < path.centre_clearance_m.max(f64::MIN_POSITIVE) {
+                    return Err(self.invalid(
+                        name,
+                        format!(
+                            "({}, {}) is {} m from polygon {k}, within the centre clearance {} m",
+                            num(p.x),
+                            num(p.y),
+                            num(distance_m),
+                            num(path.centre_clearance_m)
+                        ),
+                    ));
+                }
+            }
+            for (i, a) in agents.iter().enumerate() {
+                let p = a.slot.ideal_position(&path.start);
+                if polygon.distance_m(&p) < a.radius_m {
+                    return Err(self.invalid(
+                        format!("formation.slots[{i}]"),
+                        format!(
+                            "at the start pose the agent at ({:.3}, {:.3}) overlaps polygon {k}",
+                            p.x, p.y
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Polygons are planned round by the best-point controller only, for holonomic
+    /// agents taking turns one at a time among static obstacles; anything else with
+    /// polygons is refused, naming what is missing.
+    pub(super) fn polygons_supported(
+        &self,
+        polygons: &[Polygon],
+        agents: &[AgentSpec],
+        controller: &ControllerSpec,
+        turns: TurnMode,
+        raw: &ObstaclesFile,
+        max_lag_m: Option<f64>,
+    ) -> Result<(), ScenarioError> {
+        if polygons.is_empty() {
+            return Ok(());
+        }
+        let refuse = |name: &str, what: String| {
+            Err(self.invalid(
+                name,
+                format!("{what} beside polygon obstacles is not supported yet"),
+            ))
+        };
+        if controller.kind != ControllerKind::BestPoint {
+            return refuse(
+                "controller",
+                format!("controller {}", controller.kind.name()),
+            );
+        }
+        if let Some(i) = agents.iter().position(|a| a.kinematics.has_heading()) {
+            return refuse(
+                &format!("formation.slots[{i}]"),
+                "an agent with a heading".to_string(),
+            );
+        }
+        if turns != TurnMode::Sequential {
+            return refuse("turns.mode", "parallel turns".to_string());
+        }
+        // A world that changes replans the centre's path, which does not see polygons yet.
+        if !raw.moving.is_empty() {
+            return refuse("obstacles.moving", "a moving obstacle".to_string());
+        }
+        if !raw.unknown.is_empty() {
+            return refuse("obstacles.unknown", "an unknown obstacle".to_string());
+        }
+        if max_lag_m.is_some() {
+            return refuse("path.max_lag_m", "waiting for stragglers".to_string());
+        }
+        Ok(())
     }
 }
