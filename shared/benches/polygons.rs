@@ -1,0 +1,140 @@
+//! Cost of planning among polygon obstacles, on `scenarios/polygon-corridor.toml` (two
+//! L-shaped walls with a doorway, a wedge and two disks): one best point (every agent's
+//! slot at every step, against the walls and disks grown by the agent's radius), and one
+//! agent's whole move (best point, reachability and shortest path) on the turns of the
+//! reference simulation, beside the same turns with the polygons left out.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use shared::best_point::nearest_free_point;
+use shared::geometry::{Disk, DiskGrid, FreeSpace, InflatedPolygon, Point, Pose};
+use shared::scenario::Scenario;
+use shared::simulate::{agent_controllers, simulate};
+use shared::turn::TurnController;
+use shared::vocabulary::Body;
+
+/// One recorded turn: the centre, the agent, where it stood, the others.
+struct Turn {
+    step: usize,
+    centre: Pose,
+    agent: usize,
+    me: Point,
+    others: Vec<Body>,
+}
+
+fn corridor() -> Scenario {
+    let file = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/polygon-corridor.toml"
+    );
+    Scenario::load(std::path::Path::new(file)).expect("a shipped scenario")
+}
+
+/// Every agent's turn at every step, from where the step before left every agent.
+fn turns(scenario: &Scenario) -> Vec<Turn> {
+    let run = simulate(scenario).expect("simulate");
+    let mut out = Vec::new();
+    for pair in run.steps.windows(2) {
+        let (before, now) = (&pair[0], &pair[1]);
+        let bodies = before.bodies(scenario);
+        for agent in 0..bodies.len() {
+            out.push(Turn {
+                step: now.step,
+                centre: now.centre,
+                agent,
+                me: bodies[agent].position,
+                others: bodies
+                    .iter()
+                    .enumerate()
+                    .filter(|&(i, _)| i != agent)
+                    .map(|(_, b)| *b)
+                    .collect(),
+            });
+        }
+    }
+    out
+}
+
+/// Each turn timed alone (best of five); p50, p90 and the largest printed.
+fn print_turn_percentiles(what: &str, controllers: &[TurnController], turns: &[Turn]) {
+    let mut times_us: Vec<f64> = turns
+        .iter()
+        .map(|t| {
+            (0..5)
+                .map(|_| {
+                    let start = std::time::Instant::now();
+                    black_box(controllers[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others));
+                    start.elapsed().as_secs_f64() * 1e6
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    times_us.sort_by(f64::total_cmp);
+    let at = |q: f64| times_us[((times_us.len() - 1) as f64 * q).round() as usize];
+    eprintln!(
+        "{what} ({} turns, each best of 5): p50 {:.1} us, p90 {:.1} us, max {:.1} us",
+        times_us.len(),
+        at(0.5),
+        at(0.9),
+        at(1.0)
+    );
+}
+
+fn bench_polygons(c: &mut Criterion) {
+    let scenario = corridor();
+    let turns = turns(&scenario);
+    let with = agent_controllers(&scenario).expect("controllers");
+    let mut bare = scenario.clone();
+    bare.polygons.clear();
+    let without = agent_controllers(&bare).expect("controllers");
+    print_turn_percentiles("moves among polygons", &with, &turns);
+    print_turn_percentiles("the same turns without the polygons", &without, &turns);
+
+    let radius_m = scenario.agents[0].radius_m;
+    let grid = DiskGrid::new(
+        scenario
+            .obstacles
+            .iter()
+            .map(|d| Disk::new(d.centre.x, d.centre.y, d.radius_m + radius_m))
+            .collect(),
+    );
+    let layers = [&grid];
+    let grown: Vec<InflatedPolygon> = scenario
+        .polygons
+        .iter()
+        .map(|p| InflatedPolygon::from_polygon(p.clone(), radius_m))
+        .collect();
+    let space = FreeSpace::new(scenario.field, &layers).with_polygons(&grown);
+    let slots: Vec<Point> = turns
+        .iter()
+        .map(|t| scenario.agents[t.agent].slot.ideal_position(&t.centre))
+        .collect();
+
+    let mut group = c.benchmark_group("polygons/corridor");
+    let mut i = 0;
+    group.bench_function("best_point", |b| {
+        b.iter(|| {
+            let q = &slots[i % slots.len()];
+            i += 1;
+            black_box(nearest_free_point(&space, q))
+        })
+    });
+    for (name, controllers) in [
+        ("plan_turn", &with),
+        ("plan_turn/without_polygons", &without),
+    ] {
+        let mut i = 0;
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let t = &turns[i % turns.len()];
+                i += 1;
+                black_box(controllers[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others))
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_polygons);
+criterion_main!(benches);
