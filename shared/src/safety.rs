@@ -7,9 +7,7 @@
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{
-    Disk, DiskGrid, Field, Point, Polygon, Vector, distance_point_segment, distance_segment_segment,
-};
+use crate::geometry::{Disk, DiskGrid, Field, Point, Polygon, Vector, distance_point_segment};
 use crate::vocabulary::Body;
 
 /// How far a body may overlap another before it counts as a collision, in metres.
@@ -357,7 +355,7 @@ pub fn check_move_against_polygons(
     };
     for (segment, w) in segments.windows(2).enumerate() {
         for (polygon, shape) in polygons.iter().enumerate() {
-            let overlap_m = radius_m - distance_segment_polygon_m(&w[0], &w[1], shape);
+            let overlap_m = radius_m - shape.distance_to_segment_m(&w[0], &w[1]);
             if overlap_m > SAFETY_TOLERANCE_M {
                 return Err(Violation::HitsPolygon {
                     segment,
@@ -370,31 +368,12 @@ pub fn check_move_against_polygons(
     Ok(())
 }
 
-/// Smallest distance from the segment `a`-`b` to `polygon`, 0 when it enters it.
-pub fn distance_segment_polygon_m(a: &Point, b: &Point, polygon: &Polygon) -> f64 {
-    if polygon.contains(a) || polygon.contains(b) {
-        return 0.0;
-    }
-    polygon
-        .sides()
-        .map(|(c, d)| distance_segment_segment(a, b, &c, &d))
-        .fold(f64::INFINITY, f64::min)
-}
-
 /// Clearance of `body` (distance minus radius) to the nearest of `polygons`,
 /// `f64::INFINITY` when there is none; negative inside one.
 pub fn clearance_to_polygons_m(body: &Body, polygons: &[Polygon]) -> f64 {
     polygons
         .iter()
-        .map(|p| {
-            let inside = p.contains(&body.position);
-            let edge_m = p
-                .sides()
-                .map(|(a, b)| distance_point_segment(&body.position, &a, &b))
-                .fold(f64::INFINITY, f64::min);
-            if inside { -edge_m } else { edge_m }
-        })
-        .map(|d| d - body.radius_m)
+        .map(|p| p.signed_distance_m(&body.position) - body.radius_m)
         .fold(f64::INFINITY, f64::min)
 }
 

@@ -294,13 +294,7 @@ impl<'s> CandidateSearch<'s> {
         };
         self.push(disk.centre + disk.radius_m * direction);
 
-        let field = self.space.field;
-        let edge_lines = [
-            (Point::new(0.0, 0.0), Vector::y()),
-            (Point::new(field.width_m, 0.0), Vector::y()),
-            (Point::new(0.0, 0.0), Vector::x()),
-            (Point::new(0.0, field.height_m), Vector::x()),
-        ];
+        let edge_lines = field_edge_lines(&self.space.field);
         for (line_point, line_direction) in edge_lines {
             if let Some(crossings) =
                 circle_line_intersections(&disk.centre, disk.radius_m, &line_point, &line_direction)
@@ -357,13 +351,7 @@ impl<'s> CandidateSearch<'s> {
         let t = ((self.query - a).dot(&along) / length2).clamp(0.0, 1.0);
         self.push(a + t * along);
 
-        let field = self.space.field;
-        let edge_lines = [
-            (Point::new(0.0, 0.0), Vector::y()),
-            (Point::new(field.width_m, 0.0), Vector::y()),
-            (Point::new(0.0, 0.0), Vector::x()),
-            (Point::new(0.0, field.height_m), Vector::x()),
-        ];
+        let edge_lines = field_edge_lines(&self.space.field);
         for (line_point, line_direction) in edge_lines {
             if let Some((p, t, _)) =
                 line_line_intersection(&a, &along, &line_point, &line_direction)
@@ -386,6 +374,16 @@ impl<'s> CandidateSearch<'s> {
             }
         }
     }
+}
+
+/// The lines of the field's four edges, each as `(point, direction)`.
+fn field_edge_lines(field: &Field) -> [(Point, Vector); 4] {
+    [
+        (Point::new(0.0, 0.0), Vector::y()),
+        (Point::new(field.width_m, 0.0), Vector::y()),
+        (Point::new(0.0, 0.0), Vector::x()),
+        (Point::new(0.0, field.height_m), Vector::x()),
+    ]
 }
 
 /// Whether a parameter along a segment lies on it, with room for rounding.

@@ -1,7 +1,7 @@
 //! A polygon obstacle grown by a radius: the set of points nearer than the radius to the
 //! polygon (the Minkowski sum of the polygon and an open disk).
 
-use super::{Disk, Point, Vector, distance_point_segment, distance_segment_segment};
+use super::{Disk, Point, Vector};
 use super::{Polygon, PolygonError};
 
 /// A polygon grown by `radius_m`: a point is blocked when it is inside the polygon or
@@ -90,16 +90,7 @@ impl InflatedPolygon {
     /// Signed distance from `p` to the grown boundary: positive outside, negative inside
     /// (then minus the depth below the boundary).
     pub fn signed_distance_m(&self, p: &Point) -> f64 {
-        let to_sides_m = self
-            .polygon
-            .sides()
-            .map(|(a, b)| distance_point_segment(p, &a, &b))
-            .fold(f64::INFINITY, f64::min);
-        if self.polygon.contains(p) {
-            -to_sides_m - self.radius_m
-        } else {
-            to_sides_m - self.radius_m
-        }
+        self.polygon.signed_distance_m(p) - self.radius_m
     }
 
     /// Signed distance from the segment `a`-`b` to the grown boundary: its smallest
@@ -109,12 +100,7 @@ impl InflatedPolygon {
         if self.polygon.contains(a) || self.polygon.contains(b) {
             return self.signed_distance_m(a).min(self.signed_distance_m(b));
         }
-        let to_sides_m = self
-            .polygon
-            .sides()
-            .map(|(c, d)| distance_segment_segment(a, b, &c, &d))
-            .fold(f64::INFINITY, f64::min);
-        to_sides_m - self.radius_m
+        self.polygon.distance_to_segment_m(a, b) - self.radius_m
     }
 
     /// The circles round its convex corners, of its radius: the only arcs of its

@@ -164,11 +164,30 @@ impl Polygon {
 
     /// Distance from `p` to the polygon, 0 inside it.
     pub fn distance_m(&self, p: &Point) -> f64 {
+        self.signed_distance_m(p).max(0.0)
+    }
+
+    /// Signed distance from `p` to the polygon's boundary: positive outside, negative
+    /// inside.
+    pub fn signed_distance_m(&self, p: &Point) -> f64 {
+        let to_sides_m = self
+            .sides()
+            .map(|(a, b)| distance_point_segment(p, &a, &b))
+            .fold(f64::INFINITY, f64::min);
         if self.contains(p) {
+            -to_sides_m
+        } else {
+            to_sides_m
+        }
+    }
+
+    /// Smallest distance from the segment `a`-`b` to the polygon, 0 when it enters it.
+    pub fn distance_to_segment_m(&self, a: &Point, b: &Point) -> f64 {
+        if self.contains(a) || self.contains(b) {
             return 0.0;
         }
         self.sides()
-            .map(|(a, b)| distance_point_segment(p, &a, &b))
+            .map(|(c, d)| distance_segment_segment(a, b, &c, &d))
             .fold(f64::INFINITY, f64::min)
     }
 

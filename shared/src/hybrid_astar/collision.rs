@@ -93,21 +93,7 @@ impl Checker {
         let radius_m = 1.0 / piece.curvature_per_m.abs();
         let half_angle_rad = 0.5 * piece.length_m.abs() / n as f64 / radius_m;
         let sagitta_m = radius_m * (1.0 - half_angle_rad.min(std::f64::consts::PI).cos());
-        let mut a = piece.start.position();
-        for i in 1..=n {
-            let b = if i == n {
-                piece.end().position()
-            } else {
-                piece
-                    .pose_at(piece.length_m * i as f64 / n as f64)
-                    .position()
-            };
-            if !self.segment_clear_of_polygons(&a, &b, sagitta_m) {
-                return false;
-            }
-            a = b;
-        }
-        true
+        chords(piece, n).all(|(a, b)| self.segment_clear_of_polygons(&a, &b, sagitta_m))
     }
 
     /// Whether the piece and every chord it is drawn with are free.
@@ -140,24 +126,32 @@ impl Checker {
         }
         // The chords of the returned polyline cut inside the arc: check them too.
         let n = piece.chords(self.spacing_m);
-        let mut a = piece.start.position();
-        for i in 1..=n {
-            let b = if i == n {
-                piece.end().position()
-            } else {
-                piece
-                    .pose_at(piece.length_m * i as f64 / n as f64)
-                    .position()
-            };
-            if self
+        chords(piece, n).all(|(a, b)| {
+            !self
                 .candidates
                 .iter()
                 .any(|d| distance_point_segment(&d.centre, &a, &b) < d.radius_m)
-            {
-                return false;
-            }
-            a = b;
-        }
-        true
+        })
     }
+}
+
+/// The `n` chords `piece` is drawn with, each `(start, end)`, end to end from its start
+/// pose to its end pose.
+fn chords(piece: &Piece, n: usize) -> impl Iterator<Item = (Point, Point)> + '_ {
+    let at = move |i: usize| {
+        if i == n {
+            piece.end().position()
+        } else {
+            piece
+                .pose_at(piece.length_m * i as f64 / n as f64)
+                .position()
+        }
+    };
+    let mut a = piece.start.position();
+    (1..=n).map(move |i| {
+        let b = at(i);
+        let chord = (a, b);
+        a = b;
+        chord
+    })
 }
