@@ -21,6 +21,14 @@ pub const FORMATION_FRAME: &str = "formation";
 /// Height of the discs drawn for bodies, metres (they are flat in the model).
 const DISC_HEIGHT_M: f64 = 0.05;
 
+/// The resolution of the positions of agents, slots, best points, moves and moving
+/// obstacles in the scene, metres.
+pub const SCENE_RESOLUTION_M: f64 = 1e-4;
+
+/// Foxglove's `LinePrimitive` types (`LINE_STRIP` = 0 is not used).
+const LINE_LOOP: u8 = 1;
+const LINE_LIST: u8 = 2;
+
 fn number() -> Value {
     json!({"type": "number"})
 }
@@ -240,6 +248,14 @@ fn flat(p: &Point) -> Vector3 {
     }
 }
 
+/// What the scene draws of a position that changes every step: rounded to
+/// [`SCENE_RESOLUTION_M`], far below what a viewer can tell apart, so that its JSON is a
+/// few digits rather than seventeen. The exact positions are on `/formation/step`.
+fn shown(p: &Point) -> Point {
+    let round = |v: f64| (v / SCENE_RESOLUTION_M).round() * SCENE_RESOLUTION_M;
+    Point::new(round(p.x), round(p.y))
+}
+
 fn pose_at(p: &Point, heading_rad: f64) -> FoxPose {
     FoxPose {
         position: flat(p),
@@ -266,9 +282,10 @@ fn disc(centre: &Point, radius_m: f64, color: Color) -> Cylinder {
     }
 }
 
-fn line_strip(points: &[Point], thickness_m: f64, color: Color) -> LineStrip {
+/// A line primitive of Foxglove's type `kind` through `points`.
+fn lines_of(kind: u8, points: &[Point], thickness_m: f64, color: Color) -> LineStrip {
     LineStrip {
-        kind: 0,
+        kind,
         pose: pose_at(&Point::origin(), 0.0),
         thickness: thickness_m,
         scale_invariant: false,
@@ -303,15 +320,33 @@ fn entity(
     }
 }
 
+/// Each agent's slot in the formation frame, as the scene draws it: the slot of `step`
+/// turned back about the centre by the centre's heading, rounded to
+/// [`SCENE_RESOLUTION_M`]. The same from step to step unless the slots change.
+pub fn slots_in_formation(step: &Step) -> Vec<Point> {
+    let centre = step.centre.position();
+    let (sin, cos) = step.centre.heading_rad.sin_cos();
+    step.agents
+        .iter()
+        .map(|a| {
+            let d = a.slot - centre;
+            shown(&Point::new(cos * d.x + sin * d.y, -sin * d.x + cos * d.y))
+        })
+        .collect()
+}
+
 /// The scene at the end of `step`: each entity replaces the one of the same id before it.
 /// `known_unknown[i]`: whether unknown obstacle `i` is known by now (drawn only then);
 /// `with_obstacles`: whether to send the static obstacles (at step 0 and when one is
-/// found: they persist in between).
+/// found: they persist in between); `slots`: the slots in the formation frame
+/// ([`slots_in_formation`]), to send when they are not those sent before (they move
+/// with the frame `formation`, locked to it, and persist in between).
 pub fn scene_update(
     scenario: &Scenario,
     step: &Step,
     known_unknown: &[bool],
     with_obstacles: bool,
+    slots: Option<&[Point]>,
     log_time_ns: u64,
 ) -> SceneUpdate {
     let grey = || rgba(0.45, 0.45, 0.45, 1.0);
@@ -330,13 +365,18 @@ pub fn scene_update(
                 .filter(|(_, known)| **known)
                 .map(|(o, _)| disc(&o.centre, o.radius_m, rgba(0.6, 0.35, 0.2, 1.0))),
         );
-        entities.push(entity("obstacles", log_time_ns, obstacles, vec![]));
+        let polygons = scenario
+            .polygons
+            .iter()
+            .map(|p| lines_of(LINE_LOOP, p.vertices(), 0.05, grey()))
+            .collect();
+        entities.push(entity("obstacles", log_time_ns, obstacles, polygons));
     }
     let moving = scenario
         .moving
         .iter()
         .zip(&step.moving)
-        .map(|(m, at)| disc(at, m.radius_m, rgba(0.8, 0.5, 0.1, 1.0)))
+        .map(|(m, at)| disc(&shown(at), m.radius_m, rgba(0.8, 0.5, 0.1, 1.0)))
         .collect();
     let agents = scenario
         .agents
@@ -348,18 +388,26 @@ pub fn scene_update(
             } else {
                 rgba(0.2, 0.2, 0.2, 1.0)
             };
-            disc(&a.position, spec.radius_m, color)
+            disc(&shown(&a.position), spec.radius_m, color)
         })
         .collect();
-    let slots = step
-        .agents
-        .iter()
-        .map(|a| disc(&a.slot, 0.05, rgba(0.2, 0.63, 0.17, 0.8)))
-        .collect();
+    if let Some(slots) = slots {
+        let discs = slots
+            .iter()
+            .map(|at| disc(at, 0.05, rgba(0.2, 0.63, 0.17, 0.8)))
+            .collect();
+        entities.push(Entity {
+            frame_id: FORMATION_FRAME,
+            frame_locked: true,
+            ..entity("slots", log_time_ns, discs, vec![])
+        });
+    }
+    // A best point drawn on its slot would hide under it: only the others are drawn.
     let best = step
         .agents
         .iter()
-        .map(|a| disc(&a.best, 0.04, rgba(0.89, 0.1, 0.11, 0.8)))
+        .filter(|a| shown(&a.best) != shown(&a.slot))
+        .map(|a| disc(&shown(&a.best), 0.04, rgba(0.89, 0.1, 0.11, 0.8)))
         .collect();
     let sensing = scenario
         .agents
@@ -367,19 +415,50 @@ pub fn scene_update(
         .zip(&step.agents)
         .filter_map(|(spec, a)| {
             spec.sensing_radius_m
-                .map(|r| disc(&a.position, r, rgba(0.12, 0.47, 0.71, 0.08)))
+                .map(|r| disc(&shown(&a.position), r, rgba(0.12, 0.47, 0.71, 0.08)))
         })
         .collect();
-    let moves = step
+    // Every move's segments in one line list: one primitive, not one per agent.
+    let segments: Vec<Point> = step
         .agents
         .iter()
-        .filter(|a| a.waypoints.len() > 1)
-        .map(|a| line_strip(&a.waypoints, 0.03, rgba(0.12, 0.47, 0.71, 0.9)))
+        .flat_map(|a| a.waypoints.windows(2))
+        .flat_map(|pair| [shown(&pair[0]), shown(&pair[1])])
         .collect();
+    let moves = match segments.is_empty() {
+        true => vec![],
+        false => vec![lines_of(
+            LINE_LIST,
+            &segments,
+            0.03,
+            rgba(0.12, 0.47, 0.71, 0.9),
+        )],
+    };
+    // The way each agent with a heading faces: a segment from its centre to its rim.
+    let headings: Vec<Point> = scenario
+        .agents
+        .iter()
+        .zip(&step.agents)
+        .filter_map(|(spec, a)| {
+            let heading_rad = a.heading_rad?;
+            let (sin, cos) = heading_rad.sin_cos();
+            let tip = a.position + spec.radius_m * shared::geometry::Vector::new(cos, sin);
+            Some([shown(&a.position), shown(&tip)])
+        })
+        .flatten()
+        .collect();
+    let headings = match headings.is_empty() {
+        true => vec![],
+        false => vec![lines_of(
+            LINE_LIST,
+            &headings,
+            0.04,
+            rgba(0.95, 0.95, 0.95, 1.0),
+        )],
+    };
     entities.extend([
         entity("moving", log_time_ns, moving, vec![]),
-        entity("agents", log_time_ns, agents, vec![]),
-        entity("slots", log_time_ns, slots, vec![]),
+        entity("agents", log_time_ns, agents, headings),
         entity("best_points", log_time_ns, best, vec![]),
         entity("sensing", log_time_ns, sensing, vec![]),
         entity("moves", log_time_ns, vec![], moves),
@@ -463,8 +542,12 @@ impl SceneUpdate {
             put(&mut out, &e.id);
             out.extend_from_slice(br#","lifetime":"#);
             put(&mut out, &e.lifetime);
+            out.extend_from_slice(match e.frame_locked {
+                true => br#","frame_locked":true,"#,
+                false => br#","frame_locked":false,"#,
+            });
             out.extend_from_slice(
-                br#","frame_locked":false,"metadata":[],"arrows":[],"cubes":[],"spheres":[],"cylinders":["#,
+                br#""metadata":[],"arrows":[],"cubes":[],"spheres":[],"cylinders":["#,
             );
             for (k, c) in e.cylinders.iter().enumerate() {
                 if k > 0 {
@@ -514,10 +597,69 @@ mod tests {
             let run = simulate_along(&scenario, &path).expect("run");
             let known = vec![true; scenario.unknown.len()];
             for step in run.steps.iter().step_by(7) {
-                let scene = scene_update(&scenario, step, &known, step.step == 0, 0);
+                let slots = slots_in_formation(step);
+                let scene = scene_update(&scenario, step, &known, step.step == 0, Some(&slots), 0);
                 let fast: Value = serde_json::from_slice(&scene.to_json()).expect("JSON");
                 let serde = serde_json::to_value(&scene).expect("JSON");
                 assert_eq!(fast, serde, "{name}, step {}", step.step);
+            }
+        }
+    }
+
+    /// The slots drawn in the formation frame land on the field's slots once the frame
+    /// is placed at the centre; the polygons are drawn as closed loops with the obstacles;
+    /// a best point is drawn only off its slot.
+    #[test]
+    fn slots_follow_the_formation_frame_and_polygons_are_drawn() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+        let scenario = Scenario::load(&file.join("polygon-corridor.toml")).expect("scenario");
+        assert!(!scenario.polygons.is_empty());
+        let path = plan_centre_path(&scenario).expect("path");
+        let run = simulate_along(&scenario, &path).expect("run");
+        for step in &run.steps {
+            let slots = slots_in_formation(step);
+            let (sin, cos) = step.centre.heading_rad.sin_cos();
+            for (local, agent) in slots.iter().zip(&step.agents) {
+                let field = step.centre.position()
+                    + shared::geometry::Vector::new(
+                        cos * local.x - sin * local.y,
+                        sin * local.x + cos * local.y,
+                    );
+                assert!(
+                    (field - agent.slot).norm() < SCENE_RESOLUTION_M,
+                    "step {}",
+                    step.step
+                );
+            }
+            let scene = serde_json::to_value(scene_update(
+                &scenario,
+                step,
+                &[],
+                step.step == 0,
+                Some(&slots),
+                0,
+            ))
+            .expect("JSON");
+            let entities = scene["entities"].as_array().expect("entities");
+            let named = |id: &str| entities.iter().find(|e| e["id"] == id);
+            let drawn_slots = named("slots").expect("slots");
+            assert_eq!(drawn_slots["frame_id"], FORMATION_FRAME);
+            assert_eq!(drawn_slots["frame_locked"], true);
+            let off_slot = step
+                .agents
+                .iter()
+                .filter(|a| shown(&a.best) != shown(&a.slot))
+                .count();
+            let best = named("best_points").expect("best points");
+            assert_eq!(best["cylinders"].as_array().map(Vec::len), Some(off_slot));
+            if step.step == 0 {
+                let loops = named("obstacles").expect("obstacles")["lines"]
+                    .as_array()
+                    .expect("lines")
+                    .iter()
+                    .filter(|l| l["type"] == LINE_LOOP)
+                    .count();
+                assert_eq!(loops, scenario.polygons.len());
             }
         }
     }

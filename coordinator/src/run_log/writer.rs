@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use serde::Serialize;
 use shared::course::{Course, Replan, Wait};
-use shared::geometry::Pose;
+use shared::geometry::{Point, Pose};
 use shared::record::{Fault, Step};
 use shared::scenario::Scenario;
 
@@ -114,6 +114,8 @@ pub struct RunLogWriter {
     found: Vec<bool>,
     /// The last step logged.
     last_step: usize,
+    /// The slots last drawn in the scene, in the formation frame.
+    slots_shown: Vec<Point>,
 }
 
 impl RunLogWriter {
@@ -227,6 +229,7 @@ impl RunLogWriter {
             waits: 0,
             found: vec![false; scenario.unknown.len()],
             last_step: 0,
+            slots_shown: Vec::new(),
         };
         for topic in Topic::ALL {
             let schema = topic.schema();
@@ -379,13 +382,19 @@ impl RunLogWriter {
         self.write(Topic::Step, at, &StepMessage::of(step))?;
         let found_now = self.found.iter().filter(|f| **f).count();
         let with_obstacles = at == 0 || found_now != found_before;
+        let slots = foxglove::slots_in_formation(step);
+        let new_slots = (slots != self.slots_shown).then_some(slots.as_slice());
         let scene = foxglove::scene_update(
             &self.scenario,
             step,
             &self.found,
             with_obstacles,
+            new_slots,
             log_time_ns(at),
         );
+        if new_slots.is_some() {
+            self.slots_shown = slots;
+        }
         self.write_json(Topic::Scene, at, scene.to_json())?;
         self.write(
             Topic::Tf,
