@@ -4,6 +4,8 @@
 //! the unicycle's controller and once by the same agent's holonomic controller; and one
 //! car agent's move, on the turns of `scenarios/paper-car.toml`.
 
+mod support;
+
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -59,37 +61,18 @@ fn recorded(name: &str) -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>)
     (unicycles, holonomic, turns)
 }
 
-/// Each car turn timed alone (best of five), and the p50, p90 and largest of those times
-/// printed: the cost of a turn varies with the turn (a direct path, or the search when
-/// none is clear), which criterion's mean over the cycle of turns hides.
+/// Each car turn timed alone (see [`support::print_best_of_five_percentiles`]).
 fn print_car_turn_percentiles(cars: &[TurnController], turns: &[Turn]) {
-    let mut times_us: Vec<f64> = turns
-        .iter()
-        .map(|t| {
-            (0..5)
-                .map(|_| {
-                    let start = std::time::Instant::now();
-                    black_box(cars[t.agent].plan_turn_with_heading(
-                        t.step,
-                        &t.centre,
-                        &t.me,
-                        t.heading_rad,
-                        &t.others,
-                    ));
-                    start.elapsed().as_secs_f64() * 1e6
-                })
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    times_us.sort_by(f64::total_cmp);
-    let at = |q: f64| times_us[((times_us.len() - 1) as f64 * q).round() as usize];
-    eprintln!(
-        "car turns on paper-car.toml ({} turns, each best of 5): p50 {:.1} us, p90 {:.1} us, max {:.1} us",
-        times_us.len(),
-        at(0.5),
-        at(0.9),
-        at(1.0)
-    );
+    support::print_best_of_five_percentiles("car turns on paper-car.toml", turns.len(), |i| {
+        let t = &turns[i];
+        black_box(cars[t.agent].plan_turn_with_heading(
+            t.step,
+            &t.centre,
+            &t.me,
+            t.heading_rad,
+            &t.others,
+        ));
+    });
 }
 
 fn bench_kinematics(c: &mut Criterion) {

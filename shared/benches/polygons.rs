@@ -4,6 +4,8 @@
 //! agent's whole move (best point, reachability and shortest path) on the turns of the
 //! reference simulation, beside the same turns with the polygons left out.
 
+mod support;
+
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -56,29 +58,12 @@ fn turns(scenario: &Scenario) -> Vec<Turn> {
     out
 }
 
-/// Each turn timed alone (best of five); p50, p90 and the largest printed.
+/// Each turn of `turns` planned by `controllers`, timed alone.
 fn print_turn_percentiles(what: &str, controllers: &[TurnController], turns: &[Turn]) {
-    let mut times_us: Vec<f64> = turns
-        .iter()
-        .map(|t| {
-            (0..5)
-                .map(|_| {
-                    let start = std::time::Instant::now();
-                    black_box(controllers[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others));
-                    start.elapsed().as_secs_f64() * 1e6
-                })
-                .fold(f64::INFINITY, f64::min)
-        })
-        .collect();
-    times_us.sort_by(f64::total_cmp);
-    let at = |q: f64| times_us[((times_us.len() - 1) as f64 * q).round() as usize];
-    eprintln!(
-        "{what} ({} turns, each best of 5): p50 {:.1} us, p90 {:.1} us, max {:.1} us",
-        times_us.len(),
-        at(0.5),
-        at(0.9),
-        at(1.0)
-    );
+    support::print_best_of_five_percentiles(what, turns.len(), |i| {
+        let t = &turns[i];
+        black_box(controllers[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others));
+    });
 }
 
 fn bench_polygons(c: &mut Criterion) {
