@@ -61,17 +61,21 @@ fn recorded(name: &str) -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>)
     (unicycles, holonomic, turns)
 }
 
+/// The car's move on `turn`.
+fn plan_car_turn(cars: &[TurnController], t: &Turn) {
+    black_box(cars[t.agent].plan_turn_with_heading(
+        t.step,
+        &t.centre,
+        &t.me,
+        t.heading_rad,
+        &t.others,
+    ));
+}
+
 /// Each car turn timed alone (see [`support::print_best_of_five_percentiles`]).
 fn print_car_turn_percentiles(cars: &[TurnController], turns: &[Turn]) {
     support::print_best_of_five_percentiles("car turns on paper-car.toml", turns.len(), |i| {
-        let t = &turns[i];
-        black_box(cars[t.agent].plan_turn_with_heading(
-            t.step,
-            &t.centre,
-            &t.me,
-            t.heading_rad,
-            &t.others,
-        ));
+        plan_car_turn(cars, &turns[i]);
     });
 }
 
@@ -107,13 +111,7 @@ fn bench_kinematics(c: &mut Criterion) {
         b.iter(|| {
             let t = &car_turns[i % car_turns.len()];
             i += 1;
-            black_box(cars[t.agent].plan_turn_with_heading(
-                t.step,
-                &t.centre,
-                &t.me,
-                t.heading_rad,
-                &t.others,
-            ))
+            plan_car_turn(&cars, t)
         })
     });
     group.finish();

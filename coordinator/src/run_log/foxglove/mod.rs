@@ -296,6 +296,14 @@ fn lines_of(kind: u8, points: &[Point], thickness_m: f64, color: Color) -> LineS
     }
 }
 
+/// One `LINE_LIST` through `points` (pairs, each a segment), or none when there are none.
+fn line_list(points: &[Point], thickness_m: f64, color: Color) -> Vec<LineStrip> {
+    match points.is_empty() {
+        true => vec![],
+        false => vec![lines_of(LINE_LIST, points, thickness_m, color)],
+    }
+}
+
 fn entity(
     id: &'static str,
     log_time_ns: u64,
@@ -425,15 +433,7 @@ pub fn scene_update(
         .flat_map(|a| a.waypoints.windows(2))
         .flat_map(|pair| [shown(&pair[0]), shown(&pair[1])])
         .collect();
-    let moves = match segments.is_empty() {
-        true => vec![],
-        false => vec![lines_of(
-            LINE_LIST,
-            &segments,
-            0.03,
-            rgba(0.12, 0.47, 0.71, 0.9),
-        )],
-    };
+    let moves = line_list(&segments, 0.03, rgba(0.12, 0.47, 0.71, 0.9));
     // The way each agent with a heading faces: a segment from its centre to its rim.
     let headings: Vec<Point> = scenario
         .agents
@@ -447,15 +447,7 @@ pub fn scene_update(
         })
         .flatten()
         .collect();
-    let headings = match headings.is_empty() {
-        true => vec![],
-        false => vec![lines_of(
-            LINE_LIST,
-            &headings,
-            0.04,
-            rgba(0.95, 0.95, 0.95, 1.0),
-        )],
-    };
+    let headings = line_list(&headings, 0.04, rgba(0.95, 0.95, 0.95, 1.0));
     entities.extend([
         entity("moving", log_time_ns, moving, vec![]),
         entity("agents", log_time_ns, agents, headings),
@@ -582,85 +574,4 @@ impl SceneUpdate {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use shared::simulate::{plan_centre_path, simulate_along};
-
-    /// The scenes of a run with moving obstacles, sensing and unknown obstacles: the
-    /// template's JSON is the value `serde_json` writes of the same message.
-    #[test]
-    fn the_scene_written_from_the_template_is_the_one_serde_writes() {
-        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
-        for name in ["moving-field.toml", "discovered-wall.toml", "paper.toml"] {
-            let scenario = Scenario::load(&file.join(name)).expect("scenario");
-            let path = plan_centre_path(&scenario).expect("path");
-            let run = simulate_along(&scenario, &path).expect("run");
-            let known = vec![true; scenario.unknown.len()];
-            for step in run.steps.iter().step_by(7) {
-                let slots = slots_in_formation(step);
-                let scene = scene_update(&scenario, step, &known, step.step == 0, Some(&slots), 0);
-                let fast: Value = serde_json::from_slice(&scene.to_json()).expect("JSON");
-                let serde = serde_json::to_value(&scene).expect("JSON");
-                assert_eq!(fast, serde, "{name}, step {}", step.step);
-            }
-        }
-    }
-
-    /// The slots drawn in the formation frame land on the field's slots once the frame
-    /// is placed at the centre; the polygons are drawn as closed loops with the obstacles;
-    /// a best point is drawn only off its slot.
-    #[test]
-    fn slots_follow_the_formation_frame_and_polygons_are_drawn() {
-        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
-        let scenario = Scenario::load(&file.join("polygon-corridor.toml")).expect("scenario");
-        assert!(!scenario.polygons.is_empty());
-        let path = plan_centre_path(&scenario).expect("path");
-        let run = simulate_along(&scenario, &path).expect("run");
-        for step in &run.steps {
-            let slots = slots_in_formation(step);
-            let (sin, cos) = step.centre.heading_rad.sin_cos();
-            for (local, agent) in slots.iter().zip(&step.agents) {
-                let field = step.centre.position()
-                    + shared::geometry::Vector::new(
-                        cos * local.x - sin * local.y,
-                        sin * local.x + cos * local.y,
-                    );
-                assert!(
-                    (field - agent.slot).norm() < SCENE_RESOLUTION_M,
-                    "step {}",
-                    step.step
-                );
-            }
-            let scene = serde_json::to_value(scene_update(
-                &scenario,
-                step,
-                &[],
-                step.step == 0,
-                Some(&slots),
-                0,
-            ))
-            .expect("JSON");
-            let entities = scene["entities"].as_array().expect("entities");
-            let named = |id: &str| entities.iter().find(|e| e["id"] == id);
-            let drawn_slots = named("slots").expect("slots");
-            assert_eq!(drawn_slots["frame_id"], FORMATION_FRAME);
-            assert_eq!(drawn_slots["frame_locked"], true);
-            let off_slot = step
-                .agents
-                .iter()
-                .filter(|a| shown(&a.best) != shown(&a.slot))
-                .count();
-            let best = named("best_points").expect("best points");
-            assert_eq!(best["cylinders"].as_array().map(Vec::len), Some(off_slot));
-            if step.step == 0 {
-                let loops = named("obstacles").expect("obstacles")["lines"]
-                    .as_array()
-                    .expect("lines")
-                    .iter()
-                    .filter(|l| l["type"] == LINE_LOOP)
-                    .count();
-                assert_eq!(loops, scenario.polygons.len());
-            }
-        }
-    }
-}
+mod tests;
