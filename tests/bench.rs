@@ -361,7 +361,8 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
 #[test]
 fn bench_measures_what_the_run_log_costs() {
     let dir = tempfile::tempdir().expect("temporary directory");
-    let out_file = dir.path().join("log.json");
+    // In a folder that does not exist yet: the bench makes it before the log is written.
+    let out_file = dir.path().join("not-yet").join("log.json");
     let scenario = support::repo_root().join("scenarios").join("paper.toml");
     let report = bench_report(
         &["--log-rounds", "2"],
@@ -384,6 +385,14 @@ fn bench_measures_what_the_run_log_costs() {
         (ratio - expected).abs() <= 1e-9 * expected,
         "{ratio} vs {expected}"
     );
+    // Round 1 is (log, none), round 2 (none, log): each round's ratio is of its own two.
+    let rounds: Vec<f64> = serde_json::from_value(l["round_ratios"].clone()).expect("rounds");
+    assert_eq!(rounds.len(), 2);
+    for (r, (w, n)) in rounds.iter().zip(with.iter().zip(&without)) {
+        assert!((r - w / n).abs() <= 1e-9 * r, "{r} vs {w} / {n}");
+    }
+    let median_round = number(l, "median_round_ratio");
+    assert!((median_round - median(&rounds)).abs() <= 1e-9 * median_round);
     let log = std::path::PathBuf::from(l["log_file"].as_str().expect("log_file"));
     assert_eq!(log, out_file.with_extension("mcap"));
     let bytes = std::fs::metadata(&log).expect("the kept log").len();

@@ -35,6 +35,11 @@ pub struct LogCostReport {
     pub without_log_steps_per_s: Vec<f64>,
     /// `median(with) / median(without)`: below 1, the log slows the loop down.
     pub with_vs_without_steps_per_s: f64,
+    /// Each round's `with / without`, of its two runs made one after the other (so a
+    /// machine that gets busier or quieter between rounds weighs on both alike).
+    pub round_ratios: Vec<f64>,
+    /// The median of `round_ratios`: the figure least moved by a noisy machine.
+    pub median_round_ratio: f64,
     /// The log of the last run with it (kept beside the report).
     pub log_file: String,
     /// Its size, bytes.
@@ -75,6 +80,7 @@ pub fn measure(
     let mut order = Vec::with_capacity(2 * rounds);
     let (mut with, mut without) = (Vec::new(), Vec::new());
     let mut recorded_steps = 0;
+    let mut round_ratios = Vec::with_capacity(rounds);
     for round in 0..rounds {
         let pair = if round % 2 == 0 {
             [true, false]
@@ -105,6 +111,9 @@ pub fn measure(
                 without.push(steps_per_s);
             }
         }
+        if let (Some(w), Some(n)) = (with.last(), without.last()) {
+            round_ratios.push(super::ratio(*w, *n));
+        }
     }
     let log_bytes = std::fs::metadata(log_path).map_or(0, |m| m.len());
     let agent_steps = (scenario.agents.len() * recorded_steps).max(1);
@@ -116,6 +125,8 @@ pub fn measure(
         rounds,
         order,
         with_vs_without_steps_per_s: super::ratio(median(&with), median(&without)),
+        median_round_ratio: median(&round_ratios),
+        round_ratios,
         with_log_steps_per_s: with,
         without_log_steps_per_s: without,
         log_file: log_path.display().to_string(),
@@ -133,7 +144,7 @@ pub fn table(r: &LogCostReport) -> String {
             .join(", ")
     };
     format!(
-        "\nlog cost: {} ({}), {} agents, {} steps, {} run(s) of each\n  steps/s with the log: {}\n  steps/s without it: {}\n  with / without: {:.3}x steps/s; run.mcap {} bytes, {:.0} bytes per agent and step\n",
+        "\nlog cost: {} ({}), {} agents, {} steps, {} run(s) of each\n  steps/s with the log: {}\n  steps/s without it: {}\n  with / without, each round: {}\n  with / without: {:.3}x steps/s (medians), {:.3}x (median of the rounds); run.mcap {} bytes, {:.0} bytes per agent and step\n",
         r.scenario,
         r.file,
         r.agents,
@@ -141,7 +152,13 @@ pub fn table(r: &LogCostReport) -> String {
         r.rounds,
         list(&r.with_log_steps_per_s),
         list(&r.without_log_steps_per_s),
+        r.round_ratios
+            .iter()
+            .map(|x| format!("{x:.3}"))
+            .collect::<Vec<_>>()
+            .join(", "),
         r.with_vs_without_steps_per_s,
+        r.median_round_ratio,
         r.log_bytes,
         r.log_bytes_per_agent_step
     )

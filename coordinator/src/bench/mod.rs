@@ -165,6 +165,10 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         .transpose()?;
     let bin = locate_agent_binary(args.agent_bin.as_deref())?;
     let out = args.out.clone().unwrap_or_else(default_out);
+    // The folder first: the log-cost runs write their log beside the report.
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let svg_path = out.with_extension("svg");
     let mut report = Report {
         runs: Vec::new(),
@@ -232,9 +236,6 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         )?);
     }
 
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
     // The latency histogram, when latency was measured.
     if !report.runs.is_empty() {
         let panels: Vec<plot::Panel<'_>> = report

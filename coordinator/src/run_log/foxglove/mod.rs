@@ -514,12 +514,12 @@ impl Repeated {
 }
 
 impl SceneUpdate {
-    /// This message's JSON: the same value `serde_json` writes (checked by a test), with
-    /// the discs written from a template, their repeated sizes, colours and orientations
-    /// formatted once. The scene is most of the log, and most of it discs.
-    pub fn to_json(&self) -> Vec<u8> {
+    /// Append this message's JSON to `out`: the same value `serde_json` writes (checked by
+    /// a test), with the discs written from a template, their repeated sizes, colours and
+    /// orientations formatted once. The scene is most of the log, and most of it discs.
+    pub fn write_json(&self, out: &mut Vec<u8>) {
         let discs: usize = self.entities.iter().map(|e| e.cylinders.len()).sum();
-        let mut out = Vec::with_capacity(512 + 260 * discs);
+        out.reserve(512 + 260 * discs);
         out.extend_from_slice(br#"{"deletions":[],"entities":["#);
         let (mut size, mut color, mut orientation) = Default::default();
         for (i, e) in self.entities.iter().enumerate() {
@@ -527,13 +527,13 @@ impl SceneUpdate {
                 out.push(b',');
             }
             out.extend_from_slice(br#"{"timestamp":"#);
-            put(&mut out, &e.timestamp);
+            put(out, &e.timestamp);
             out.extend_from_slice(br#","frame_id":"#);
-            put(&mut out, &e.frame_id);
+            put(out, &e.frame_id);
             out.extend_from_slice(br#","id":"#);
-            put(&mut out, &e.id);
+            put(out, &e.id);
             out.extend_from_slice(br#","lifetime":"#);
-            put(&mut out, &e.lifetime);
+            put(out, &e.lifetime);
             out.extend_from_slice(match e.frame_locked {
                 true => br#","frame_locked":true,"#,
                 false => br#","frame_locked":false,"#,
@@ -547,29 +547,28 @@ impl SceneUpdate {
                 }
                 let p = &c.pose;
                 out.extend_from_slice(br#"{"pose":{"position":"#);
-                put(&mut out, &p.position);
+                put(out, &p.position);
                 out.extend_from_slice(br#","orientation":"#);
                 let o = &p.orientation;
                 let o_bits = [o.x, o.y, o.z, o.w].map(f64::to_bits);
-                Repeated::put(&mut orientation, &mut out, &o_bits, o);
+                Repeated::put(&mut orientation, out, &o_bits, o);
                 out.extend_from_slice(br#"},"size":"#);
                 let s_bits = [c.size.x, c.size.y, c.size.z].map(f64::to_bits);
-                Repeated::put(&mut size, &mut out, &s_bits, &c.size);
+                Repeated::put(&mut size, out, &s_bits, &c.size);
                 out.extend_from_slice(br#","bottom_scale":"#);
-                put(&mut out, &c.bottom_scale);
+                put(out, &c.bottom_scale);
                 out.extend_from_slice(br#","top_scale":"#);
-                put(&mut out, &c.top_scale);
+                put(out, &c.top_scale);
                 out.extend_from_slice(br#","color":"#);
                 let c_bits = [c.color.r, c.color.g, c.color.b, c.color.a].map(f64::to_bits);
-                Repeated::put(&mut color, &mut out, &c_bits, &c.color);
+                Repeated::put(&mut color, out, &c_bits, &c.color);
                 out.push(b'}');
             }
             out.extend_from_slice(br#"],"lines":"#);
-            put(&mut out, &e.lines);
+            put(out, &e.lines);
             out.extend_from_slice(br#","triangles":[],"texts":[],"models":[]}"#);
         }
         out.extend_from_slice(b"]}");
-        out
     }
 }
 
