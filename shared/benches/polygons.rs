@@ -10,7 +10,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use shared::best_point::nearest_free_point;
-use shared::geometry::{Disk, DiskGrid, FreeSpace, InflatedPolygon, Point, Pose};
+use shared::geometry::{Disk, DiskGrid, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose};
 use shared::scenario::Scenario;
 use shared::simulate::{agent_controllers, simulate};
 use shared::turn::TurnController;
@@ -90,6 +90,7 @@ fn bench_polygons(c: &mut Criterion) {
         .iter()
         .map(|p| InflatedPolygon::from_polygon(p.clone(), radius_m))
         .collect();
+    let grown = PolygonLayer::new(grown);
     let space = FreeSpace::new(scenario.field, &layers).with_polygons(&grown);
     let slots: Vec<Point> = turns
         .iter()

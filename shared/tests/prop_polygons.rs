@@ -16,7 +16,9 @@ use proptest::prelude::*;
 use proptest::test_runner::Config;
 use shared::best_point::nearest_free_point;
 use shared::disk_path::{PathError, shortest_path};
-use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon};
+use shared::geometry::{
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer,
+};
 
 const FIELD_M: f64 = 10.0;
 
@@ -184,6 +186,7 @@ proptest! {
         let grid = DiskGrid::new(world.disks.clone());
         let layers = [&grid];
         let grown = world.grown();
+        let grown = PolygonLayer::new(grown);
         let space = FreeSpace::new(world.field, &layers).with_polygons(&grown);
         let query = Point::new(qx, qy);
 
@@ -218,6 +221,7 @@ proptest! {
         let grid = DiskGrid::new(world.disks.clone());
         let layers = [&grid];
         let grown = world.grown();
+        let grown = PolygonLayer::new(grown);
         let space = FreeSpace::new(world.field, &layers).with_polygons(&grown);
         // Free end points: the best points of random queries.
         let (Ok(from), Ok(to)) = (

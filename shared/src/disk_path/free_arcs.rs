@@ -11,7 +11,7 @@ use std::f64::consts::TAU;
 
 use super::tolerance::FREE_TOLERANCE_M;
 use crate::geometry::{
-    Disk, Field, InflatedPolygon, Point, Vector, circle_circle_intersections,
+    Disk, Field, InflatedPolygon, Point, PolygonLayer, Vector, circle_circle_intersections,
     circle_line_intersections,
 };
 
@@ -26,7 +26,7 @@ pub(super) fn turn_rem(x: f64) -> f64 {
 pub(super) fn blocked_intervals(
     k: usize,
     circles: &[Disk],
-    polygons: &[InflatedPolygon],
+    polygons: Option<&PolygonLayer>,
     field: &Field,
 ) -> Vec<(f64, f64)> {
     let ck = circles[k].centre;
@@ -83,10 +83,11 @@ pub(super) fn blocked_intervals(
         );
     }
     let reach = Vector::new(rk, rk);
-    for polygon in polygons {
-        if polygon.box_meets(&(ck - reach), &(ck + reach)) {
+    if let Some(layer) = polygons {
+        let _ = layer.visit_box(&(ck - reach), &(ck + reach), |_, polygon| {
             push_polygon_intervals(&circles[k], polygon, &mut out);
-        }
+            std::ops::ControlFlow::<()>::Continue(())
+        });
     }
     out
 }

@@ -2,7 +2,7 @@
 
 use std::ops::ControlFlow;
 
-use super::{Disk, DiskGrid, Field, InflatedPolygon, Point, Vector};
+use super::{Disk, DiskGrid, Field, InflatedPolygon, Point, PolygonLayer, Vector};
 
 /// The free space a point agent moves in: the field minus the union of one or more
 /// indexed disk layers (static obstacles, other agents) and of grown polygons, every
@@ -17,8 +17,8 @@ pub struct FreeSpace<'a> {
     pub field: Field,
     /// The blocking disks, in layers (for example static obstacles and other agents).
     pub layers: &'a [&'a DiskGrid],
-    /// The blocking polygons, already grown by the agent's radius.
-    pub polygons: &'a [InflatedPolygon],
+    /// The blocking polygons, already grown by the agent's radius, if any.
+    pub polygons: Option<&'a PolygonLayer>,
 }
 
 impl<'a> FreeSpace<'a> {
@@ -27,13 +27,21 @@ impl<'a> FreeSpace<'a> {
         Self {
             field,
             layers,
-            polygons: &[],
+            polygons: None,
         }
     }
 
     /// The same space, also outside every grown polygon of `polygons`.
-    pub fn with_polygons(self, polygons: &'a [InflatedPolygon]) -> Self {
-        Self { polygons, ..self }
+    pub fn with_polygons(self, polygons: &'a PolygonLayer) -> Self {
+        Self {
+            polygons: Some(polygons),
+            ..self
+        }
+    }
+
+    /// The grown polygons (none when it has none).
+    pub fn polygon_list(&self) -> &'a [InflatedPolygon] {
+        self.polygons.map_or(&[], PolygonLayer::polygons)
     }
 
     /// Largest disk or polygon radius over all layers.
@@ -41,7 +49,7 @@ impl<'a> FreeSpace<'a> {
         self.layers
             .iter()
             .map(|g| g.max_radius_m())
-            .chain(self.polygons.iter().map(InflatedPolygon::radius_m))
+            .chain(self.polygon_list().iter().map(InflatedPolygon::radius_m))
             .fold(0.0, f64::max)
     }
 
@@ -50,14 +58,12 @@ impl<'a> FreeSpace<'a> {
         &self,
         min: &Point,
         max: &Point,
-        mut visit: impl FnMut(usize, &InflatedPolygon) -> ControlFlow<B>,
+        visit: impl FnMut(usize, &InflatedPolygon) -> ControlFlow<B>,
     ) -> ControlFlow<B> {
-        for (i, polygon) in self.polygons.iter().enumerate() {
-            if polygon.box_meets(min, max) {
-                visit(i, polygon)?;
-            }
+        match self.polygons {
+            Some(layer) => layer.visit_box(min, max, visit),
+            None => ControlFlow::Continue(()),
         }
-        ControlFlow::Continue(())
     }
 
     /// Visit every disk of every layer whose box meets `[min, max]`; the index passed is

@@ -120,6 +120,17 @@ impl Polygon {
         Ok(Self { vertices })
     }
 
+    /// The polygon through `vertices`, which the caller knows to be simple (three corners
+    /// or more, finite, no side meeting another but its neighbours at their shared
+    /// corners), without the `O(n^2)` check of [`Polygon::new`]: for the outlines of a
+    /// map's cells, simple by construction. Stored anticlockwise.
+    pub(crate) fn new_trusted_simple(mut vertices: Vec<Point>) -> Self {
+        if area2(&vertices) < 0.0 {
+            vertices.reverse();
+        }
+        Self { vertices }
+    }
+
     /// The same polygon moved by `by` (its corners in the same order: a translation keeps
     /// it simple and anticlockwise).
     pub fn translated(&self, by: &super::Vector) -> Self {

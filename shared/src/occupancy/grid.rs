@@ -111,6 +111,32 @@ impl OccupancyGrid {
         }
     }
 
+    /// A grid of `width` x `height` `cells` (row by row from the bottom one) of
+    /// `resolution_m` with cell (0, 0) at `origin_m`.
+    ///
+    /// # Panics
+    /// If `cells` does not hold `width * height` cells.
+    pub fn from_cells(
+        width: usize,
+        height: usize,
+        resolution_m: f64,
+        origin_m: [f64; 2],
+        cells: Vec<Cell>,
+    ) -> Self {
+        assert_eq!(
+            cells.len(),
+            width * height,
+            "cells of a {width} x {height} grid"
+        );
+        Self {
+            width,
+            height,
+            resolution_m,
+            origin_m,
+            cells,
+        }
+    }
+
     /// The cell in column `x` and row `y` (row 0 the bottom one).
     ///
     /// # Panics

@@ -7,6 +7,8 @@
 //! - [`grid`]: the cells, free, occupied or unknown, placed in metres ([`OccupancyGrid`]);
 //! - [`outline`]: blocked cells merged into rectilinear polygons along the cells' own
 //!   sides ([`outline_cells`]);
+//! - [`pieces`]: the blocked cells as simple polygons without holes, tile by tile, the
+//!   obstacles a scenario's map adds ([`OccupancyGrid::pieces`]);
 //! - [`error`]: why a map was refused ([`MapError`], `FILE: FIELD: REASON`).
 //!
 //! A rotated map (an `origin` yaw other than 0) is refused; the map's frame is the
@@ -27,6 +29,7 @@
 pub mod error;
 pub mod grid;
 pub mod outline;
+pub mod pieces;
 pub mod raster;
 pub mod yaml;
 
@@ -36,6 +39,7 @@ mod tests;
 pub use error::MapError;
 pub use grid::{Cell, OccupancyGrid};
 pub use outline::{CellCorner, outline_cells, ring_area2_cells};
+pub use pieces::PIECE_TILE_CELLS;
 pub use raster::{MAX_IMAGE_BYTES, Raster};
 pub use yaml::{MAX_MAP_YAML_BYTES, MapMode, MapYaml};
 

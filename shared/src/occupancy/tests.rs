@@ -373,8 +373,124 @@ fn cells_meeting_at_a_corner_are_separate_rings_and_holes_run_clockwise() {
     );
 }
 
+/// Checks `pieces` against the cells of `grid` for which `blocked` holds: every piece is
+/// a simple polygon (checked in full by [`Polygon::new`]) of the same area, the areas add
+/// up to the blocked cells', and every cell's centre lies in exactly one piece when the
+/// cell is blocked and in none when it is not (so the pieces cover the blocked cells
+/// exactly, without overlapping).
+fn check_pieces(
+    grid: &OccupancyGrid,
+    blocked: impl Fn(Cell) -> bool,
+    pieces: &[crate::geometry::Polygon],
+) -> Result<(), String> {
+    let res = grid.resolution_m;
+    let mut inside = vec![0u32; grid.width * grid.height];
+    let mut area_m2 = 0.0;
+    for (k, piece) in pieces.iter().enumerate() {
+        let checked = crate::geometry::Polygon::new(piece.vertices().to_vec())
+            .map_err(|e| format!("piece {k}: {e}"))?;
+        if checked.area_m2() != piece.area_m2() || piece.area_m2() <= 0.0 {
+            return Err(format!("piece {k}: area {}", piece.area_m2()));
+        }
+        area_m2 += piece.area_m2();
+        let cell = |v: f64, o: f64| ((v - o) / res).round() as usize;
+        let xs = piece.vertices().iter().map(|p| cell(p.x, grid.origin_m[0]));
+        let ys = piece.vertices().iter().map(|p| cell(p.y, grid.origin_m[1]));
+        let (x0, x1) = (xs.clone().min().unwrap_or(0), xs.max().unwrap_or(0));
+        let (y0, y1) = (ys.clone().min().unwrap_or(0), ys.max().unwrap_or(0));
+        for y in y0..y1.min(grid.height) {
+            for x in x0..x1.min(grid.width) {
+                if piece.contains(&grid.cell_centre(x, y)) {
+                    inside[y * grid.width + x] += 1;
+                }
+            }
+        }
+    }
+    let mut cells = 0;
+    for y in 0..grid.height {
+        for x in 0..grid.width {
+            let want = u32::from(blocked(grid.cell(x, y)));
+            cells += want;
+            if inside[y * grid.width + x] != want {
+                return Err(format!(
+                    "cell ({x}, {y}) is in {} pieces, blocked: {}",
+                    inside[y * grid.width + x],
+                    want == 1
+                ));
+            }
+        }
+    }
+    let blocked_m2 = f64::from(cells) * res * res;
+    if (area_m2 - blocked_m2).abs() > 1e-9 * blocked_m2.max(1.0) {
+        return Err(format!(
+            "pieces cover {area_m2} m2, blocked cells {blocked_m2} m2"
+        ));
+    }
+    Ok(())
+}
+
+#[test]
+fn the_pieces_of_the_real_maps_are_simple_and_cover_exactly_their_blocked_cells() {
+    for name in ["depot.yaml", "tb3_sandbox.yaml"] {
+        let (_, grid) = OccupancyGrid::load(&maps_dir().join(name)).unwrap();
+        for (what, blocked) in [
+            ("occupied", (|c| c == Cell::Occupied) as fn(Cell) -> bool),
+            ("not free", |c| c != Cell::Free),
+        ] {
+            let pieces = grid.pieces(blocked);
+            assert!(pieces.len() > 1, "{name}: {what}: {} pieces", pieces.len());
+            check_pieces(&grid, blocked, &pieces).unwrap_or_else(|e| panic!("{name}: {what}: {e}"));
+        }
+    }
+}
+
+#[test]
+fn a_ring_of_walls_is_cut_until_no_piece_has_a_hole() {
+    // A 20 x 20 room: walls one cell thick round a free floor, inside one tile row of
+    // 16 and beyond it, so the first tile's outline has a hole and must be cut.
+    let n = 20;
+    let cells = (0..n * n)
+        .map(|k| {
+            let (x, y) = (k % n, k / n);
+            match x == 0 || y == 0 || x == n - 1 || y == n - 1 {
+                true => Cell::Occupied,
+                false => Cell::Free,
+            }
+        })
+        .collect();
+    let grid = OccupancyGrid::from_cells(n, n, 0.5, [-1.0, 2.0], cells);
+    let pieces = grid.pieces(|c| c == Cell::Occupied);
+    check_pieces(&grid, |c| c == Cell::Occupied, &pieces).unwrap();
+    // The pieces are grown obstacles as they are: the floor's middle is free and 4.5 m
+    // from every wall (each wall piece's inner side at 0.5 m from the map's edge).
+    let middle = Point::new(-1.0 + 5.0, 2.0 + 5.0);
+    let nearest = pieces
+        .iter()
+        .map(|p| p.distance_m(&middle))
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(nearest, 4.5);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
+
+    #[test]
+    fn the_pieces_of_random_grids_cover_exactly_their_blocked_cells(
+        width in 1usize..40,
+        height in 1usize..40,
+        density in 0.3f64..0.95,
+        seed in any::<u64>(),
+    ) {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let cells: Vec<Cell> = (0..width * height)
+            .map(|_| if rng.random_bool(density) { Cell::Occupied } else { Cell::Free })
+            .collect();
+        let grid = OccupancyGrid::from_cells(width, height, 0.05, [1.0, -2.0], cells);
+        let pieces = grid.pieces(|c| c == Cell::Occupied);
+        let checked = check_pieces(&grid, |c| c == Cell::Occupied, &pieces);
+        prop_assert!(checked.is_ok(), "{:?}", checked);
+    }
 
     #[test]
     fn the_outlines_of_random_grids_cover_exactly_their_blocked_cells(

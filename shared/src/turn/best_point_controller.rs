@@ -5,7 +5,7 @@ use crate::best_point::{self, BestPointError};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{
-    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, Pose, Vector,
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, Vector,
 };
 use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
@@ -44,7 +44,7 @@ pub struct BestPointController {
 #[derive(Clone, Debug, Default)]
 struct PolygonObstacles {
     /// Grown by the agent's radius and the planning margin, in the planning frame.
-    grown: Vec<InflatedPolygon>,
+    grown: PolygonLayer,
     /// As given, in world coordinates (same order as `grown`), to pick the ones the agent
     /// senses each turn.
     given: Vec<Polygon>,
@@ -86,27 +86,39 @@ impl BestPointController {
     pub fn with_polygons(mut self, polygons: &[Polygon]) -> Self {
         let grow_m = self.radius_m + PLANNING_MARGIN_M;
         self.polygons = Box::new(PolygonObstacles {
-            grown: polygons
-                .iter()
-                .map(|p| InflatedPolygon::from_polygon(p.translated(&-self.offset), grow_m))
-                .collect(),
+            grown: PolygonLayer::new(
+                polygons
+                    .iter()
+                    .map(|p| InflatedPolygon::from_polygon(p.translated(&-self.offset), grow_m))
+                    .collect(),
+            ),
             given: polygons.to_vec(),
         });
         self
     }
 
-    /// The grown polygons (planning frame) the agent senses from `me`, in polygon order.
-    fn sensed_polygons(&self, me: &Point) -> Vec<InflatedPolygon> {
-        let Some(sensing_m) = self.spec.sensing_radius_m else {
-            return self.polygons.grown.clone();
-        };
-        self.polygons
-            .given
-            .iter()
-            .zip(&self.polygons.grown)
-            .filter(|(p, _)| p.distance_m(me) <= sensing_m)
-            .map(|(_, grown)| grown.clone())
-            .collect()
+    /// The grown polygons (planning frame) the agent senses from `me`, in polygon order;
+    /// `None` when it senses everything.
+    fn sensed_polygons(&self, me: &Point) -> Option<PolygonLayer> {
+        let sensing_m = self.spec.sensing_radius_m?;
+        let grow_m = self.radius_m + PLANNING_MARGIN_M;
+        let here = me - self.offset;
+        let reach = Vector::repeat(sensing_m + grow_m);
+        let mut seen = Vec::new();
+        let _ = self
+            .polygons
+            .grown
+            .visit_box(&(here - reach), &(here + reach), |i, _| {
+                if self.polygons.given[i].distance_m(me) <= sensing_m {
+                    seen.push(i);
+                }
+                std::ops::ControlFlow::<()>::Continue(())
+            });
+        seen.sort_unstable();
+        let grown = self.polygons.grown.polygons();
+        Some(PolygonLayer::new(
+            seen.iter().map(|&i| grown[i].clone()).collect(),
+        ))
     }
 
     /// The inflated obstacles (planning frame) the agent senses from `me`, in obstacle
@@ -180,13 +192,11 @@ impl BestPointController {
         );
         let sensed = self.sensed_obstacles(me);
         let layers = [sensed.as_ref().unwrap_or(&self.obstacles), &agents];
-        let sensed_polygons;
-        let polygons = if self.spec.sensing_radius_m.is_some() && !self.polygons.grown.is_empty() {
-            sensed_polygons = self.sensed_polygons(me);
-            &sensed_polygons[..]
-        } else {
-            &self.polygons.grown[..]
+        let sensed_polygons = match self.polygons.grown.is_empty() {
+            true => None,
+            false => self.sensed_polygons(me),
         };
+        let polygons = sensed_polygons.as_ref().unwrap_or(&self.polygons.grown);
         let space = FreeSpace::new(self.field, &layers).with_polygons(polygons);
         let (slot_p, me_p) = (slot - self.offset, me - self.offset);
         // Back to world coordinates, keeping the slot and the start bit-exact.
