@@ -317,7 +317,8 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
                 TurnController::new(&mission.controller, mission.field, obstacles, spec)
                     .context("the mission's controller settings")?
                     .with_moving(&mission.moving, obstacles)
-                    .with_polygons(&mission.polygons),
+                    .with_polygons(&mission.polygons)
+                    .with_map(mission.map.as_ref()),
             );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
         }
@@ -381,6 +382,7 @@ mod tests {
                 field: scenario.field,
                 obstacles: scenario.static_obstacles(),
                 polygons: scenario.polygons.clone(),
+                map: scenario.map.clone(),
                 moving: scenario.moving.clone(),
                 agents: scenario.agents.clone(),
                 controller: scenario.controller,

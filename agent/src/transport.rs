@@ -16,6 +16,8 @@ pub struct MissionView {
     pub obstacles: Vec<Disk>,
     /// The static polygon obstacles.
     pub polygons: Vec<Polygon>,
+    /// The map the polygons from its `first_piece` on come from, if any.
+    pub map: Option<shared::scenario::ScenarioMap>,
     /// The moving obstacles; where they stand follows from the turn's step.
     pub moving: Vec<MovingObstacle>,
     /// Every agent, in agent order.
@@ -32,6 +34,7 @@ impl MissionView {
             field: scenario.field,
             obstacles: scenario.static_obstacles(),
             polygons: scenario.polygons,
+            map: scenario.map,
             moving: scenario.moving,
             agents: scenario.agents,
             controller: scenario.controller,

@@ -45,6 +45,7 @@ pub fn agent_controllers(scenario: &Scenario) -> Result<Vec<TurnController>, Cbf
             TurnController::new(&scenario.controller, scenario.field, &obstacles, a).map(|p| {
                 p.with_moving(&scenario.moving, &obstacles)
                     .with_polygons(&scenario.polygons)
+                    .with_map(scenario.map.as_ref())
             })
         })
         .collect()

@@ -100,6 +100,11 @@ pub fn write_run(
         .to_resolved_toml(source)
         .with_context(|| format!("writing the resolved form of {source}"))?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    // The scenario as run names the copy of its map beside it.
+    if let Some(map) = &scenario.map {
+        map.write_copy(dir)
+            .with_context(|| format!("writing the map's copy into {}", dir.display()))?;
+    }
     let summary = run.summary();
     let file = SummaryFile {
         summary: &summary,

@@ -215,7 +215,7 @@ impl<'s> CandidateSearch<'s> {
             let earlier = polygons.len();
             let _ = self.space.visit_polygons_box(&min, &max, |i, polygon| {
                 if polygon.radius_m() > 0.0 && polygons[..earlier].binary_search(&i).is_err() {
-                    gathered.extend(polygon.corner_disks());
+                    gathered.extend(polygon.bend_disks());
                     sides.extend(polygon.offset_sides());
                     polygons.push(i);
                 }

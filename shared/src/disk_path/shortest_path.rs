@@ -63,6 +63,9 @@ pub(super) fn search_path(
     from: &Point,
     to: &Point,
 ) -> Result<DiskPath, PathError> {
+    if space.surely_apart(from, to) {
+        return Err(PathError::Unreachable);
+    }
     let direct_m = (to - from).norm();
     // The ellipse covers the field once it holds the four corners (the field is convex).
     let cover_m = space
@@ -122,7 +125,7 @@ fn candidate_disks(space: &FreeSpace, s: &Point, t: &Point, limit_m: f64) -> Vec
     });
     // A path bends round a grown polygon only on the circles of its convex corners.
     let _ = space.visit_polygons_box(&min, &max, |_, polygon| {
-        polygon.corner_disks().for_each(|d| keep(&d));
+        polygon.bend_disks().for_each(|d| keep(&d));
         ControlFlow::<()>::Continue(())
     });
     out

@@ -3,6 +3,7 @@
 use std::ops::ControlFlow;
 
 use super::{Disk, DiskGrid, Field, InflatedPolygon, Point, PolygonLayer, Vector};
+use crate::occupancy::CellRegions;
 
 /// The free space a point agent moves in: the field minus the union of one or more
 /// indexed disk layers (static obstacles, other agents) and of grown polygons, every
@@ -19,6 +20,10 @@ pub struct FreeSpace<'a> {
     pub layers: &'a [&'a DiskGrid],
     /// The blocking polygons, already grown by the agent's radius, if any.
     pub polygons: Option<&'a PolygonLayer>,
+    /// The regions a map's blocked cells close off from each other, for this agent's
+    /// clearance, if the polygons come from a map: a quick proof that a goal is
+    /// unreachable.
+    pub regions: Option<&'a CellRegions>,
 }
 
 impl<'a> FreeSpace<'a> {
@@ -28,6 +33,7 @@ impl<'a> FreeSpace<'a> {
             field,
             layers,
             polygons: None,
+            regions: None,
         }
     }
 
@@ -37,6 +43,17 @@ impl<'a> FreeSpace<'a> {
             polygons: Some(polygons),
             ..self
         }
+    }
+
+    /// The same space, whose map closes off `regions` from each other.
+    pub fn with_regions(self, regions: Option<&'a CellRegions>) -> Self {
+        Self { regions, ..self }
+    }
+
+    /// Whether `a` and `b` are surely in different components of the free space, by the
+    /// map's regions (`false` says nothing).
+    pub fn surely_apart(&self, a: &Point, b: &Point) -> bool {
+        self.regions.is_some_and(|r| r.apart(a, b))
     }
 
     /// The grown polygons (none when it has none).
@@ -166,7 +183,10 @@ impl<'a> FreeSpace<'a> {
         .is_continue()
             && self
                 .visit_polygons_box(&min, &max, |_, polygon| {
-                    if polygon.signed_distance_to_segment_m(a, b) < -tolerance_m {
+                    // The box holds the grown polygon: a segment that misses it is clear.
+                    if polygon.segment_meets_box(a, b)
+                        && polygon.signed_distance_to_segment_m(a, b) < -tolerance_m
+                    {
                         ControlFlow::Break(())
                     } else {
                         ControlFlow::Continue(())

@@ -93,6 +93,31 @@ impl InflatedPolygon {
         self.polygon.signed_distance_m(p) - self.radius_m
     }
 
+    /// Whether the segment `a`-`b` meets its bounding box (`false`: the segment is clear
+    /// of it by more than nothing): a quick test before the exact one.
+    pub fn segment_meets_box(&self, a: &Point, b: &Point) -> bool {
+        // Clip the segment's parameter range [0, 1] against the box's two slabs.
+        let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+        for (p, d, lo, hi) in [
+            (a.x, b.x - a.x, self.min.x, self.max.x),
+            (a.y, b.y - a.y, self.min.y, self.max.y),
+        ] {
+            if d == 0.0 {
+                if p < lo || p > hi {
+                    return false;
+                }
+                continue;
+            }
+            let (u, v) = ((lo - p) / d, (hi - p) / d);
+            t0 = t0.max(u.min(v));
+            t1 = t1.min(u.max(v));
+            if t0 > t1 {
+                return false;
+            }
+        }
+        true
+    }
+
     /// Signed distance from the segment `a`-`b` to the grown boundary: its smallest
     /// distance to the polygon minus the radius (a segment that enters the polygon gives
     /// at most `-radius_m`).
@@ -109,6 +134,16 @@ impl InflatedPolygon {
         let v = self.polygon.vertices();
         self.polygon
             .convex_corners()
+            .map(move |i| Disk::new(v[i].x, v[i].y, self.radius_m))
+    }
+
+    /// The circles round its [bend corners](Polygon::bend_corners): the corner circles a
+    /// shortest path or a nearest free point can use. A circle round a seam lies inside
+    /// the neighbour's growth but for one point of an offset side.
+    pub fn bend_disks(&self) -> impl Iterator<Item = Disk> + '_ {
+        let v = self.polygon.vertices();
+        self.polygon
+            .bend_corners()
             .map(move |i| Disk::new(v[i].x, v[i].y, self.radius_m))
     }
 

@@ -57,6 +57,10 @@ pub enum PolygonError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Polygon {
     vertices: Vec<Point>,
+    /// The corners, in increasing order, where this polygon meets a neighbour along a
+    /// side (a piece of a map cut into tiles): no path bends round them, since the
+    /// obstacle goes on beyond them. Empty for a polygon given whole.
+    seams: Vec<usize>,
 }
 
 /// Twice the signed area of the polygon through `v` (anticlockwise positive).
@@ -117,18 +121,35 @@ impl Polygon {
         if twice < 0.0 {
             vertices.reverse();
         }
-        Ok(Self { vertices })
+        Ok(Self {
+            vertices,
+            seams: Vec::new(),
+        })
     }
 
     /// The polygon through `vertices`, which the caller knows to be simple (three corners
     /// or more, finite, no side meeting another but its neighbours at their shared
     /// corners), without the `O(n^2)` check of [`Polygon::new`]: for the outlines of a
     /// map's cells, simple by construction. Stored anticlockwise.
-    pub(crate) fn new_trusted_simple(mut vertices: Vec<Point>) -> Self {
+    /// `seam(i)` tells whether corner `i` (as given) is a seam ([`Polygon::seams`]).
+    pub(crate) fn new_trusted_simple(
+        mut vertices: Vec<Point>,
+        seam: impl Fn(usize) -> bool,
+    ) -> Self {
+        let n = vertices.len();
+        let mut seams: Vec<usize> = (0..n).filter(|&i| seam(i)).collect();
         if area2(&vertices) < 0.0 {
             vertices.reverse();
+            seams = seams.iter().rev().map(|&i| n - 1 - i).collect();
         }
-        Self { vertices }
+        Self { vertices, seams }
+    }
+
+    /// The corners where this polygon meets a neighbour along a side, in increasing
+    /// order: a map's piece cut from the rest of a wall there. Empty for a polygon given
+    /// whole.
+    pub fn seams(&self) -> &[usize] {
+        &self.seams
     }
 
     /// The same polygon moved by `by` (its corners in the same order: a translation keeps
@@ -136,6 +157,7 @@ impl Polygon {
     pub fn translated(&self, by: &super::Vector) -> Self {
         Self {
             vertices: self.vertices.iter().map(|v| v + by).collect(),
+            seams: self.seams.clone(),
         }
     }
 
@@ -200,6 +222,13 @@ impl Polygon {
         self.sides()
             .map(|(c, d)| distance_segment_segment(a, b, &c, &d))
             .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The convex corners that are not [seams](Polygon::seams): the only corners a
+    /// shortest path can bend round (at a seam the obstacle goes on in a neighbour).
+    pub fn bend_corners(&self) -> impl Iterator<Item = usize> + '_ {
+        self.convex_corners()
+            .filter(|i| self.seams.binary_search(i).is_err())
     }
 
     /// The corners where the polygon is convex (the interior angle below 180 degrees):

@@ -149,6 +149,11 @@ impl OccupancyGrid {
         self.cells[y * self.width + x]
     }
 
+    /// Every cell, row by row from the bottom one.
+    pub fn cells(&self) -> &[Cell] {
+        &self.cells
+    }
+
     /// How many cells hold `what`.
     pub fn count(&self, what: Cell) -> usize {
         self.cells.iter().filter(|&&c| c == what).count()

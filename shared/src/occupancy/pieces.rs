@@ -9,7 +9,8 @@
 //! disjoint, and they meet only along cell sides. A union of polygons grown by a radius is
 //! the union grown by it, so the free space round the pieces is exactly the free space
 //! round the blocked cells: cutting adds corners inside the union (where a corner circle
-//! of one piece lies within the growth of its neighbour) but changes no free point.
+//! of one piece lies within the growth of its neighbour) but changes no free point. Those
+//! corners are marked as seams ([`Polygon::seams`]), so that no path searches round them.
 
 use crate::geometry::Polygon;
 
@@ -43,11 +44,31 @@ impl OccupancyGrid {
                 tile_rings(&blocked_at, [x0, y0], [w, h], &mut rings);
             }
         }
+        // A corner where the blocked cells round it make no convex corner of their union
+        // (two side by side, three, or four) is a seam: the obstacle goes on beyond it.
+        let at = |x: usize, y: usize, dx: usize, dy: usize| {
+            x >= dx
+                && y >= dy
+                && x - dx < self.width
+                && y - dy < self.height
+                && blocked_at(x - dx, y - dy)
+        };
+        let seam = |[i, j]: CellCorner| {
+            let [ll, lr, ul, ur] = [
+                at(i, j, 1, 1),
+                at(i, j, 0, 1),
+                at(i, j, 1, 0),
+                at(i, j, 0, 0),
+            ];
+            let count = [ll, lr, ul, ur].iter().filter(|&&b| b).count();
+            let diagonal = count == 2 && ll == ur;
+            !(count == 1 || diagonal)
+        };
         rings
             .iter()
             .map(|ring| {
                 let corners = ring.iter().map(|&c| self.corner_point(c)).collect();
-                Polygon::new_trusted_simple(corners)
+                Polygon::new_trusted_simple(corners, |k| seam(ring[k]))
             })
             .collect()
     }

@@ -469,6 +469,17 @@ fn a_ring_of_walls_is_cut_until_no_piece_has_a_hole() {
         .map(|p| p.distance_m(&middle))
         .fold(f64::INFINITY, f64::min);
     assert_eq!(nearest, 4.5);
+    // A path bends only round the room's four outer corners: the corners where the wall
+    // was cut into pieces are seams, and the floor's corners are not convex.
+    let mut bends: Vec<(f64, f64)> = pieces
+        .iter()
+        .flat_map(|p| {
+            p.bend_corners()
+                .map(|i| (p.vertices()[i].x, p.vertices()[i].y))
+        })
+        .collect();
+    bends.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(bends, [(-1.0, 2.0), (-1.0, 12.0), (9.0, 2.0), (9.0, 12.0)]);
 }
 
 proptest! {

@@ -20,7 +20,11 @@ pub(super) struct ScenarioFile {
     pub(super) name: String,
     #[serde(default)]
     pub(super) seed: u64,
-    pub(super) field: FieldFile,
+    /// Absent with a `[map]`: the field is then the map's extent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) field: Option<FieldFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) map: Option<MapFile>,
     #[serde(default)]
     pub(super) obstacles: ObstaclesFile,
     pub(super) formation: FormationFile,
@@ -56,6 +60,38 @@ pub(super) struct CbfFile {
     pub(super) sensing_radius_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) lse_sharpness_per_m: Option<f64>,
+}
+
+/// `[map]`: an occupancy map whose blocked cells are obstacles: a map_server YAML file
+/// (`yaml`), or the cells themselves (`cells`, as a resolved scenario writes them).
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct MapFile {
+    /// The map_server YAML file, relative to the scenario file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) yaml: Option<String>,
+    /// With `cells`: where they were read from (a note, not read).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) source: Option<String>,
+    /// `"obstacle"` (the default) or `"free"`: what unknown cells are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) unknown: Option<String>,
+    /// `[x_m, y_m]`: where the map's lower-left corner lies (in place of the YAML's
+    /// origin; required with `cells`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) origin_m: Option<Vec<f64>>,
+    /// With `cells`: the side of a cell, metres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) resolution_m: Option<f64>,
+    /// With `cells`: cells per row.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) width_cells: Option<usize>,
+    /// With `cells`: rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) height_cells: Option<usize>,
+    /// The cells, run-length encoded ([`ScenarioMap::cells_text`](super::ScenarioMap::cells_text)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) cells: Option<String>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -290,8 +326,9 @@ pub(super) fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, Scenari
 /// any. Serde fills a struct from an array by position, silently dropping extra items;
 /// the format wants every value named with its unit.
 fn table_given_as_array(document: &toml::Table) -> Option<String> {
-    const TABLES: [&str; 7] = [
+    const TABLES: [&str; 8] = [
         "field",
+        "map",
         "obstacles",
         "obstacles.random",
         "formation",

@@ -10,6 +10,8 @@
 //! - `file`: the TOML side: reading, [`Scenario::parse`], [`Scenario::load`], the
 //!   embedded paper scenario, the raw serde structures of the format;
 //! - `check`: validation of the raw structures into a [`Scenario`], and its limits;
+//! - `map`: [`ScenarioMap`], the occupancy map the obstacles of `[map]` come from, its
+//!   cells written inline in a resolved scenario, and the copy of it a run keeps;
 //! - `random`: the obstacles drawn from the scenario's seed;
 //! - `resolved`: [`Scenario::to_resolved_toml`], the scenario written back as a
 //!   self-contained file.
@@ -21,6 +23,7 @@ mod check;
 mod error;
 mod file;
 mod load;
+mod map;
 mod model;
 mod random;
 mod resolved;
@@ -30,6 +33,7 @@ pub use check::{
 };
 pub use error::ScenarioError;
 pub use load::{PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
+pub use map::{CellsTextError, ScenarioMap};
 pub use model::{PathSpec, Scenario};
 pub use resolved::{ResolveError, moving_obstacle_table};
 

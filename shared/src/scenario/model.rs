@@ -2,6 +2,8 @@
 
 use crate::geometry::{Disk, Field, Polygon, Pose};
 use crate::moving_obstacle::MovingObstacle;
+
+use super::ScenarioMap;
 use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode};
 
 /// A validated scenario: every number finite and in range, every body placed legally.
@@ -22,8 +24,11 @@ pub struct Scenario {
     /// each joins the known map the moment an agent senses it (agents plan around them as
     /// around any obstacle they sense).
     pub unknown: Vec<Disk>,
-    /// Static polygon obstacles, known from the start, in file order.
+    /// Static polygon obstacles, known from the start: those of `[[obstacles.polygon]]`
+    /// in file order, then the pieces of the map's blocked cells, if it has a map.
     pub polygons: Vec<Polygon>,
+    /// The occupancy map of `[map]`, if any (its pieces are in `polygons`).
+    pub map: Option<ScenarioMap>,
     /// The agents, in turn order.
     pub agents: Vec<AgentSpec>,
     /// Formation centre path settings.

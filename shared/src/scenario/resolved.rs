@@ -4,12 +4,13 @@
 //! parser reads ([`super::file`]), filled from the [`Scenario`] and serialised with
 //! `toml`, so a key has one spelling for reading and writing.
 
-use super::Scenario;
 use super::check::MAX_ANGLE_DEG;
 use super::file::{
-    CbfFile, DiskFile, FieldFile, FormationFile, MovingFile, ObstaclesFile, PathFile, PolygonFile,
-    PoseFile, ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m, default_obstacle_radius_m,
+    CbfFile, DiskFile, FieldFile, FormationFile, MapFile, MovingFile, ObstaclesFile, PathFile,
+    PolygonFile, PoseFile, ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m,
+    default_obstacle_radius_m,
 };
+use super::{Scenario, ScenarioMap};
 use crate::geometry::{Disk, Point, Pose};
 use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::Kinematics;
@@ -72,10 +73,21 @@ impl Scenario {
         Ok(ScenarioFile {
             name: self.name.clone(),
             seed: self.seed,
-            field: FieldFile {
+            field: Some(FieldFile {
                 width_m: self.field.width_m,
                 height_m: self.field.height_m,
-            },
+            }),
+            // The cells themselves: the resolved form loads alone, in any process.
+            map: self.map.as_ref().map(|m| MapFile {
+                yaml: None,
+                source: Some(m.source.clone()),
+                unknown: Some(if m.unknown_free { "free" } else { "obstacle" }.to_string()),
+                origin_m: Some(m.grid.origin_m.to_vec()),
+                resolution_m: Some(m.grid.resolution_m),
+                width_cells: Some(m.grid.width),
+                height_cells: Some(m.grid.height),
+                cells: Some(ScenarioMap::cells_text(&m.grid)),
+            }),
             obstacles: self.obstacles_file(),
             formation: self.formation_file()?,
             path: PathFile {
@@ -115,8 +127,11 @@ impl Scenario {
             random: None,
             moving: self.moving.iter().map(moving_file).collect(),
             unknown: self.unknown.iter().map(disk_file).collect(),
-            polygon: self
-                .polygons
+            // The map's pieces are not written: the map is.
+            polygon: self.polygons[..self
+                .map
+                .as_ref()
+                .map_or(self.polygons.len(), |m| m.first_piece)]
                 .iter()
                 .map(|p| PolygonFile {
                     vertices_m: p.vertices().iter().map(|v| vec![v.x, v.y]).collect(),

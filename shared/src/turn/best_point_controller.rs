@@ -7,6 +7,8 @@ use crate::formation::Slot;
 use crate::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, Vector,
 };
+use crate::occupancy::CellRegions;
+use crate::scenario::ScenarioMap;
 use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
 use super::PLANNING_MARGIN_M;
@@ -48,6 +50,9 @@ struct PolygonObstacles {
     /// As given, in world coordinates (same order as `grown`), to pick the ones the agent
     /// senses each turn.
     given: Vec<Polygon>,
+    /// The regions the map's blocked cells close off, for this agent's clearance, in the
+    /// planning frame (with a map only).
+    regions: Option<CellRegions>,
 }
 
 impl BestPointController {
@@ -93,7 +98,18 @@ impl BestPointController {
                     .collect(),
             ),
             given: polygons.to_vec(),
+            regions: None,
         });
+        self
+    }
+
+    /// The same controller knowing that the polygons from `map.first_piece` on are the
+    /// blocked cells of `map`: it proves goals in regions the map closes off unreachable
+    /// at once ([`CellRegions`]). Call after [`Self::with_polygons`].
+    pub fn with_map(mut self, map: &ScenarioMap) -> Self {
+        let clearance_m = self.radius_m + PLANNING_MARGIN_M - disk_path::FREE_TOLERANCE_M;
+        let regions = CellRegions::new(&map.grid, |c| map.blocks(c), clearance_m, -self.offset);
+        self.polygons.regions = Some(regions);
         self
     }
 
@@ -197,7 +213,9 @@ impl BestPointController {
             false => self.sensed_polygons(me),
         };
         let polygons = sensed_polygons.as_ref().unwrap_or(&self.polygons.grown);
-        let space = FreeSpace::new(self.field, &layers).with_polygons(polygons);
+        let space = FreeSpace::new(self.field, &layers)
+            .with_polygons(polygons)
+            .with_regions(self.polygons.regions.as_ref());
         let (slot_p, me_p) = (slot - self.offset, me - self.offset);
         // Back to world coordinates, keeping the slot and the start bit-exact.
         let to_world = |p: &Point| -> Point {

@@ -17,6 +17,7 @@ use crate::geometry::{Disk, DiskGrid, Field, Point, Polygon, Pose, polyline_pref
 use crate::kinematics::{CarLimits, UnicycleLimits, drive_unicycle};
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaController;
+use crate::scenario::ScenarioMap;
 use crate::vocabulary::{
     AgentSpec, Body, CbfSettingsError, ControllerKind, ControllerSpec, Kinematics, Move, MoveStatus,
 };
@@ -140,6 +141,15 @@ impl TurnController {
     pub fn with_polygons(mut self, polygons: &[Polygon]) -> Self {
         if let Controller::BestPoint(c) = self.controller {
             self.controller = Controller::BestPoint(c.with_polygons(polygons));
+        }
+        self
+    }
+
+    /// This controller knowing that the polygons from `map.first_piece` on are `map`'s
+    /// blocked cells (`None`: no map): see [`BestPointController::with_map`].
+    pub fn with_map(mut self, map: Option<&ScenarioMap>) -> Self {
+        if let (Controller::BestPoint(c), Some(map)) = (&self.controller, map) {
+            self.controller = Controller::BestPoint(c.clone().with_map(map));
         }
         self
     }

@@ -13,6 +13,7 @@ use crate::vocabulary::TurnMode;
 
 mod feasibility;
 mod formation;
+mod map;
 mod obstacles;
 
 /// Largest field side accepted, in metres: beyond this the numbers stop being a field.
@@ -131,8 +132,23 @@ impl Checker<'_> {
         if raw.name.trim().is_empty() {
             return Err(self.invalid("name", "must not be empty"));
         }
-        let width_m = self.positive("field.width_m", raw.field.width_m, MAX_FIELD_SIDE_M)?;
-        let height_m = self.positive("field.height_m", raw.field.height_m, MAX_FIELD_SIDE_M)?;
+        let map = raw
+            .map
+            .as_ref()
+            .map(|m| self.map(m, raw.obstacles.polygon.len()))
+            .transpose()?;
+        let (width_m, height_m) = match (&raw.field, &map) {
+            (Some(f), _) => (f.width_m, f.height_m),
+            (None, Some(map)) => self.field_of_map(map)?,
+            (None, None) => {
+                return Err(self.invalid(
+                    "field",
+                    "missing: give [field] width_m and height_m, or a [map] whose extent is the field",
+                ));
+            }
+        };
+        let width_m = self.positive("field.width_m", width_m, MAX_FIELD_SIDE_M)?;
+        let height_m = self.positive("field.height_m", height_m, MAX_FIELD_SIDE_M)?;
         let field = Field::new(width_m, height_m);
         let side_m = width_m.max(height_m);
 
@@ -195,10 +211,14 @@ impl Checker<'_> {
         let unknown = self.unknown_obstacles(&raw.obstacles, &field, obstacles.len())?;
         let mut all_static = obstacles.clone();
         all_static.extend_from_slice(&unknown);
-        let polygons = self.polygons(&raw.obstacles, &field)?;
+        let mut polygons = self.polygons(&raw.obstacles, &field)?;
+        if let Some(map) = &map {
+            polygons.extend(self.map_pieces(map, &field)?);
+        }
         self.start_and_goal_clear(&all_static, &field, &path)?;
         self.formation_fits_at_start(&agents, &all_static, &field, &path)?;
-        self.clear_of_polygons(&polygons, &agents, &path)?;
+        let first_piece = map.as_ref().map_or(polygons.len(), |m| m.first_piece);
+        self.clear_of_polygons(&polygons, first_piece, &agents, &path)?;
         let moving =
             self.moving_obstacles(&raw.obstacles, &field, &path, &agents, all_static.len())?;
         if !moving.is_empty()
@@ -240,6 +260,7 @@ impl Checker<'_> {
             moving,
             unknown,
             polygons,
+            map,
             agents,
             path,
             controller,

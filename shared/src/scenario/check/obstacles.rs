@@ -303,14 +303,20 @@ impl Checker<'_> {
     }
 
     /// The centre's start and goal keep their clearance from every polygon, and every
-    /// agent's slot at the start stands clear of them.
+    /// agent's slot at the start stands clear of them; those from `first_piece` on are the
+    /// map's, and named so.
     pub(super) fn clear_of_polygons(
         &self,
         polygons: &[Polygon],
+        first_piece: usize,
         agents: &[AgentSpec],
         path: &PathSpec,
     ) -> Result<(), ScenarioError> {
         for (k, polygon) in polygons.iter().enumerate() {
+            let what = match k < first_piece {
+                true => format!("polygon {k}"),
+                false => "the map's blocked cells".to_string(),
+            };
             for (name, pose) in [("path.start", &path.start), ("path.goal", &path.goal)] {
                 let p = pose.position();
                 let distance_m = polygon.distance_m(&p);
@@ -318,7 +324,7 @@ impl Checker<'_> {
                     return Err(self.invalid(
                         name,
                         format!(
-                            "({}, {}) is {} m from polygon {k}, within the centre clearance {} m",
+                            "({}, {}) is {} m from {what}, within the centre clearance {} m",
                             num(p.x),
                             num(p.y),
                             num(distance_m),
@@ -333,7 +339,7 @@ impl Checker<'_> {
                     return Err(self.invalid(
                         format!("formation.slots[{i}]"),
                         format!(
-                            "at the start pose the agent at ({:.3}, {:.3}) overlaps polygon {k}",
+                            "at the start pose the agent at ({:.3}, {:.3}) overlaps {what}",
                             p.x, p.y
                         ),
                     ));
