@@ -1,8 +1,10 @@
 //! Cost of planning among polygon obstacles, on `scenarios/polygon-corridor.toml` (two
-//! L-shaped walls with a doorway, a wedge and two disks): one best point (every agent's
-//! slot at every step, against the walls and disks grown by the agent's radius), and one
-//! agent's whole move (best point, reachability and shortest path) on the turns of the
-//! reference simulation, beside the same turns with the polygons left out.
+//! L-shaped walls with a doorway, a wedge and two disks) and on
+//! `scenarios/depot-shelves.toml` (a real map: the depot's blocked cells as 500 polygon
+//! pieces): one best point (every agent's slot at every step, against the obstacles
+//! grown by the agent's radius), and one agent's whole move (best point, reachability
+//! and shortest path) on the turns of the reference simulation, beside the same turns
+//! with the polygons left out. Each is also timed item by item (p50, p90, largest).
 
 mod support;
 
@@ -25,12 +27,11 @@ struct Turn {
     others: Vec<Body>,
 }
 
-fn corridor() -> Scenario {
-    let file = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../scenarios/polygon-corridor.toml"
-    );
-    Scenario::load(std::path::Path::new(file)).expect("a shipped scenario")
+fn shipped(name: &str) -> Scenario {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenarios")
+        .join(name);
+    Scenario::load(&file).expect("a shipped scenario")
 }
 
 /// Every agent's turn at every step, from where the step before left every agent.
@@ -67,14 +68,23 @@ fn print_turn_percentiles(what: &str, controllers: &[TurnController], turns: &[T
 }
 
 fn bench_polygons(c: &mut Criterion) {
-    let scenario = corridor();
-    let turns = turns(&scenario);
-    let with = agent_controllers(&scenario).expect("controllers");
+    bench_scenario(c, "corridor", &shipped("polygon-corridor.toml"));
+    bench_scenario(c, "depot", &shipped("depot-shelves.toml"));
+}
+
+fn bench_scenario(c: &mut Criterion, name: &str, scenario: &Scenario) {
+    let turns = turns(scenario);
+    let with = agent_controllers(scenario).expect("controllers");
     let mut bare = scenario.clone();
     bare.polygons.clear();
+    bare.map = None;
     let without = agent_controllers(&bare).expect("controllers");
-    print_turn_percentiles("moves among polygons", &with, &turns);
-    print_turn_percentiles("the same turns without the polygons", &without, &turns);
+    print_turn_percentiles(&format!("{name}: moves among polygons"), &with, &turns);
+    print_turn_percentiles(
+        &format!("{name}: the same turns without the polygons"),
+        &without,
+        &turns,
+    );
 
     let radius_m = scenario.agents[0].radius_m;
     let grid = DiskGrid::new(
@@ -97,7 +107,15 @@ fn bench_polygons(c: &mut Criterion) {
         .map(|t| scenario.agents[t.agent].slot.ideal_position(&t.centre))
         .collect();
 
-    let mut group = c.benchmark_group("polygons/corridor");
+    support::print_best_of_five_percentiles(
+        &format!("{name}: best points among polygons"),
+        slots.len(),
+        |i| {
+            black_box(nearest_free_point(&space, &slots[i]).ok());
+        },
+    );
+
+    let mut group = c.benchmark_group(format!("polygons/{name}"));
     let mut i = 0;
     group.bench_function("best_point", |b| {
         b.iter(|| {

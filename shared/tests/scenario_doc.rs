@@ -212,9 +212,19 @@ fn all_keys(table: &Table, prefix: &str, out: &mut BTreeSet<String>) {
     }
 }
 
+/// The examples are read as if they were files in `scenarios/`, so that a map they name
+/// (`maps/depot.yaml`) is the one shipped there.
+fn as_scenario_file(name: &str) -> String {
+    repo_root()
+        .join("scenarios")
+        .join(name)
+        .display()
+        .to_string()
+}
+
 fn parse(doc: &Table, what: &str) -> Result<Scenario, shared::scenario::ScenarioError> {
     let text = toml::to_string(doc).unwrap_or_else(|e| panic!("{what}: cannot write: {e}"));
-    Scenario::parse(&text, what)
+    Scenario::parse(&text, &as_scenario_file(what))
 }
 
 /// The field an error about `key` names: `a[].b` becomes `a[0].b`.
@@ -343,7 +353,8 @@ fn every_toml_block_of_the_doc_is_a_valid_scenario_with_a_path() {
     );
     for (line, body) in &blocks {
         let what = format!("docs/scenario-format.md, block at line {line}");
-        let scenario = Scenario::parse(body, &what).unwrap_or_else(|e| panic!("{e}"));
+        let scenario = Scenario::parse(body, &as_scenario_file("doc.toml"))
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
         let path = plan_centre_path(&scenario).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert!(path.len() >= 2, "{what}: a path of {} poses", path.len());
     }
@@ -358,7 +369,8 @@ fn the_key_table_matches_the_parser() {
     // The round trip through toml::to_string that the checks use changes nothing.
     assert_eq!(
         parse(&example, "doc.toml").expect("the complete example parses"),
-        Scenario::parse(&first, "doc.toml").expect("the complete example parses")
+        Scenario::parse(&first, &as_scenario_file("doc.toml"))
+            .expect("the complete example parses")
     );
 
     let documented: BTreeSet<String> = rows.iter().map(|r| r.key.clone()).collect();

@@ -2,8 +2,7 @@
 
 use std::ops::ControlFlow;
 
-use super::{Disk, DiskGrid, Field, InflatedPolygon, Point, PolygonLayer, Vector};
-use crate::occupancy::CellRegions;
+use super::{Disk, DiskGrid, Field, InflatedPolygon, Point, PolygonLayer, RegionGrid, Vector};
 
 /// The free space a point agent moves in: the field minus the union of one or more
 /// indexed disk layers (static obstacles, other agents) and of grown polygons, every
@@ -23,7 +22,7 @@ pub struct FreeSpace<'a> {
     /// The regions a map's blocked cells close off from each other, for this agent's
     /// clearance, if the polygons come from a map: a quick proof that a goal is
     /// unreachable.
-    pub regions: Option<&'a CellRegions>,
+    pub regions: Option<&'a RegionGrid>,
 }
 
 impl<'a> FreeSpace<'a> {
@@ -46,7 +45,7 @@ impl<'a> FreeSpace<'a> {
     }
 
     /// The same space, whose map closes off `regions` from each other.
-    pub fn with_regions(self, regions: Option<&'a CellRegions>) -> Self {
+    pub fn with_regions(self, regions: Option<&'a RegionGrid>) -> Self {
         Self { regions, ..self }
     }
 

@@ -21,6 +21,7 @@ mod polygon;
 mod polygon_layer;
 mod polyline;
 mod pose;
+mod region_grid;
 
 pub use box_index::BoxIndex;
 pub use disk::{Disk, distance_point_segment};
@@ -37,6 +38,7 @@ pub use polyline::{
     distance_polyline_polyline, distance_segment_segment, polyline_length_m, polyline_prefix,
 };
 pub use pose::{Pose, wrap_angle_rad};
+pub use region_grid::RegionGrid;
 
 #[cfg(test)]
 mod tests;

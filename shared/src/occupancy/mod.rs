@@ -10,7 +10,7 @@
 //! - [`pieces`]: the blocked cells as simple polygons without holes, tile by tile, the
 //!   obstacles a scenario's map adds ([`OccupancyGrid::pieces`]);
 //! - [`regions`]: the free regions a map's walls close off from each other, a quick proof
-//!   that a goal is unreachable ([`CellRegions`]);
+//!   that a goal is unreachable ([`OccupancyGrid::regions`]);
 //! - [`error`]: why a map was refused ([`MapError`], `FILE: FIELD: REASON`).
 //!
 //! A rotated map (an `origin` yaw other than 0) is refused; the map's frame is the
@@ -44,7 +44,6 @@ pub use grid::{Cell, OccupancyGrid};
 pub use outline::{CellCorner, outline_cells, ring_area2_cells};
 pub use pieces::PIECE_TILE_CELLS;
 pub use raster::{MAX_IMAGE_BYTES, Raster};
-pub use regions::CellRegions;
 pub use yaml::{MAX_MAP_YAML_BYTES, MapMode, MapYaml};
 
 /// Most cells of a map (4096 x 4096): a larger image is refused before it is decoded.

@@ -1,51 +1,39 @@
-//! Which free places of a map cannot reach each other ([`CellRegions`]): a quick and
-//! sound proof that a goal is unreachable, before any search.
+//! Which free places of a map cannot reach each other ([`OccupancyGrid::regions`]): a
+//! quick and sound proof that a goal is unreachable, before any search.
 
-use crate::geometry::{Point, Vector};
+use crate::geometry::{Point, RegionGrid, Vector};
 
 use super::{Cell, OccupancyGrid};
 
-/// The free regions of a map for a point agent that keeps `clearance_m` from every
-/// blocked cell: the cells that are surely blocked (every point of them nearer than the
-/// clearance to a blocked cell, blocked cells included) wall the others off into
-/// regions, labelled by a flood fill across cell sides.
-///
-/// Two points in different regions are in different components of the free space: a
-/// path between them would cross a surely blocked cell, or pass a corner where two such
-/// cells meet, and every point there is blocked. So [`CellRegions::apart`] proves a goal
-/// unreachable without a search (other obstacles only take more of the space away);
-/// points it does not set apart may still be, and go to the search.
-///
-/// ```
-/// use shared::geometry::{Point, Vector};
-/// use shared::occupancy::{Cell, CellRegions, OccupancyGrid};
-/// // A 10 x 1 strip of 1 m cells with a wall in its middle cell.
-/// let cells = (0..10).map(|x| if x == 5 { Cell::Occupied } else { Cell::Free }).collect();
-/// let grid = OccupancyGrid::from_cells(10, 1, 1.0, [0.0, 0.0], cells);
-/// let regions = CellRegions::new(&grid, |c| c == Cell::Occupied, 0.25, Vector::zeros());
-/// assert!(regions.apart(&Point::new(1.0, 0.5), &Point::new(8.0, 0.5)));
-/// assert!(!regions.apart(&Point::new(1.0, 0.5), &Point::new(4.0, 0.5)));
-/// ```
-#[derive(Clone, Debug, PartialEq)]
-pub struct CellRegions {
-    width: usize,
-    height: usize,
-    resolution_m: f64,
-    origin: Point,
-    /// Per cell (row by row from the bottom): 0 surely blocked, else its region.
-    label: Vec<u32>,
-}
-
-impl CellRegions {
-    /// The regions of `grid` (its cells for which `blocked` holds are obstacles) for an
-    /// agent that keeps `clearance_m` from them, in a frame where the map's origin lies
-    /// at `grid.origin_m + shift`.
-    pub fn new(
-        grid: &OccupancyGrid,
+impl OccupancyGrid {
+    /// The free regions of this map for a point agent that keeps `clearance_m` from every
+    /// blocked cell (those for which `blocked` holds), in a frame where the map's origin
+    /// lies at `origin_m + shift`: the cells that are surely blocked (every point of them
+    /// nearer than the clearance to a blocked cell, blocked cells included) wall the
+    /// others off into regions, labelled by a flood fill across cell sides.
+    ///
+    /// Two points in different regions are in different components of the free space: a
+    /// path between them would cross a surely blocked cell, or pass a corner where two
+    /// such cells meet, and every point there is blocked. Other obstacles only take more
+    /// of the space away.
+    ///
+    /// ```
+    /// use shared::geometry::{Point, Vector};
+    /// use shared::occupancy::{Cell, OccupancyGrid};
+    /// // A 10 x 1 strip of 1 m cells with a wall in its middle cell.
+    /// let cells = (0..10).map(|x| if x == 5 { Cell::Occupied } else { Cell::Free }).collect();
+    /// let grid = OccupancyGrid::from_cells(10, 1, 1.0, [0.0, 0.0], cells);
+    /// let regions = grid.regions(|c| c == Cell::Occupied, 0.25, Vector::zeros());
+    /// assert!(regions.apart(&Point::new(1.0, 0.5), &Point::new(8.0, 0.5)));
+    /// assert!(!regions.apart(&Point::new(1.0, 0.5), &Point::new(4.0, 0.5)));
+    /// ```
+    pub fn regions(
+        &self,
         blocked: impl Fn(Cell) -> bool,
         clearance_m: f64,
         shift: Vector,
-    ) -> Self {
+    ) -> RegionGrid {
+        let grid = self;
         let (w, h, res) = (grid.width, grid.height, grid.resolution_m);
         let mut sure = vec![false; w * h];
         for y in 0..h {
@@ -117,58 +105,7 @@ impl CellRegions {
             }
         }
         let origin = Point::new(grid.origin_m[0], grid.origin_m[1]) + shift;
-        Self {
-            width: w,
-            height: h,
-            resolution_m: res,
-            origin,
-            label,
-        }
-    }
-
-    /// The region of every cell `p` lies in (on a side or a corner, each cell touching
-    /// it): `None` when `p` is off the map or touches a surely blocked cell.
-    fn region(&self, p: &Point) -> Option<u32> {
-        let fx = (p.x - self.origin.x) / self.resolution_m;
-        let fy = (p.y - self.origin.y) / self.resolution_m;
-        if !(fx >= 0.0 && fy >= 0.0 && fx <= self.width as f64 && fy <= self.height as f64) {
-            return None;
-        }
-        let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
-        // The cells whose closed squares hold p: one, two on a side, four at a corner.
-        let xs = if fx == x0 as f64 && x0 > 0 {
-            [x0 - 1, x0]
-        } else {
-            [x0, x0]
-        };
-        let ys = if fy == y0 as f64 && y0 > 0 {
-            [y0 - 1, y0]
-        } else {
-            [y0, y0]
-        };
-        let mut region = None;
-        for y in ys {
-            for x in xs {
-                let l = *self.label.get(
-                    y.min(self.height.saturating_sub(1)) * self.width
-                        + x.min(self.width.saturating_sub(1)),
-                )?;
-                if l == 0 || region.is_some_and(|r| r != l) {
-                    return None;
-                }
-                region = Some(l);
-            }
-        }
-        region
-    }
-
-    /// Whether `a` and `b` lie in different regions, so that no path joins them (`false`
-    /// says nothing).
-    pub fn apart(&self, a: &Point, b: &Point) -> bool {
-        match (self.region(a), self.region(b)) {
-            (Some(ra), Some(rb)) => ra != rb,
-            _ => false,
-        }
+        RegionGrid::from_labels(w, h, res, origin, label)
     }
 }
 

@@ -5,9 +5,9 @@ use crate::best_point::{self, BestPointError};
 use crate::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{
-    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, Vector,
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer, Pose,
+    RegionGrid, Vector,
 };
-use crate::occupancy::CellRegions;
 use crate::scenario::ScenarioMap;
 use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
@@ -52,7 +52,7 @@ struct PolygonObstacles {
     given: Vec<Polygon>,
     /// The regions the map's blocked cells close off, for this agent's clearance, in the
     /// planning frame (with a map only).
-    regions: Option<CellRegions>,
+    regions: Option<RegionGrid>,
 }
 
 impl BestPointController {
@@ -105,10 +105,12 @@ impl BestPointController {
 
     /// The same controller knowing that the polygons from `map.first_piece` on are the
     /// blocked cells of `map`: it proves goals in regions the map closes off unreachable
-    /// at once ([`CellRegions`]). Call after [`Self::with_polygons`].
+    /// at once ([`RegionGrid`]). Call after [`Self::with_polygons`].
     pub fn with_map(mut self, map: &ScenarioMap) -> Self {
         let clearance_m = self.radius_m + PLANNING_MARGIN_M - disk_path::FREE_TOLERANCE_M;
-        let regions = CellRegions::new(&map.grid, |c| map.blocks(c), clearance_m, -self.offset);
+        let regions = map
+            .grid
+            .regions(|c| map.blocks(c), clearance_m, -self.offset);
         self.polygons.regions = Some(regions);
         self
     }
