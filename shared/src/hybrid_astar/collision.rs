@@ -6,7 +6,7 @@ use std::ops::ControlFlow;
 use super::primitive::Piece;
 use super::settings::HybridAStarSettings;
 use crate::geometry::{
-    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, distance_point_segment,
+    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, PolygonLayer, distance_point_segment,
 };
 
 /// Exact collision checks against the obstacles inflated by the clearance and the field
@@ -17,8 +17,8 @@ pub(super) struct Checker {
     pub(super) max: Point,
     spacing_m: f64,
     candidates: Vec<Disk>,
-    /// Polygon obstacles grown by the clearance.
-    polygons: Vec<InflatedPolygon>,
+    /// Polygon obstacles grown by the clearance, indexed (a map gives thousands).
+    polygons: PolygonLayer,
 }
 
 impl Checker {
@@ -30,7 +30,7 @@ impl Checker {
             max: Point::new(field.width_m - c, field.height_m - c),
             spacing_m: settings.sample_spacing_m,
             candidates: Vec::new(),
-            polygons: Vec::new(),
+            polygons: PolygonLayer::default(),
         }
     }
 
@@ -40,10 +40,12 @@ impl Checker {
         polygons: &[Polygon],
         settings: &HybridAStarSettings,
     ) -> Self {
-        self.polygons = polygons
-            .iter()
-            .map(|p| InflatedPolygon::from_polygon(p.clone(), settings.clearance_m))
-            .collect();
+        self.polygons = PolygonLayer::new(
+            polygons
+                .iter()
+                .map(|p| InflatedPolygon::from_polygon(p.clone(), settings.clearance_m))
+                .collect(),
+        );
         self
     }
 
@@ -54,9 +56,14 @@ impl Checker {
             Point::new(a.x.max(b.x) + margin_m, a.y.max(b.y) + margin_m),
         );
         self.polygons
-            .iter()
-            .filter(|p| p.box_meets(&min, &max))
-            .all(|p| p.signed_distance_to_segment_m(a, b) >= margin_m)
+            .visit_box(&min, &max, |_, p| {
+                if p.signed_distance_to_segment_m(a, b) >= margin_m {
+                    ControlFlow::Continue(())
+                } else {
+                    ControlFlow::Break(())
+                }
+            })
+            .is_continue()
     }
 
     pub(super) fn in_field(&self, p: &Point) -> bool {

@@ -116,6 +116,17 @@ impl Checker<'_> {
     /// upper-right corner.
     pub(super) fn field_of_map(&self, map: &ScenarioMap) -> Result<(f64, f64), ScenarioError> {
         let g = &map.grid;
+        let [x_m, y_m] = g.origin_m;
+        if x_m < 0.0 || y_m < 0.0 {
+            return Err(self.invalid(
+                "map.yaml",
+                format!(
+                    "the map starts at ({}, {}), left of or below the field's corner (0, 0), and there is no [field]: place it with [map] origin_m (origin_m = [0.0, 0.0] puts its lower-left corner there), or give a [field] (the cells outside it are left out)",
+                    num(x_m),
+                    num(y_m)
+                ),
+            ));
+        }
         let top_right = g.corner_point([g.width, g.height]);
         if !(top_right.x > 0.0 && top_right.y > 0.0) {
             return Err(self.invalid(
