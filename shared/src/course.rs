@@ -373,7 +373,8 @@ impl<'a> Course<'a> {
                 self.scenario.field,
                 self.scenario.path.goal,
                 self.settings.clone(),
-            ),
+            )
+            .map(|r| r.with_polygons(&self.scenario.polygons)),
         };
         let planned: Result<Vec<Pose>, PlanError> = replanner.and_then(|mut r| {
             let dense = r.plan_from(&here, &obstacles);

@@ -7,7 +7,7 @@ use super::error::PlanError;
 use super::heuristic::Holonomic;
 use super::plan::{plan_with_checker, validate_inputs};
 use super::settings::HybridAStarSettings;
-use crate::geometry::{Disk, Field, Point, Pose};
+use crate::geometry::{Disk, Field, Point, Polygon, Pose};
 
 /// A planner for one field, goal and settings, asked again and again from new start poses
 /// as the known obstacles change (the formation centre replanning online).
@@ -63,6 +63,8 @@ pub struct Replanner {
     settings: HybridAStarSettings,
     /// The heuristic and the obstacles (true radii, in the order given) it was built for.
     heuristic: Option<(Vec<Disk>, Holonomic)>,
+    /// Static polygon obstacles every path keeps clear of.
+    polygons: Vec<Polygon>,
 }
 
 impl Replanner {
@@ -79,7 +81,15 @@ impl Replanner {
             goal,
             settings,
             heuristic: None,
+            polygons: Vec::new(),
         })
+    }
+
+    /// The same replanner keeping every path clear of the static `polygons` too.
+    pub fn with_polygons(mut self, polygons: &[Polygon]) -> Self {
+        self.polygons = polygons.to_vec();
+        self.heuristic = None;
+        self
     }
 
     /// The goal every path ends at.
@@ -98,7 +108,8 @@ impl Replanner {
     /// obstacles only, not on the earlier calls.
     pub fn plan_from(&mut self, start: &Pose, obstacles: &[Disk]) -> Result<Vec<Pose>, PlanError> {
         validate_inputs(&self.field, obstacles, &self.settings)?;
-        let checker = Checker::new(&self.field, obstacles, &self.settings);
+        let checker = Checker::new(&self.field, obstacles, &self.settings)
+            .with_polygons(&self.polygons, &self.settings);
         let (field, goal, settings) = (&self.field, &self.goal, &self.settings);
         let cache = &mut self.heuristic;
         plan_with_checker(field, checker, start, goal, settings, |checker| {

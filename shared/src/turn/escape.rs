@@ -3,8 +3,8 @@
 
 use crate::disk_path;
 use crate::geometry::{
-    Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector, distance_point_segment,
-    polyline_length_m,
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
+    distance_point_segment, polyline_length_m,
 };
 use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
@@ -130,7 +130,18 @@ impl TurnController {
             .collect();
         let (statics, bodies) = (DiskGrid::new(statics), DiskGrid::new(bodies));
         let layers = [&statics, &bodies];
-        let space = FreeSpace::new(field, &layers);
+        // The polygons near enough to matter, grown and moved into the planning frame.
+        let mut polygons = Vec::new();
+        let near = Vector::repeat(near_m);
+        let _ = self.polygons.visit_box(&(me - near), &(me + near), |_, p| {
+            polygons.push(InflatedPolygon::from_polygon(
+                p.polygon().translated(&-offset),
+                grow_m,
+            ));
+            std::ops::ControlFlow::<()>::Continue(())
+        });
+        let polygons = PolygonLayer::new(polygons);
+        let space = FreeSpace::new(field, &layers).with_polygons(&polygons);
         let me_p = me - offset;
         // A step to spare beyond the disk first, then just outside it.
         for (off_deg, out_r) in offsets_deg(180)
@@ -297,7 +308,29 @@ impl TurnController {
             let clear_of_statics =
                 self.statics
                     .all_near(me, t + clear_m + self.statics.max_radius_m(), segment_clear);
-            (outside_reach && in_field && clear_of_bodies && clear_of_moving && clear_of_statics)
+            let grow = Vector::repeat(clear_m);
+            let (lo, hi) = (
+                Point::new(me.x.min(q.x), me.y.min(q.y)) - grow,
+                Point::new(me.x.max(q.x), me.y.max(q.y)) + grow,
+            );
+            let clear_of_polygons = self
+                .polygons
+                .visit_box(&lo, &hi, |_, p| {
+                    let clear = p.signed_distance_to_segment_m(me, &q)
+                        >= self.spec.radius_m + 0.5 * PLANNING_MARGIN_M
+                        && p.signed_distance_m(&q) >= clear_m;
+                    match clear {
+                        true => std::ops::ControlFlow::Continue(()),
+                        false => std::ops::ControlFlow::Break(()),
+                    }
+                })
+                .is_continue();
+            (outside_reach
+                && in_field
+                && clear_of_bodies
+                && clear_of_moving
+                && clear_of_statics
+                && clear_of_polygons)
                 .then_some(q)
         }
     }

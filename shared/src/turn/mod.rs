@@ -13,7 +13,9 @@
 use std::borrow::Cow;
 
 use crate::cbf::{CbfController, ZcbfLogSumExpController};
-use crate::geometry::{Disk, DiskGrid, Field, Point, Polygon, Pose, polyline_prefix};
+use crate::geometry::{
+    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, polyline_prefix,
+};
 use crate::kinematics::{CarLimits, UnicycleLimits, drive_unicycle};
 use crate::moving_obstacle::MovingObstacle;
 use crate::orca::OrcaController;
@@ -54,6 +56,8 @@ pub struct TurnController {
     moving: Vec<MovingObstacle>,
     /// With moving obstacles: the static ones (true radii), to check an escape against.
     statics: DiskGrid,
+    /// The static polygons (as given, indexed), to check an escape against.
+    polygons: PolygonLayer,
     /// For an agent with a heading: the static obstacles (true radii), to check where a
     /// move cut inside a segment stops.
     obstacles: DiskGrid,
@@ -116,6 +120,7 @@ impl TurnController {
             spec: *spec,
             moving: Vec::new(),
             statics: DiskGrid::new(Vec::new()),
+            polygons: PolygonLayer::default(),
             obstacles: DiskGrid::new(if spec.kinematics.has_heading() {
                 obstacles.to_vec()
             } else {
@@ -142,6 +147,13 @@ impl TurnController {
         if let Controller::BestPoint(c) = self.controller {
             self.controller = Controller::BestPoint(c.with_polygons(polygons));
         }
+        // An escape from a moving obstacle keeps clear of them too.
+        self.polygons = PolygonLayer::new(
+            polygons
+                .iter()
+                .map(|p| InflatedPolygon::from_polygon(p.clone(), 0.0))
+                .collect(),
+        );
         self
     }
 

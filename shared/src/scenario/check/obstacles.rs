@@ -350,8 +350,8 @@ impl Checker<'_> {
     }
 
     /// Polygons are planned round by the best-point controller only, for holonomic
-    /// agents taking turns one at a time among static obstacles; anything else with
-    /// polygons is refused, naming what is missing.
+    /// agents taking turns one at a time, beside static and moving obstacles; anything
+    /// else with polygons is refused, naming what is missing.
     pub(super) fn polygons_supported(
         &self,
         polygons: &[Polygon],
@@ -385,10 +385,9 @@ impl Checker<'_> {
         if turns != TurnMode::Sequential {
             return refuse("turns.mode", "parallel turns".to_string());
         }
-        // A world that changes replans the centre's path, which does not see polygons yet.
-        if !raw.moving.is_empty() {
-            return refuse("obstacles.moving", "a moving obstacle".to_string());
-        }
+        // Obstacles found on the way and waiting for stragglers are not tried beside
+        // polygons yet (moving obstacles are: the replanner and the escapes keep clear of
+        // the polygons).
         if !raw.unknown.is_empty() {
             return refuse("obstacles.unknown", "an unknown obstacle".to_string());
         }
