@@ -350,16 +350,14 @@ impl Checker<'_> {
     }
 
     /// Polygons are planned round by the best-point controller only, for holonomic
-    /// agents taking turns one at a time, beside static and moving obstacles; anything
-    /// else with polygons is refused, naming what is missing.
+    /// agents taking turns one at a time (in a static or a changing world); anything else
+    /// with polygons is refused, naming what is missing.
     pub(super) fn polygons_supported(
         &self,
         polygons: &[Polygon],
         agents: &[AgentSpec],
         controller: &ControllerSpec,
         turns: TurnMode,
-        raw: &ObstaclesFile,
-        max_lag_m: Option<f64>,
     ) -> Result<(), ScenarioError> {
         if polygons.is_empty() {
             return Ok(());
@@ -384,15 +382,6 @@ impl Checker<'_> {
         }
         if turns != TurnMode::Sequential {
             return refuse("turns.mode", "parallel turns".to_string());
-        }
-        // Obstacles found on the way and waiting for stragglers are not tried beside
-        // polygons yet (moving obstacles are: the replanner and the escapes keep clear of
-        // the polygons).
-        if !raw.unknown.is_empty() {
-            return refuse("obstacles.unknown", "an unknown obstacle".to_string());
-        }
-        if max_lag_m.is_some() {
-            return refuse("path.max_lag_m", "waiting for stragglers".to_string());
         }
         Ok(())
     }
