@@ -272,6 +272,22 @@ fn a_changing_world_with_limited_sensing_matches_the_reference() {
     assert!(run.steps.iter().any(|s| s.moving != run.steps[0].moving));
 }
 
+/// Parallel turns on a map: the agents of a group plan round the map's pieces at once, in
+/// their own processes; the run equals the reference to the bit, with groups of more
+/// than one agent.
+#[test]
+fn parallel_turns_on_a_map_match_the_reference() {
+    let file = support::repo_root().join("tests/data/depot-parallel.toml");
+    let scenario = Scenario::load(&file).expect("depot-parallel.toml");
+    assert!(scenario.map.is_some() && scenario.turns == shared::vocabulary::TurnMode::Parallel);
+    let run = run_and_compare(&scenario);
+    let agents = scenario.agents.len() as f64;
+    assert!(
+        run.summary().mean_groups_per_step < agents,
+        "no step had a group of two"
+    );
+}
+
 /// Strikes over real processes: a moving obstacle that catches agents now and then. The
 /// monitor (parry) and the recorder both let a struck agent move away, and only away; the
 /// run equals the reference to the bit, strikes and all.

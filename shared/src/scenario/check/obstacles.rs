@@ -380,9 +380,9 @@ impl Checker<'_> {
                 "an agent with a heading".to_string(),
             );
         }
-        if turns != TurnMode::Sequential {
-            return refuse("turns.mode", "parallel turns".to_string());
-        }
+        // Parallel groups are made of agents that cannot meet within the step: each plans
+        // round the polygons alone, as in sequential turns.
+        let _ = turns;
         Ok(())
     }
 }
