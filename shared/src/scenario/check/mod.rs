@@ -232,7 +232,7 @@ impl Checker<'_> {
             ));
         }
         let controller = self.controller(raw.controller, raw.cbf.as_ref(), &agents, side_m)?;
-        self.polygons_supported(&polygons, &agents, &controller, raw.turns.mode)?;
+        self.polygons_supported(&polygons, &agents, &controller)?;
         let turns = raw.turns.mode;
         if turns == TurnMode::Parallel
             && let Some(i) = agents.iter().position(|a| a.max_step_m.is_none())

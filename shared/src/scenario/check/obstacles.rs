@@ -7,7 +7,7 @@ use crate::moving_obstacle::MovingObstacle;
 use crate::scenario::file::{MovingFile, ObstaclesFile};
 use crate::scenario::random::{Crowded, random_obstacles};
 use crate::scenario::{PathSpec, ScenarioError};
-use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_OBSTACLES, TurnMode};
+use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_OBSTACLES};
 
 /// The most polygon corners a scenario may list, all polygons together (the validity
 /// check of a polygon is quadratic in its corners).
@@ -350,14 +350,13 @@ impl Checker<'_> {
     }
 
     /// Polygons are planned round by the best-point controller only, for holonomic
-    /// agents taking turns one at a time (in a static or a changing world); anything else
-    /// with polygons is refused, naming what is missing.
+    /// agents (in sequential or parallel turns, a static or a changing world); anything
+    /// else with polygons is refused, naming what is missing.
     pub(super) fn polygons_supported(
         &self,
         polygons: &[Polygon],
         agents: &[AgentSpec],
         controller: &ControllerSpec,
-        turns: TurnMode,
     ) -> Result<(), ScenarioError> {
         if polygons.is_empty() {
             return Ok(());
@@ -382,7 +381,6 @@ impl Checker<'_> {
         }
         // Parallel groups are made of agents that cannot meet within the step: each plans
         // round the polygons alone, as in sequential turns.
-        let _ = turns;
         Ok(())
     }
 }
