@@ -78,39 +78,11 @@ impl BoxIndex {
             cell_start: Vec::new(),
             cell_items: Vec::new(),
         };
-        let mut counts = vec![0u32; columns * rows];
         let ranges: Vec<Option<[usize; 4]>> = boxes
             .iter()
             .map(|b| usable(b).then(|| index.cells_of(&b.0, &b.1)))
             .collect();
-        for [c0, r0, c1, r1] in ranges.iter().flatten() {
-            for r in *r0..=*r1 {
-                for c in *c0..=*c1 {
-                    counts[r * columns + c] += 1;
-                }
-            }
-        }
-        let mut start = Vec::with_capacity(counts.len() + 1);
-        let mut total = 0u32;
-        for n in &counts {
-            start.push(total);
-            total += n;
-        }
-        start.push(total);
-        let mut fill = start.clone();
-        let mut items = vec![0u32; total as usize];
-        for (i, range) in ranges.iter().enumerate() {
-            let Some([c0, r0, c1, r1]) = range else {
-                continue;
-            };
-            for r in *r0..=*r1 {
-                for c in *c0..=*c1 {
-                    let k = r * columns + c;
-                    items[fill[k] as usize] = i as u32;
-                    fill[k] += 1;
-                }
-            }
-        }
+        let (start, items) = super::cell_lists::cell_lists(columns, rows, &ranges);
         index.cell_start = start;
         index.cell_items = items;
         index

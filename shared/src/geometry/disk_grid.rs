@@ -66,34 +66,15 @@ impl DiskGrid {
             cell_items: Vec::new(),
             max_radius_m,
         };
-        let mut counts = vec![0u32; columns * rows + 1];
-        for d in &grid.disks {
-            let (c0, r0, c1, r1) = grid.cell_range(&d.centre, d.radius_m, d.radius_m);
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    counts[r * columns + c] += 1;
-                }
-            }
-        }
-        let mut start = Vec::with_capacity(counts.len() + 1);
-        let mut acc = 0u32;
-        for n in &counts {
-            start.push(acc);
-            acc += n;
-        }
-        start.push(acc);
-        let mut fill = start.clone();
-        let mut items = vec![0u32; acc as usize];
-        for (i, d) in grid.disks.iter().enumerate() {
-            let (c0, r0, c1, r1) = grid.cell_range(&d.centre, d.radius_m, d.radius_m);
-            for r in r0..=r1 {
-                for c in c0..=c1 {
-                    let k = r * columns + c;
-                    items[fill[k] as usize] = i as u32;
-                    fill[k] += 1;
-                }
-            }
-        }
+        let ranges: Vec<Option<[usize; 4]>> = grid
+            .disks
+            .iter()
+            .map(|d| {
+                let (c0, r0, c1, r1) = grid.cell_range(&d.centre, d.radius_m, d.radius_m);
+                Some([c0, r0, c1, r1])
+            })
+            .collect();
+        let (start, items) = super::cell_lists::cell_lists(columns, rows, &ranges);
         grid.cell_start = start;
         grid.cell_items = items;
         grid

@@ -11,6 +11,7 @@ pub type Point = nalgebra::Point2<f64>;
 pub type Vector = nalgebra::Vector2<f64>;
 
 mod box_index;
+mod cell_lists;
 mod disk;
 mod disk_grid;
 mod field;
