@@ -633,3 +633,21 @@ fn a_controller_that_does_not_see_polygons_is_refused_on_a_polygon_scenario() {
         assert!(!out.exists(), "{command}: nothing written");
     }
 }
+
+/// `validate` on a scenario with a map names the map and its pieces in its one line,
+/// beside the polygons drawn by hand (none here), and exits 0.
+#[test]
+fn validate_names_a_scenarios_map_and_its_pieces() {
+    let scenario = support::repo_root().join("scenarios/depot-shelves.toml");
+    let mut cmd = Command::new(support::coordinator_bin());
+    cmd.arg("validate").arg(&scenario);
+    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("valid: 4 agents, 0 obstacles, a map of 604 x 307 cells cut into ")
+            && !stderr.contains("polygons,"),
+        "{stderr}"
+    );
+}

@@ -89,11 +89,26 @@ pub fn execute(args: &ValidateArgs) -> Result<(), CliError> {
         return validate_map(&args.scenario);
     }
     let loaded = load_and_plan(Some(&args.scenario))?;
+    let s = &loaded.scenario;
+    // Polygons and a map are named only when there are some.
+    let first_piece = s.map.as_ref().map_or(s.polygons.len(), |m| m.first_piece);
+    let mut shapes = String::new();
+    if first_piece > 0 {
+        shapes += &format!(", {first_piece} polygons");
+    }
+    if let Some(map) = &s.map {
+        shapes += &format!(
+            ", a map of {} x {} cells cut into {} pieces",
+            map.grid.width,
+            map.grid.height,
+            s.polygons.len() - first_piece
+        );
+    }
     eprintln!(
-        "{}: valid: {} agents, {} obstacles, centre path of {} steps",
+        "{}: valid: {} agents, {} obstacles{shapes}, centre path of {} steps",
         args.scenario.display(),
-        loaded.scenario.agents.len(),
-        loaded.scenario.obstacles.len(),
+        s.agents.len(),
+        s.obstacles.len(),
         loaded.centre_path.len().saturating_sub(1)
     );
     Ok(())

@@ -1,11 +1,13 @@
 //! Cost of reading a real map: the depot of the Navigation2 project (604 x 307 cells at
-//! 0.05 m), its YAML and PGM read and classified, and its blocked cells merged into
-//! outlines.
+//! 0.05 m), its YAML and PGM read and classified, its blocked cells merged into outlines
+//! and cut into the polygon pieces a scenario's `[map]` plans round, and the regions its
+//! walls close off for one agent.
 
 use std::hint::black_box;
 use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use shared::geometry::Vector;
 use shared::occupancy::{Cell, OccupancyGrid};
 
 fn depot() -> PathBuf {
@@ -37,6 +39,19 @@ fn bench(c: &mut Criterion) {
             let (_, grid) = OccupancyGrid::load(black_box(&yaml)).expect("the depot map");
             grid.outlines(|cell| cell != Cell::Free)
         })
+    });
+    eprintln!(
+        "depot: {} pieces",
+        grid.pieces(|cell| cell != Cell::Free).len()
+    );
+    c.bench_function("occupancy/load_and_cut_depot_into_pieces", |b| {
+        b.iter(|| {
+            let (_, grid) = OccupancyGrid::load(black_box(&yaml)).expect("the depot map");
+            grid.pieces(|cell| cell != Cell::Free)
+        })
+    });
+    c.bench_function("occupancy/regions_depot", |b| {
+        b.iter(|| black_box(&grid).regions(|cell| cell != Cell::Free, 0.23, Vector::zeros()))
     });
 }
 
