@@ -83,7 +83,15 @@ fn no_stranger_joins_a_run_over_tls() {
             .find(|f| f.agent == agent)
             .unwrap_or_else(|| panic!("agent {agent} not recorded: {:?}", run.faults));
         assert_eq!((fault.step, fault.kind), (0, FaultKind::FailedToStart));
-        assert!(fault.detail.contains("refused"), "{fault:?}");
+        // Mostly the slot's relay waits out the deadline (the hint names the refusal); on
+        // a loaded machine it was once seen to exit first (`exited before its
+        // handshake`). Either way no session was given to the stranger, which the checks
+        // below hold to.
+        assert!(
+            fault.detail.contains("refused")
+                || fault.detail.contains("exited before its handshake"),
+            "{fault:?}"
+        );
         // Frozen where it stood from the first move on.
         assert!(run.steps.iter().skip(1).all(|s| !s.agents[agent].alive));
         let start = run.steps[0].agents[agent].position;
