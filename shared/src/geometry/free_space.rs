@@ -55,17 +55,17 @@ impl<'a> FreeSpace<'a> {
         self.regions.is_some_and(|r| r.apart(a, b))
     }
 
-    /// The grown polygons (none when it has none).
-    pub fn polygon_list(&self) -> &'a [InflatedPolygon] {
-        self.polygons.map_or(&[], PolygonLayer::polygons)
-    }
-
     /// Largest disk or polygon radius over all layers.
     pub fn max_radius_m(&self) -> f64 {
         self.layers
             .iter()
             .map(|g| g.max_radius_m())
-            .chain(self.polygon_list().iter().map(InflatedPolygon::radius_m))
+            .chain(
+                self.polygons
+                    .map_or(&[][..], PolygonLayer::polygons)
+                    .iter()
+                    .map(InflatedPolygon::radius_m),
+            )
             .fold(0.0, f64::max)
     }
 

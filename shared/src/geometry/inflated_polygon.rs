@@ -49,11 +49,7 @@ impl InflatedPolygon {
             0.0
         };
         let grow = Vector::new(radius_m, radius_m);
-        let (mut min, mut max) = (polygon.vertices()[0], polygon.vertices()[0]);
-        for v in polygon.vertices() {
-            min = Point::new(min.x.min(v.x), min.y.min(v.y));
-            max = Point::new(max.x.max(v.x), max.y.max(v.y));
-        }
+        let (min, max) = polygon.bounding_box();
         Self {
             polygon,
             radius_m,

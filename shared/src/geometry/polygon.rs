@@ -172,6 +172,17 @@ impl Polygon {
         (0..n).map(move |i| (self.vertices[i], self.vertices[(i + 1) % n]))
     }
 
+    /// The corners of its bounding box, `(min, max)`.
+    pub fn bounding_box(&self) -> (Point, Point) {
+        let first = self.vertices[0];
+        self.vertices.iter().fold((first, first), |(min, max), v| {
+            (
+                Point::new(min.x.min(v.x), min.y.min(v.y)),
+                Point::new(max.x.max(v.x), max.y.max(v.y)),
+            )
+        })
+    }
+
     /// The area, square metres.
     pub fn area_m2(&self) -> f64 {
         0.5 * area2(&self.vertices)

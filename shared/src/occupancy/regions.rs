@@ -33,12 +33,11 @@ impl OccupancyGrid {
         clearance_m: f64,
         shift: Vector,
     ) -> RegionGrid {
-        let grid = self;
-        let (w, h, res) = (grid.width, grid.height, grid.resolution_m);
+        let (w, h, res) = (self.width, self.height, self.resolution_m);
         let mut sure = vec![false; w * h];
         for y in 0..h {
             for x in 0..w {
-                sure[y * w + x] = blocked(grid.cell(x, y));
+                sure[y * w + x] = blocked(self.cell(x, y));
             }
         }
         // A cell is surely blocked when its farthest point is nearer than the clearance to
@@ -104,7 +103,7 @@ impl OccupancyGrid {
                 }
             }
         }
-        let origin = Point::new(grid.origin_m[0], grid.origin_m[1]) + shift;
+        let origin = Point::new(self.origin_m[0], self.origin_m[1]) + shift;
         RegionGrid::from_labels(w, h, res, origin, label)
     }
 }

@@ -150,18 +150,8 @@ impl Checker<'_> {
         let mut pieces = map.grid.pieces(|c| map.blocks(c));
         // Pieces wholly outside the field block nothing an agent can reach.
         pieces.retain(|p| {
-            let v = p.vertices();
-            let (min_x, max_x) = v
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                    (a.min(p.x), b.max(p.x))
-                });
-            let (min_y, max_y) = v
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                    (a.min(p.y), b.max(p.y))
-                });
-            min_x < field.width_m && min_y < field.height_m && max_x > 0.0 && max_y > 0.0
+            let (min, max) = p.bounding_box();
+            min.x < field.width_m && min.y < field.height_m && max.x > 0.0 && max.y > 0.0
         });
         if pieces.len() > MAX_MAP_PIECES {
             return Err(self.invalid(
