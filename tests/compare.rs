@@ -60,15 +60,41 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
     assert!(final_dev("best-point") < 0.05);
     // The new columns come after the old ones: the paper's own (sequential) turns, a
     // move length and a speed for every run.
-    assert_eq!(headers.len(), 15);
+    assert_eq!(headers.len(), 17);
     assert_eq!(
         headers.iter().skip(12).collect::<Vec<_>>(),
-        ["turns", "max_move_m", "steps_per_s"]
+        [
+            "turns",
+            "max_move_m",
+            "steps_per_s",
+            "worst_agent",
+            "worst_step"
+        ]
     );
     for r in &rows {
         assert_eq!(&r[col("turns")], "sequential");
         assert!(r[col("max_move_m")].parse::<f64>().expect("max move") > 0.0);
         assert!(r[col("steps_per_s")].parse::<f64>().expect("steps/s") > 0.0);
+        // The worst agent and step name a deviation of the run: that agent's record at
+        // that step in the run's own trajectory.csv holds the largest deviation.
+        let (agent, step) = (
+            r[col("worst_agent")].parse::<usize>().expect("agent"),
+            r[col("worst_step")].parse::<usize>().expect("step"),
+        );
+        assert!(agent < 6);
+        assert!(step > 0, "the obstacles disturb every controller");
+        let folder = out.join(format!("paper-example-{}", &r[col("controller")]));
+        let mut traj = csv::Reader::from_path(folder.join("trajectory.csv")).expect("trajectory");
+        let th = traj.headers().expect("headers").clone();
+        let tcol = |name: &str| th.iter().position(|h| h == name).expect(name);
+        let worst = traj
+            .records()
+            .map(|t| t.expect("row"))
+            .find(|t| t[tcol("step")] == step.to_string() && t[tcol("agent")] == agent.to_string())
+            .expect("the worst record");
+        let dev: f64 = worst[tcol("deviation_m")].parse().expect("deviation");
+        let max: f64 = r[col("max_deviation_m")].parse().expect("max");
+        assert!((dev - max).abs() <= 1e-9 * (1.0 + max), "{dev} vs {max}");
     }
     assert!(md.contains("| turns | max move (m) | steps/s |"));
 }

@@ -105,12 +105,26 @@ impl Channel for IpcPorts {
             if heading_rad.is_some_and(|h| !h.is_finite()) {
                 bail!("a world whose heading is not a finite number");
             }
+            if w.ahead.len() > shared::tracking::MAX_HORIZON_STEPS {
+                bail!(
+                    "a world with {} poses ahead, beyond the capacity",
+                    w.ahead.len()
+                );
+            }
+            let ahead: Vec<shared::geometry::Pose> = w.ahead.iter().map(|p| (*p).into()).collect();
+            if !ahead
+                .iter()
+                .all(|p| p.x_m.is_finite() && p.y_m.is_finite() && p.heading_rad.is_finite())
+            {
+                bail!("a world with a pose ahead that is not finite");
+            }
             turn = Some(TurnInput {
                 seq: w.seq,
                 step: w.step,
                 token: w.token,
                 centre: w.centre.into(),
                 heading_rad,
+                ahead,
                 bodies: w
                     .bodies
                     .iter()

@@ -328,12 +328,14 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         let started = Instant::now();
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let step = turn_step(&turn);
-        let mv = match turn.heading_rad {
-            Some(heading_rad) => {
-                controller.plan_turn_with_heading(step, &turn.centre, &me, heading_rad, &others)
-            }
-            None => controller.plan_turn(step, &turn.centre, &me, &others),
-        };
+        let mv = controller.plan_turn_ahead(
+            step,
+            &turn.centre,
+            &turn.ahead,
+            &me,
+            turn.heading_rad,
+            &others,
+        );
         let compute = started.elapsed();
         transport.publish_move(Reply::new(&turn, &mv, compute))?;
     }
@@ -407,6 +409,7 @@ mod tests {
                 token: 1000 + step as u64,
                 centre: path[step],
                 heading_rad: None,
+                ahead: path[step + 1..].iter().take(10).copied().collect(),
                 bodies: positions.iter().copied().enumerate().collect(),
             })
             .collect()
@@ -432,10 +435,12 @@ mod tests {
                     radius_m: scenario.agents[j].radius_m,
                 })
                 .collect();
-            let want = controller.plan_turn(
+            let want = controller.plan_turn_ahead(
                 turn_step(turn),
                 &turn.centre,
+                &turn.ahead,
                 &turn.bodies[agent].1,
+                None,
                 &others,
             );
             assert_eq!(*seq, turn.seq);

@@ -33,6 +33,11 @@ pub fn net_turn(t: &TurnInput) -> NetTurn {
         token: t.token,
         centre: [t.centre.x_m, t.centre.y_m, t.centre.heading_rad],
         heading_rad: t.heading_rad,
+        ahead: t
+            .ahead
+            .iter()
+            .map(|p| [p.x_m, p.y_m, p.heading_rad])
+            .collect(),
         bodies: t
             .bodies
             .iter()
@@ -46,7 +51,14 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
     if t.bodies.len() > MAX_AGENTS {
         bail!("a turn with {} bodies, beyond the capacity", t.bodies.len());
     }
+    if t.ahead.len() > shared::tracking::MAX_HORIZON_STEPS {
+        bail!(
+            "a turn with {} poses ahead, beyond the capacity",
+            t.ahead.len()
+        );
+    }
     let finite = t.centre.iter().all(|v| v.is_finite())
+        && t.ahead.iter().flatten().all(|v| v.is_finite())
         && t.heading_rad.is_none_or(f64::is_finite)
         && t.bodies
             .iter()
@@ -60,6 +72,11 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
         token: t.token,
         centre: Pose::new(t.centre[0], t.centre[1], t.centre[2]),
         heading_rad: t.heading_rad,
+        ahead: t
+            .ahead
+            .iter()
+            .map(|p| Pose::new(p[0], p[1], p[2]))
+            .collect(),
         bodies: t
             .bodies
             .into_iter()

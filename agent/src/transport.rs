@@ -56,6 +56,8 @@ pub struct TurnInput {
     /// Where this agent faces, if it has a heading (a unicycle): the coordinator keeps
     /// every agent's pose and hands it over with each turn.
     pub heading_rad: Option<f64>,
+    /// The centre's next poses along its plan, as far as this agent looks ahead.
+    pub ahead: Vec<Pose>,
     /// The agents this agent may sense, itself included, as (agent index, position) in
     /// increasing index order (every agent when it has no sensing radius); their radii
     /// are in the mission.

@@ -32,6 +32,10 @@ pub enum Command {
     /// Run a scenario in this process with the reference simulation (no agent process)
     /// and time it: the yardstick of the multi-process run (JSON on stdout).
     Simulate(SimulateArgs),
+    /// The least mean and largest deviation any controller can reach with the agents'
+    /// top speeds (each agent alone, along its known slot track: a cone programme), and
+    /// the reference simulation's against them (JSON on stdout)
+    Bound(BoundArgs),
     /// Run every controller on every scenario and tabulate safety, deviation, deadlocks and
     /// compute time (CSV and Markdown).
     Compare(CompareArgs),
@@ -279,6 +283,13 @@ pub struct SimulateArgs {
     /// Time this many runs and report each (the first is often slower: caches).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
     pub repeat: u32,
+}
+
+/// Arguments of `bound`.
+#[derive(Debug, Args)]
+pub struct BoundArgs {
+    /// The scenario file (TOML); the embedded paper example when omitted.
+    pub scenario: Option<PathBuf>,
 }
 
 /// Arguments of `compare`.

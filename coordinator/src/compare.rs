@@ -49,6 +49,10 @@ pub struct Row {
     pub max_move_m: f64,
     /// Steps per second of the step loop (as in `summary.json`).
     pub steps_per_s: f64,
+    /// The agent whose deviation was the largest (the first such, by step then agent).
+    pub worst_agent: usize,
+    /// The step of that largest deviation.
+    pub worst_step: usize,
 }
 
 /// Agent-steps where a live agent off its slot did not move.
@@ -59,6 +63,20 @@ pub fn deadlocked_steps(run: &Run) -> usize {
         .flat_map(|s| s.agents.iter())
         .filter(|a| a.alive && a.waypoints.len() == 1 && a.deviation_m > 1e-6)
         .count()
+}
+
+/// The live agent and step of the largest deviation of `run` (the first, by step then
+/// agent; agent 0 at step 0 when nobody ever deviates).
+pub fn worst_agent_step(run: &Run) -> (usize, usize) {
+    let mut worst = (0, 0, 0.0);
+    for (k, step) in run.steps.iter().enumerate() {
+        for (i, a) in step.agents.iter().enumerate() {
+            if a.alive && a.deviation_m > worst.2 {
+                worst = (i, k, a.deviation_m);
+            }
+        }
+    }
+    (worst.0, worst.1)
 }
 
 /// `scenario` with its turns taken in `mode`; parallel turns need a top speed for every
@@ -87,6 +105,7 @@ pub(crate) fn with_turn_mode(
 fn row(run: &Run, controller: ControllerKind, turns: TurnMode, timing: &output::Timing) -> Row {
     let s = run.summary();
     let compute = &timing.compute_us;
+    let (worst_agent, worst_step) = worst_agent_step(run);
     Row {
         scenario: s.scenario.clone(),
         controller: controller.name().to_string(),
@@ -107,17 +126,19 @@ fn row(run: &Run, controller: ControllerKind, turns: TurnMode, timing: &output::
         turns: turns.name().to_string(),
         max_move_m: s.max_move_m,
         steps_per_s: timing.steps_per_s,
+        worst_agent,
+        worst_step,
     }
 }
 
 /// The table as Markdown.
 pub fn markdown(rows: &[Row]) -> String {
     let mut md = String::from(
-        "| scenario | controller | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | deadlocked agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | controller | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | stuck agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s | worst agent @ step |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} | {} | {:.4} | {:.1} |\n",
+            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} | {} | {:.4} | {:.1} | {} @ {} |\n",
             r.scenario,
             r.controller,
             r.completed,
@@ -132,7 +153,9 @@ pub fn markdown(rows: &[Row]) -> String {
             r.compute_p99_us,
             r.turns,
             r.max_move_m,
-            r.steps_per_s
+            r.steps_per_s,
+            r.worst_agent,
+            r.worst_step
         ));
     }
     md

@@ -80,6 +80,8 @@ pub struct TurnWorld<'a> {
     pub alive: &'a [bool],
     /// The agents the turn's agent sees (increasing), or every agent when `None`.
     pub visible: Option<&'a [usize]>,
+    /// The centre's next poses along its plan that the turn's agent looks ahead to.
+    pub ahead: &'a [Pose],
 }
 
 /// The turn a world was published for.
@@ -361,6 +363,7 @@ impl CoordinatorIpc {
         w.turn_agent = agent as u32;
         w.centre = (*world.centre).into();
         w.set_heading(world.heading_rad);
+        w.set_ahead(world.ahead);
         let (bodies, alive) = (world.bodies, world.alive);
         match world.visible {
             Some(v) => w.set_bodies(bodies, alive, v.iter().copied())?,

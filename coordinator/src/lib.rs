@@ -3,6 +3,7 @@
 
 mod agents;
 mod bench;
+mod bound;
 pub mod cli;
 mod compare;
 mod error;
@@ -33,6 +34,7 @@ pub fn run_cli(cli: cli::Cli) -> Result<(), CliError> {
         cli::Command::Plan(args) => plan::execute(&args),
         cli::Command::Run(args) => run_command::execute(&args),
         cli::Command::Simulate(args) => simulate_command::execute(&args),
+        cli::Command::Bound(args) => bound::execute(&args),
         cli::Command::Compare(args) => compare::execute(&args),
         cli::Command::Render(args) => render::execute(&args),
         cli::Command::Bench(args) => bench::execute(&args),

@@ -24,6 +24,7 @@ struct SimulateReport {
     controller: &'static str,
     collisions: usize,
     mean_deviation_m: f64,
+    max_deviation_m: f64,
     max_move_m: f64,
     /// Wall time of each run of the step loop (the centre path planned once, before).
     run_s: Vec<f64>,
@@ -65,6 +66,7 @@ pub fn execute(args: &SimulateArgs) -> Result<(), CliError> {
         controller: scenario.controller.kind.name(),
         collisions: summary.collisions,
         mean_deviation_m: summary.mean_deviation_m,
+        max_deviation_m: summary.max_deviation_m,
         max_move_m: summary.max_move_m,
         best_s,
         steps_per_s: if best_s > 0.0 {

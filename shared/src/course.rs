@@ -187,6 +187,14 @@ impl<'a> Course<'a> {
         self.plan[self.at]
     }
 
+    /// The next poses along the current plan, at most `n`: where the centre goes next if
+    /// it does not hold or replan (fewer near the goal). An agent looks ahead along them
+    /// ([`crate::turn::TurnController::plan_turn_ahead`]).
+    pub fn ahead(&self, n: usize) -> &[Pose] {
+        let from = (self.at + 1).min(self.plan.len());
+        &self.plan[from..(from + n).min(self.plan.len())]
+    }
+
     /// The centre pose of `step` (from 1), given every agent's body and liveness at the
     /// end of step `step - 1`; `None` when the run is over: the goal was reached, or the
     /// centre waited too long for a way through ([`Self::gave_up`]).

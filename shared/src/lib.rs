@@ -20,6 +20,7 @@
 //! - [`course`]: the centre's course in a changing world (obstacles found on the way,
 //!   online replanning, waits);
 //! - [`scenario`]: the TOML scenario model and its validation;
+//! - [`tracking`]: where an agent with a top speed aims, knowing where its slot will be;
 //! - [`turn`]: one agent's turn: the paper's best-point controller, and every controller behind
 //!   one interface, shared by simulation and agents;
 //! - [`groups`]: parallel turns: which agents may move at once;
@@ -51,5 +52,6 @@ pub mod scenario;
 pub mod sensing;
 pub mod simulate;
 pub mod survival_grid;
+pub mod tracking;
 pub mod turn;
 pub mod vocabulary;

@@ -13,6 +13,7 @@ use crate::groups::turn_groups;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
+use crate::tracking::MAX_HORIZON_STEPS;
 use crate::turn::TurnController;
 use crate::vocabulary::CbfSettingsError;
 use crate::vocabulary::Move;
@@ -124,6 +125,7 @@ pub fn simulate_along_with_deaths(
     while let Some(centre) = course.advance(step + 1, recorder.bodies(), recorder.alive()) {
         step += 1;
         let centre = &centre;
+        let ahead = course.ahead(MAX_HORIZON_STEPS);
         recorder.begin_step(step, *centre);
         let groups = turn_groups(
             scenario.turns,
@@ -158,16 +160,15 @@ pub fn simulate_along_with_deaths(
                 .map(|&agent| {
                     let me = recorder.bodies()[agent].position;
                     let others = recorder.others(agent);
-                    let mv = match recorder.headings()[agent] {
-                        Some(heading_rad) => controllers[agent].plan_turn_with_heading(
-                            step,
-                            centre,
-                            &me,
-                            heading_rad,
-                            &others,
-                        ),
-                        None => controllers[agent].plan_turn(step, centre, &me, &others),
-                    };
+                    let heading_rad = recorder.headings()[agent];
+                    let mv = controllers[agent].plan_turn_ahead(
+                        step,
+                        centre,
+                        ahead,
+                        &me,
+                        heading_rad,
+                        &others,
+                    );
                     (agent, mv)
                 })
                 .collect();

@@ -12,6 +12,7 @@ use shared::geometry::{Point, Pose};
 use shared::groups::turn_groups;
 use shared::record::{Recorder, replay_course};
 use shared::scenario::Scenario;
+use shared::tracking::MAX_HORIZON_STEPS;
 
 use super::hand_over::HandOver;
 use super::lateness::TurnHistory;
@@ -196,6 +197,7 @@ impl Driver<'_, '_> {
         {
             step += 1;
             let centre = &centre;
+            let ahead = course.ahead(MAX_HORIZON_STEPS).to_vec();
             self.begin_step(&mut monitor, step, centre);
             if bar.position() + 1 >= bar.length().unwrap_or(0) {
                 // The course waited or was replanned: the path ahead is longer.
@@ -226,7 +228,7 @@ impl Driver<'_, '_> {
                     self.scenario.turns,
                     self.recorder.alive(),
                 );
-                if self.take_group(&monitor, step, group, &next, centre)? {
+                if self.take_group(&monitor, step, group, &next, centre, &ahead)? {
                     break 'steps;
                 }
             }

@@ -20,8 +20,10 @@ use crate::ipc::{TurnSplit, TurnWorld};
 use crate::monitor::SafetyMonitor;
 
 impl Driver<'_, '_> {
-    /// Take the turns of `group` at `step`, the centre at `centre`, and tell the first
-    /// live agent of `next` that its turn comes next; true if the run was interrupted.
+    /// Take the turns of `group` at `step`, the centre at `centre` with `ahead` its next
+    /// poses along its plan, and tell the first live agent of `next` that its turn comes
+    /// next; true if the run was interrupted.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn take_group(
         &mut self,
         monitor: &SafetyMonitor,
@@ -29,12 +31,13 @@ impl Driver<'_, '_> {
         group: &[usize],
         next: &[usize],
         centre: &Pose,
+        ahead: &[Pose],
     ) -> anyhow::Result<bool> {
         let sensing = self
             .senses
             .then(|| SensedAgents::new(self.recorder.bodies()));
         self.kill_before_turns(step, group);
-        let turns = self.grant_group(step, group, centre, sensing.as_ref())?;
+        let turns = self.grant_group(step, group, centre, ahead, sensing.as_ref())?;
         self.hand_over
             .tell_next(self.ipc, self.procs, self.recorder.alive(), group, next);
         let Some(mut moves) = self.collect_group(monitor, step, turns, centre)? else {
@@ -56,6 +59,7 @@ impl Driver<'_, '_> {
         step: usize,
         group: &[usize],
         centre: &Pose,
+        ahead: &[Pose],
         sensing: Option<&SensedAgents>,
     ) -> anyhow::Result<Vec<Turn>> {
         let mut turns = Vec::with_capacity(group.len());
@@ -76,6 +80,11 @@ impl Driver<'_, '_> {
                 bodies: self.recorder.bodies(),
                 alive: self.recorder.alive(),
                 visible: visible.as_deref(),
+                // As far as the agent looks ahead, and only with a top speed.
+                ahead: match spec.max_step_m {
+                    Some(_) => &ahead[..spec.horizon_steps.min(ahead.len())],
+                    None => &[],
+                },
             };
             let grant = self.ipc.publish_world(step, agent, &world)?;
             let rung = !self.hand_over.polls_world(agent, self.procs.pid(agent));

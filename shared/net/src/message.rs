@@ -45,6 +45,9 @@ pub struct NetTurn {
     pub centre: [f64; 3],
     /// Where the agent faces (rad), if it has a heading.
     pub heading_rad: Option<f64>,
+    /// The centre's next poses along its plan, as far as the agent looks ahead: x, y (m),
+    /// heading (rad).
+    pub ahead: Vec<[f64; 3]>,
     /// The agents this agent may sense, itself included: (index, [x, y] in m).
     pub bodies: Vec<(u32, [f64; 2])>,
 }
@@ -171,6 +174,7 @@ mod tests {
             token: u64::MAX,
             centre: [1.5, -0.25, std::f64::consts::PI],
             heading_rad: Some(0.75),
+            ahead: vec![[1.75, -0.25, 3.0], [2.0, 1e-300, -0.5]],
             bodies: vec![(0, [0.3, 0.1]), (7, [-1.0, 2.0])],
         });
         assert_eq!(decode::<Down>(&encode(&turn).unwrap()).unwrap(), turn);

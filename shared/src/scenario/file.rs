@@ -213,6 +213,10 @@ pub(super) struct FormationFile {
     /// Whether the agents end each move facing the centre's heading (absent: no).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) align_heading: Option<bool>,
+    /// How many steps ahead an agent with a top speed looks along the centre's plan
+    /// (absent: the default look-ahead).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) horizon_steps: Option<usize>,
     pub(super) slots: Vec<SlotFile>,
 }
 

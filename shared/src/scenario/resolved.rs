@@ -205,6 +205,8 @@ impl Scenario {
             reverse: None,
             turning_radius_m: None,
             align_heading: self.agents.iter().any(|a| a.align_heading).then_some(true),
+            // One look-ahead for the formation.
+            horizon_steps: self.agents.first().map(|a| a.horizon_steps),
             slots,
         })
     }

@@ -42,6 +42,18 @@ pub struct BestPointController {
     spec: AgentSpec,
 }
 
+/// Where an agent with a top speed is heading when it cannot follow its slot exactly
+/// ([`BestPointController::plan_move_aiming`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Aim {
+    /// The first point of its least-deviation track, at most its top speed away
+    /// ([`crate::tracking::lead_point`]).
+    pub lead: Point,
+}
+
+/// The best point for a goal and the path there (`None`: the agent stands on it).
+type Found = Result<(Point, Option<DiskPath>), BestPointError>;
+
 /// The polygon obstacles of one agent's controller.
 #[derive(Clone, Debug, Default)]
 struct PolygonObstacles {
@@ -197,6 +209,31 @@ impl BestPointController {
         max_step_m: Option<f64>,
         max_chord_m: f64,
     ) -> Move {
+        self.plan_move_aiming(centre, None, me, others, max_step_m, max_chord_m)
+    }
+
+    /// [`Self::plan_move_with_chords`] for an agent that knows where its slot is going
+    /// (`aim`: see [`Aim`]; `None`: it chases its slot as usual). When the straight move
+    /// to the aim's lead point is clear, the agent takes it (status
+    /// [`MoveStatus::UnderWay`], its best point the lead point). Otherwise something
+    /// stands in the way, and the agent plans for its slot as usual, going round the
+    /// obstacle rather than pressing against it towards a lead point behind it.
+    ///
+    /// Measured on the capped paper, dense, narrow and large scenarios: heading for the
+    /// best point of a slot some steps ahead when the lead point is blocked (an
+    /// intercept) did worse (large: mean deviation 0.132 m against 0.103 m), as the
+    /// shortest path to a far slot's best point may start the other way round an
+    /// obstacle, and the agent then turns back and forth between the two.
+    #[allow(clippy::too_many_arguments)]
+    pub fn plan_move_aiming(
+        &self,
+        centre: &Pose,
+        aim: Option<&Aim>,
+        me: &Point,
+        others: &[Body],
+        max_step_m: Option<f64>,
+        max_chord_m: f64,
+    ) -> Move {
         let slot = self.slot_position(centre);
         let grow_m = self.radius_m + PLANNING_MARGIN_M;
         let agents = DiskGrid::new(
@@ -218,6 +255,65 @@ impl BestPointController {
         let space = FreeSpace::new(self.field, &layers)
             .with_polygons(polygons)
             .with_regions(self.polygons.regions.as_ref());
+        let me_p = me - self.offset;
+        if let Some(aim) = aim {
+            let lead_p = aim.lead - self.offset;
+            if space.is_free(&lead_p, 0.0) && space.is_segment_free(&me_p, &lead_p, 0.0) {
+                return Move {
+                    end_heading_rad: None,
+                    slot,
+                    best: aim.lead,
+                    status: MoveStatus::UnderWay,
+                    waypoints: vec![*me, aim.lead],
+                };
+            }
+        }
+        let mut paths = disk_path::PathsFrom::new(&space, &me_p);
+        let found = self.best_and_path(&space, &mut paths, &slot, me);
+        self.follow(slot, me, found, max_step_m, max_chord_m)
+    }
+
+    /// The best point for `goal` (world coordinates) seen from `me`, and the shortest path
+    /// there (`None`: the agent stands on it), `paths` holding the searches from `me`.
+    fn best_and_path(
+        &self,
+        space: &FreeSpace<'_>,
+        paths: &mut disk_path::PathsFrom<'_, '_>,
+        goal: &Point,
+        me: &Point,
+    ) -> Found {
+        let (goal_p, me_p) = (goal - self.offset, me - self.offset);
+        let mut found: Option<(Point, DiskPath)> = None;
+        let best_p =
+            best_point::nearest_reachable_free_point(space, &goal_p, &me_p, |p| {
+                match paths.shortest_path(p) {
+                    Ok(path) => {
+                        found = Some((*p, path));
+                        true
+                    }
+                    Err(_) => false,
+                }
+            })?;
+        if best_p == me_p {
+            return Ok((best_p, None));
+        }
+        // The closure accepted `best` last, so `found` holds its path.
+        match found {
+            Some((p, path)) if p == best_p => Ok((best_p, Some(path))),
+            _ => Ok((me_p, None)),
+        }
+    }
+
+    /// The move along `found` (the best point for `slot`, in the planning frame, and the
+    /// path there), cut at `max_step_m`, for an agent at `me`.
+    fn follow(
+        &self,
+        slot: Point,
+        me: &Point,
+        found: Found,
+        max_step_m: Option<f64>,
+        max_chord_m: f64,
+    ) -> Move {
         let (slot_p, me_p) = (slot - self.offset, me - self.offset);
         // Back to world coordinates, keeping the slot and the start bit-exact.
         let to_world = |p: &Point| -> Point {
@@ -236,39 +332,18 @@ impl BestPointController {
             status,
             waypoints: vec![*me],
         };
-
-        let mut found: Option<(Point, DiskPath)> = None;
-        let best = best_point::nearest_reachable_free_point(&space, &slot_p, &me_p, {
-            // One context for every candidate of the turn (same space, same start): it
-            // answers as `disk_path::shortest_path` does, but proves most candidates in
-            // another free component unreachable without a search.
-            let mut paths = disk_path::PathsFrom::new(&space, &me_p);
-            let found = &mut found;
-            move |p| match paths.shortest_path(p) {
-                Ok(path) => {
-                    *found = Some((*p, path));
-                    true
-                }
-                Err(_) => false,
-            }
-        });
-        let best_p = match best {
-            Ok(p) => p,
+        let (best_p, path) = match found {
+            Ok(found) => found,
             Err(BestPointError::NoFreePoint) => return stay(MoveStatus::NoFreePoint),
         };
         let best = to_world(&best_p);
-        if best_p == me_p {
-            let status = if (slot - best).norm() <= 1e-9 {
+        let Some(path) = path else {
+            let status = if best_p == me_p && (slot - best).norm() <= 1e-9 {
                 MoveStatus::AtSlot
             } else {
                 MoveStatus::Stayed
             };
             return stay(status);
-        }
-        // The closure accepted `best` last, so `found` holds its path.
-        let path = match found {
-            Some((p, path)) if p == best_p => path,
-            _ => return stay(MoveStatus::Stayed),
         };
         // With a top speed the agent follows the path that far: cut on the path itself
         // (on an arc's circle, not on a chord), so it stops at a free point.

@@ -9,16 +9,19 @@ use crate::geometry::{
 use crate::moving_obstacle::MovingObstacle;
 use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
 
-use super::{PLANNING_MARGIN_M, TurnController};
+use super::{Aim, PLANNING_MARGIN_M, TurnController};
 
 impl TurnController {
     /// [`Self::plan_turn`] before looking ahead: the escape, if any, and the plan round
     /// the reach disks `reach` (with a step to spare) of the `sensed` moving obstacles;
-    /// `others` are the sensed bodies.
+    /// `others` are the sensed bodies; the best point is taken for `aim` when given
+    /// (`TurnController::plan_turn_ahead`).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn plan_turn_around(
         &self,
         step: usize,
         centre: &Pose,
+        aim: Option<&Aim>,
         me: &Point,
         others: &[Body],
         sensed: &[&MovingObstacle],
@@ -62,11 +65,11 @@ impl TurnController {
             }
         }
         let Some(escape) = escape else {
-            return self.plan_move_within(centre, me, &bodies, self.spec.max_step_m);
+            return self.plan_move_within(centre, aim, me, &bodies, self.spec.max_step_m);
         };
         let used_m = polyline_length_m(&escape);
         let left_m = self.spec.max_step_m.map(|s| (s - used_m).max(0.0));
-        let mut mv = self.plan_move_within(centre, &start, &bodies, left_m);
+        let mut mv = self.plan_move_within(centre, aim, &start, &bodies, left_m);
         // The escape, then the rest (which begins where the escape ends).
         let mut waypoints = escape;
         waypoints.extend(mv.waypoints.iter().skip(1));

@@ -26,6 +26,9 @@ pub struct AgentSpec {
     /// Whether it ends each move facing the centre's heading (for an agent with a
     /// heading; otherwise its heading at the best point is free).
     pub align_heading: bool,
+    /// How many steps ahead along the centre's plan it looks when its top speed keeps it
+    /// from following its slot ([`crate::tracking`]): 0 chases where the slot is now.
+    pub horizon_steps: usize,
 }
 
 impl AgentSpec {
@@ -39,6 +42,7 @@ impl AgentSpec {
             kinematics: Kinematics::Holonomic,
             heading_offset_rad: 0.0,
             align_heading: false,
+            horizon_steps: 0,
         }
     }
 

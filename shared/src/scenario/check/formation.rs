@@ -6,6 +6,7 @@ use crate::formation::Slot;
 use crate::geometry::{Field, Pose};
 use crate::scenario::ScenarioError;
 use crate::scenario::file::{CbfFile, FormationFile};
+use crate::tracking::{DEFAULT_HORIZON_STEPS, MAX_HORIZON_STEPS};
 use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, Kinematics, MAX_AGENTS};
 
 impl Checker<'_> {
@@ -80,6 +81,16 @@ impl Checker<'_> {
             .sensing_radius_m
             .map(|v| self.positive("formation.sensing_radius_m", v, diagonal_m))
             .transpose()?;
+        let horizon_steps = match raw.horizon_steps {
+            Some(h) if h > MAX_HORIZON_STEPS => {
+                return Err(self.invalid(
+                    "formation.horizon_steps",
+                    format!("{h} steps exceed the largest look-ahead, {MAX_HORIZON_STEPS}"),
+                ));
+            }
+            Some(h) => h,
+            None => DEFAULT_HORIZON_STEPS,
+        };
         let mut agents = Vec::with_capacity(raw.slots.len());
         for (i, s) in raw.slots.iter().enumerate() {
             let name = format!("formation.slots[{i}]");
@@ -143,6 +154,7 @@ impl Checker<'_> {
                 kinematics,
                 heading_offset_rad,
                 align_heading: raw.align_heading.unwrap_or(false) && kinematics.has_heading(),
+                horizon_steps,
             });
         }
         // A formation-wide key of a model no agent has would be silently unused.

@@ -2,6 +2,8 @@
 
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
+use shared::geometry::Pose;
+use shared::tracking::MAX_HORIZON_STEPS;
 use shared::vocabulary::{Body, MAX_AGENTS};
 
 use crate::{CapacityError, WirePoint, WirePose};
@@ -45,6 +47,9 @@ pub struct World {
     /// The agents the turn's agent may sense, itself included, in increasing agent order,
     /// dead ones included (they are obstacles): every agent without a sensing radius.
     pub bodies: StaticVec<WireBody, MAX_AGENTS>,
+    /// The centre's next poses along its current plan, as many as the turn's agent looks
+    /// ahead (none for an agent without a top speed or a look-ahead).
+    pub ahead: StaticVec<WirePose, MAX_HORIZON_STEPS>,
 }
 
 impl World {
@@ -58,6 +63,15 @@ impl World {
     /// flag other than 0 or 1 reads as none too).
     pub fn heading(&self) -> Option<f64> {
         (self.has_heading == 1).then_some(self.heading_rad)
+    }
+
+    /// Replace the centre's poses ahead with the first [`MAX_HORIZON_STEPS`] of `ahead`.
+    pub fn set_ahead(&mut self, ahead: &[Pose]) {
+        self.ahead.clear();
+        for p in ahead.iter().take(MAX_HORIZON_STEPS) {
+            // Within the capacity: cannot fail.
+            let _ = self.ahead.push((*p).into());
+        }
     }
 
     /// Replace the bodies with the agents `visible` (indices, increasing) of `bodies`

@@ -1,0 +1,315 @@
+//! `coordinator bound [SCENARIO]`: the physical limit of tracking under a top speed.
+//!
+//! Each agent alone (no obstacle, no mate), starting at its slot and knowing the whole
+//! centre path, can do no better than the track that solves
+//!
+//! ```text
+//! minimise   sum_k |x_k - s_k|          k = 1 .. T (s_k: its slot at step k)
+//! subject to |x_k - x_(k-1)| <= c        x_0: its slot at step 0, c: its top speed
+//! ```
+//!
+//! a second-order cone programme, solved by Clarabel (an interior-point solver, pure
+//! Rust). Its optimum over `T` and the agents is a lower bound of the mean deviation any
+//! controller can reach with those top speeds, obstacles and mates only adding to it.
+//! The same constraints with `|x_k - s_k| <= t` for every `k`, minimising `t`, bound the
+//! largest deviation from below. The reference simulation is run too, and its figures are
+//! reported against the bounds.
+
+use anyhow::Context;
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use serde::Serialize;
+use shared::geometry::{Point, Pose};
+use shared::simulate::simulate_along;
+
+use crate::cli::BoundArgs;
+use crate::error::CliError;
+use crate::validate::load_and_plan;
+
+/// Why a bound could not be computed.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum BoundError {
+    /// The solver did not reach an optimum.
+    #[error("the cone programme was not solved: {0}")]
+    NotSolved(String),
+    /// The top speed is not a positive finite number.
+    #[error("top speed {0} m is not a positive finite number")]
+    BadSpeed(f64),
+}
+
+/// What is minimised.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Objective {
+    /// The summed deviation over the steps.
+    Sum,
+    /// The largest deviation of a step.
+    Max,
+}
+
+/// The optimal track of one agent that starts at `start` and moves at most `max_step_m`
+/// a step, its slot at step `k + 1` being `slots[k]`: the optimal value of `objective`
+/// (metres: summed or largest deviation) and the track (`x_1 .. x_T`).
+pub fn optimal_track(
+    start: &Point,
+    slots: &[Point],
+    max_step_m: f64,
+    objective: Objective,
+) -> Result<(f64, Vec<Point>), BoundError> {
+    if !(max_step_m.is_finite() && max_step_m > 0.0) {
+        return Err(BoundError::BadSpeed(max_step_m));
+    }
+    let t = slots.len();
+    if t == 0 {
+        return Ok((0.0, Vec::new()));
+    }
+    // Variables: x_1, y_1, ..., x_T, y_T, then the deviations (T of them for a sum, one
+    // for a maximum).
+    let deviations = match objective {
+        Objective::Sum => t,
+        Objective::Max => 1,
+    };
+    let n = 2 * t + deviations;
+    let dev_var = |k: usize| match objective {
+        Objective::Sum => 2 * t + k,
+        Objective::Max => 2 * t,
+    };
+    let mut q = vec![0.0; n];
+    for v in q.iter_mut().skip(2 * t) {
+        *v = 1.0;
+    }
+    // Rows: per step a deviation cone (t_k, x_k - s_k) and a speed cone
+    // (c, x_k - x_(k-1)), each s = b - A z in the second-order cone of dimension 3.
+    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+    let mut b = Vec::with_capacity(6 * t);
+    let mut cones = Vec::with_capacity(2 * t);
+    let mut entry = |r: usize, c: usize, v: f64| {
+        rows.push(r);
+        cols.push(c);
+        vals.push(v);
+    };
+    for (k, s) in slots.iter().enumerate() {
+        let r = 6 * k;
+        entry(r, dev_var(k), -1.0);
+        entry(r + 1, 2 * k, -1.0);
+        entry(r + 2, 2 * k + 1, -1.0);
+        b.extend([0.0, -s.x, -s.y]);
+        entry(r + 4, 2 * k, -1.0);
+        entry(r + 5, 2 * k + 1, -1.0);
+        if k == 0 {
+            b.extend([max_step_m, -start.x, -start.y]);
+        } else {
+            entry(r + 4, 2 * (k - 1), 1.0);
+            entry(r + 5, 2 * (k - 1) + 1, 1.0);
+            b.extend([max_step_m, 0.0, 0.0]);
+        }
+        cones.push(SupportedConeT::SecondOrderConeT(3));
+        cones.push(SupportedConeT::SecondOrderConeT(3));
+    }
+    let a = CscMatrix::new_from_triplets(6 * t, n, rows, cols, vals);
+    let p = CscMatrix::zeros((n, n));
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .build()
+        .map_err(|e| BoundError::NotSolved(e.to_string()))?;
+    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings)
+        .map_err(|e| BoundError::NotSolved(format!("{e:?}")))?;
+    solver.solve();
+    let sol = &solver.solution;
+    if sol.status != SolverStatus::Solved {
+        return Err(BoundError::NotSolved(format!("{:?}", sol.status)));
+    }
+    let track = (0..t)
+        .map(|k| Point::new(sol.x[2 * k], sol.x[2 * k + 1]))
+        .collect();
+    // The dual objective bounds the optimum from below; at an optimum the two agree
+    // to the solver's tolerance, and the lower one is reported.
+    Ok((sol.obj_val.min(sol.obj_val_dual).max(0.0), track))
+}
+
+/// One agent's bounds.
+#[derive(Clone, Debug, Serialize)]
+pub struct AgentBound {
+    /// The agent.
+    pub agent: usize,
+    /// Its top speed (`null`: none, so it can follow its slot exactly: both bounds 0).
+    pub max_step_m: Option<f64>,
+    /// The least mean deviation over the steps, in metres.
+    pub mean_deviation_m: f64,
+    /// The least largest deviation, in metres.
+    pub max_deviation_m: f64,
+}
+
+/// What `bound` prints.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoundReport {
+    /// Scenario name.
+    pub scenario: String,
+    /// Agents.
+    pub agents: usize,
+    /// Steps of the centre path (after step 0).
+    pub steps: usize,
+    /// The least mean deviation any controller can reach (every agent alone), in metres.
+    pub bound_mean_deviation_m: f64,
+    /// The least largest deviation any controller can reach, in metres.
+    pub bound_max_deviation_m: f64,
+    /// The reference simulation's mean deviation (the multi-process run's, to the bit).
+    pub mean_deviation_m: f64,
+    /// The reference simulation's largest deviation.
+    pub max_deviation_m: f64,
+    /// `mean_deviation_m / bound_mean_deviation_m` (`null` when the bound is 0).
+    pub mean_ratio: Option<f64>,
+    /// `max_deviation_m / bound_max_deviation_m` (`null` when the bound is 0).
+    pub max_ratio: Option<f64>,
+    /// Collisions of the reference simulation (0 in a safe run).
+    pub collisions: usize,
+    /// Each agent's bounds.
+    pub per_agent: Vec<AgentBound>,
+}
+
+/// The bounds of every agent along `centre_path`, `specs` giving each agent's slot and
+/// top speed.
+pub fn agent_bounds(
+    specs: &[shared::vocabulary::AgentSpec],
+    centre_path: &[Pose],
+) -> Result<Vec<AgentBound>, BoundError> {
+    specs
+        .iter()
+        .enumerate()
+        .map(|(agent, spec)| {
+            let Some(cap) = spec.max_step_m else {
+                return Ok(AgentBound {
+                    agent,
+                    max_step_m: None,
+                    mean_deviation_m: 0.0,
+                    max_deviation_m: 0.0,
+                });
+            };
+            let Some((first, rest)) = centre_path.split_first() else {
+                return Ok(AgentBound {
+                    agent,
+                    max_step_m: Some(cap),
+                    mean_deviation_m: 0.0,
+                    max_deviation_m: 0.0,
+                });
+            };
+            let start = spec.slot.ideal_position(first);
+            let slots: Vec<Point> = rest.iter().map(|c| spec.slot.ideal_position(c)).collect();
+            let (sum_m, _) = optimal_track(&start, &slots, cap, Objective::Sum)?;
+            let (max_m, _) = optimal_track(&start, &slots, cap, Objective::Max)?;
+            Ok(AgentBound {
+                agent,
+                max_step_m: Some(cap),
+                mean_deviation_m: sum_m / slots.len().max(1) as f64,
+                max_deviation_m: max_m,
+            })
+        })
+        .collect()
+}
+
+/// Carry out `bound`: one JSON object on stdout, one line on stderr.
+pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
+    let loaded = load_and_plan(args.scenario.as_deref())?;
+    let scenario = &loaded.scenario;
+    let per_agent = agent_bounds(&scenario.agents, &loaded.centre_path)
+        .context("the tracking bound")
+        .map_err(CliError::Other)?;
+    let n = per_agent.len().max(1) as f64;
+    let bound_mean = per_agent.iter().map(|a| a.mean_deviation_m).sum::<f64>() / n;
+    let bound_max = per_agent
+        .iter()
+        .map(|a| a.max_deviation_m)
+        .fold(0.0, f64::max);
+    let run = simulate_along(scenario, &loaded.centre_path).context("the reference simulation")?;
+    let summary = run.summary();
+    let ratio = |ours: f64, bound: f64| (bound > 0.0).then(|| ours / bound);
+    let report = BoundReport {
+        scenario: summary.scenario.clone(),
+        agents: summary.agents,
+        steps: loaded.centre_path.len().saturating_sub(1),
+        bound_mean_deviation_m: bound_mean,
+        bound_max_deviation_m: bound_max,
+        mean_deviation_m: summary.mean_deviation_m,
+        max_deviation_m: summary.max_deviation_m,
+        mean_ratio: ratio(summary.mean_deviation_m, bound_mean),
+        max_ratio: ratio(summary.max_deviation_m, bound_max),
+        collisions: summary.collisions,
+        per_agent,
+    };
+    let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.2}x"));
+    eprintln!(
+        "{}: mean deviation {:.4} m against the bound {:.4} m ({}), max {:.3} m against {:.3} m ({})",
+        report.scenario,
+        report.mean_deviation_m,
+        report.bound_mean_deviation_m,
+        show(report.mean_ratio),
+        report.max_deviation_m,
+        report.bound_max_deviation_m,
+        show(report.max_ratio)
+    );
+    let json = serde_json::to_string_pretty(&report).context("writing the report")?;
+    println!("{json}");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A slot the agent can follow: both bounds are 0 and the track is the slots.
+    #[test]
+    fn a_followable_slot_costs_nothing() {
+        let start = Point::new(0.0, 0.0);
+        let slots: Vec<Point> = (1..=5).map(|k| Point::new(0.4 * k as f64, 0.0)).collect();
+        let (sum, track) = optimal_track(&start, &slots, 0.5, Objective::Sum).unwrap();
+        assert!(sum < 1e-6, "{sum}");
+        for (p, s) in track.iter().zip(&slots) {
+            assert!((p - s).norm() < 1e-5);
+        }
+        let (max, _) = optimal_track(&start, &slots, 0.5, Objective::Max).unwrap();
+        assert!(max < 1e-6, "{max}");
+    }
+
+    /// A slot running away at 1 m a step from an agent that makes 0.5 m: it falls
+    /// behind by 0.5 m a step whatever it does, so the summed deviation is
+    /// 0.5 (1 + 2 + ... + T) and the largest 0.5 T.
+    #[test]
+    fn a_runaway_slot_gives_the_closed_form() {
+        let start = Point::new(0.0, 0.0);
+        let t = 8;
+        let slots: Vec<Point> = (1..=t).map(|k| Point::new(k as f64, 0.0)).collect();
+        let (sum, _) = optimal_track(&start, &slots, 0.5, Objective::Sum).unwrap();
+        let exact = 0.5 * (t * (t + 1) / 2) as f64;
+        assert!((sum - exact).abs() < 1e-5 * exact, "{sum} vs {exact}");
+        let (max, _) = optimal_track(&start, &slots, 0.5, Objective::Max).unwrap();
+        assert!((max - 0.5 * t as f64).abs() < 1e-5, "{max}");
+    }
+
+    /// The agents' own look-ahead solver (`shared::tracking`) finds a track no better
+    /// than the optimum (it is feasible) and close to it.
+    #[test]
+    fn the_agents_track_solver_comes_close_to_the_optimum() {
+        let start = Point::new(0.0, 0.0);
+        let slots: Vec<Point> = (1..=12)
+            .map(|j| {
+                let a = 0.3 * j as f64;
+                Point::new(5.0 * a.cos() - 5.0, 5.0 * a.sin())
+            })
+            .collect();
+        let (best, _) = optimal_track(&start, &slots, 0.8, Objective::Sum).unwrap();
+        let track = shared::tracking::least_deviation_track(&start, &slots, 0.8, 150);
+        let ours = shared::tracking::track_deviation_m(&track, &slots);
+        assert!(ours >= best - 1e-6, "{ours} below the optimum {best}");
+        assert!(ours <= best * 1.02, "{ours} against the optimum {best}");
+    }
+
+    #[test]
+    fn a_bad_speed_is_refused() {
+        let p = Point::new(0.0, 0.0);
+        assert_eq!(
+            optimal_track(&p, &[p], 0.0, Objective::Sum).unwrap_err(),
+            BoundError::BadSpeed(0.0)
+        );
+    }
+}

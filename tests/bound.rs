@@ -1,0 +1,56 @@
+//! `coordinator bound`: the physical limit of tracking under a top speed, against the
+//! reference simulation's deviation. No controller can beat the bound.
+
+mod support;
+
+use std::process::Command;
+
+fn bound(scenario: Option<&str>) -> serde_json::Value {
+    let mut cmd = Command::new(support::coordinator_bin());
+    cmd.arg("bound");
+    if let Some(s) = scenario {
+        cmd.arg(support::repo_root().join(s));
+    }
+    let out = cmd.output().expect("coordinator bound");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
+}
+
+#[test]
+fn the_bound_is_below_the_run_and_zero_for_a_slot_that_can_be_followed() {
+    let r = bound(Some("tests/data/sweeping-turn.toml"));
+    let f = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
+    assert_eq!(r["agents"], 4);
+    assert_eq!(r["collisions"], 0);
+    // The outer slots sweep faster than the top speed: the bound is positive, and the
+    // run, which meets obstacles of nobody, stays above it.
+    assert!(f("bound_mean_deviation_m") > 0.1, "{r}");
+    assert!(f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-6));
+    assert!(f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-6));
+    assert!(f("mean_ratio") >= 1.0 - 1e-6);
+    let per = r["per_agent"].as_array().expect("per_agent");
+    assert_eq!(per.len(), 4);
+    // Agent 0 sits at the centre, which moves slower than its top speed.
+    assert!(per[0]["mean_deviation_m"].as_f64().expect("mean") < 1e-4);
+    assert!(per[1]["mean_deviation_m"].as_f64().expect("mean") > 0.1);
+    let mean_of_agents = per
+        .iter()
+        .map(|a| a["mean_deviation_m"].as_f64().expect("mean"))
+        .sum::<f64>()
+        / 4.0;
+    assert!((mean_of_agents - f("bound_mean_deviation_m")).abs() < 1e-12);
+}
+
+#[test]
+fn agents_without_a_top_speed_have_no_bound() {
+    // The paper's example: no top speed, so every agent could follow its slot.
+    let r = bound(None);
+    assert_eq!(r["bound_mean_deviation_m"], 0.0);
+    assert_eq!(r["bound_max_deviation_m"], 0.0);
+    assert!(r["mean_ratio"].is_null());
+    assert!(r["per_agent"][0]["max_step_m"].is_null());
+}
