@@ -288,6 +288,29 @@ fn parallel_turns_on_a_map_match_the_reference() {
     );
 }
 
+/// ORCA's own model over real processes: every agent moves at once with the velocities
+/// of the last step (sent with each turn), and the safety checks refuse moves that
+/// would meet a mate's. The run, refusals and all, equals the reference to the bit.
+#[test]
+fn orca_in_its_own_model_matches_the_reference() {
+    let file = support::repo_root().join("tests/data/dense-orca.toml");
+    let scenario = Scenario::load(&file).expect("dense-orca.toml");
+    assert_eq!(scenario.turns, shared::vocabulary::TurnMode::Simultaneous);
+    let run = run_and_compare(&scenario);
+    let agents = scenario.agents.len() as f64;
+    assert_eq!(
+        run.summary().mean_groups_per_step,
+        1.0,
+        "one group of {agents}"
+    );
+    // Agents do move reciprocally: somebody's velocity was not zero when it planned.
+    assert!(
+        run.steps[2..]
+            .iter()
+            .any(|s| s.agents.iter().any(|a| a.waypoints.len() > 1))
+    );
+}
+
 /// Strikes over real processes: a moving obstacle that catches agents now and then. The
 /// monitor (parry) and the recorder both let a struck agent move away, and only away; the
 /// run equals the reference to the bit, strikes and all.

@@ -130,6 +130,11 @@ impl Channel for IpcPorts {
                     .iter()
                     .map(|b| (b.agent as usize, Point::from(b.position)))
                     .collect(),
+                velocities: w
+                    .bodies
+                    .iter()
+                    .map(|b| shared::geometry::Vector::new(b.velocity.x_m, b.velocity.y_m))
+                    .collect(),
             });
         }
         Ok(turn)

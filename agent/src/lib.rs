@@ -27,8 +27,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use shared::geometry::Point;
-use shared::turn::TurnController;
-use shared::vocabulary::Body;
+use shared::turn::{TurnController, Velocities};
+use shared::vocabulary::{Body, TurnMode};
 
 use wire::cgroup::Limits;
 use wire::misbehave::Misbehave;
@@ -289,6 +289,22 @@ fn read_bodies(
     me.with_context(|| format!("the world does not list agent {agent} itself"))
 }
 
+/// How the bodies of `turn` moved over the last step, as agent `agent` plans with them:
+/// its own, then the others' in the order [`read_bodies`] lists them (zero where the
+/// world gives none).
+fn velocities_of(turn: &TurnInput, agent: usize) -> Velocities {
+    let mut v = Velocities::default();
+    for (k, &(j, _)) in turn.bodies.iter().enumerate() {
+        let velocity = turn.velocities.get(k).copied().unwrap_or_default();
+        if j == agent {
+            v.me = velocity;
+        } else {
+            v.others.push(velocity);
+        }
+    }
+    v
+}
+
 /// The agent's turn loop: announce readiness, then for every turn plan and publish a
 /// move, until [`Command::Quit`].
 pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()> {
@@ -298,6 +314,8 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
     let mut radii_m: Vec<f64> = Vec::new();
     // The other agents as bodies; the buffer is kept from turn to turn.
     let mut others: Vec<Body> = Vec::new();
+    // Whether every agent moves at once (the world then says how each body moved).
+    let mut simultaneous = false;
     loop {
         let turn = match transport.next_command()? {
             Command::Quit => return Ok(()),
@@ -321,6 +339,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
                     .with_map(mission.map.as_ref()),
             );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
+            simultaneous = mission.turns == TurnMode::Simultaneous;
         }
         let Some(controller) = controller.as_ref() else {
             continue;
@@ -328,6 +347,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         let started = Instant::now();
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let step = turn_step(&turn);
+        let velocities = simultaneous.then(|| velocities_of(&turn, agent));
         let mv = controller.plan_turn_ahead(
             step,
             &turn.centre,
@@ -335,6 +355,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
             &me,
             turn.heading_rad,
             &others,
+            velocities.as_ref(),
         );
         let compute = started.elapsed();
         transport.publish_move(Reply::new(&turn, &mv, compute))?;
@@ -380,15 +401,7 @@ mod tests {
 
     fn scripted(scenario: &Scenario, turns: Vec<TurnInput>) -> Scripted {
         Scripted {
-            mission: MissionView {
-                field: scenario.field,
-                obstacles: scenario.static_obstacles(),
-                polygons: scenario.polygons.clone(),
-                map: scenario.map.clone(),
-                moving: scenario.moving.clone(),
-                agents: scenario.agents.clone(),
-                controller: scenario.controller,
-            },
+            mission: MissionView::of(scenario.clone()),
             commands: turns.into_iter().map(Command::Turn).collect(),
             ready: false,
             published: Vec::new(),
@@ -411,6 +424,7 @@ mod tests {
                 heading_rad: None,
                 ahead: path[step + 1..].iter().take(10).copied().collect(),
                 bodies: positions.iter().copied().enumerate().collect(),
+                velocities: Vec::new(),
             })
             .collect()
     }
@@ -442,6 +456,7 @@ mod tests {
                 &turn.bodies[agent].1,
                 None,
                 &others,
+                None,
             );
             assert_eq!(*seq, turn.seq);
             assert_eq!(*mv, want);

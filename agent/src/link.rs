@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use anyhow::{Context, bail};
 use net::{NetMove, NetTurn};
-use shared::geometry::{Point, Pose};
+use shared::geometry::{Point, Pose, Vector};
 use shared::scenario::Scenario;
 use shared::vocabulary::{MAX_AGENTS, MAX_WAYPOINTS, Move, MoveStatus};
 
@@ -43,6 +43,7 @@ pub fn net_turn(t: &TurnInput) -> NetTurn {
             .iter()
             .map(|&(j, p)| (u32::try_from(j).unwrap_or(u32::MAX), [p.x, p.y]))
             .collect(),
+        velocities: t.velocities.iter().map(|v| [v.x, v.y]).collect(),
     }
 }
 
@@ -50,6 +51,13 @@ pub fn net_turn(t: &TurnInput) -> NetTurn {
 pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
     if t.bodies.len() > MAX_AGENTS {
         bail!("a turn with {} bodies, beyond the capacity", t.bodies.len());
+    }
+    if t.velocities.len() > t.bodies.len() {
+        bail!(
+            "a turn with {} velocities for {} bodies",
+            t.velocities.len(),
+            t.bodies.len()
+        );
     }
     if t.ahead.len() > shared::tracking::MAX_HORIZON_STEPS {
         bail!(
@@ -59,6 +67,7 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
     }
     let finite = t.centre.iter().all(|v| v.is_finite())
         && t.ahead.iter().flatten().all(|v| v.is_finite())
+        && t.velocities.iter().flatten().all(|v| v.is_finite())
         && t.heading_rad.is_none_or(f64::is_finite)
         && t.bodies
             .iter()
@@ -81,6 +90,11 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
             .bodies
             .into_iter()
             .map(|(j, p)| (j as usize, Point::new(p[0], p[1])))
+            .collect(),
+        velocities: t
+            .velocities
+            .iter()
+            .map(|v| Vector::new(v[0], v[1]))
             .collect(),
     })
 }

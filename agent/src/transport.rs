@@ -2,9 +2,9 @@
 
 use std::time::Duration;
 
-use shared::geometry::{Disk, Field, Point, Polygon, Pose};
+use shared::geometry::{Disk, Field, Point, Polygon, Pose, Vector};
 use shared::moving_obstacle::MovingObstacle;
-use shared::vocabulary::{AgentSpec, ControllerSpec, Move};
+use shared::vocabulary::{AgentSpec, ControllerSpec, Move, TurnMode};
 
 /// The static scenario as an agent sees it.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +24,8 @@ pub struct MissionView {
     pub agents: Vec<AgentSpec>,
     /// The controller and its settings.
     pub controller: ControllerSpec,
+    /// How the agents take their turns.
+    pub turns: TurnMode,
 }
 
 impl MissionView {
@@ -38,6 +40,7 @@ impl MissionView {
             moving: scenario.moving,
             agents: scenario.agents,
             controller: scenario.controller,
+            turns: scenario.turns,
         }
     }
 }
@@ -62,6 +65,9 @@ pub struct TurnInput {
     /// increasing index order (every agent when it has no sensing radius); their radii
     /// are in the mission.
     pub bodies: Vec<(usize, Point)>,
+    /// With simultaneous turns, how far each body of `bodies` moved over the last step
+    /// (metres per step, same order); empty otherwise.
+    pub velocities: Vec<Vector>,
 }
 
 /// What the coordinator asks.

@@ -300,8 +300,10 @@ pub struct CompareArgs {
     /// The controllers to compare (comma-separated; default: all).
     #[arg(long, alias = "planners", value_delimiter = ',', value_parser = parse_controller)]
     pub controllers: Vec<ControllerKind>,
-    /// Turn modes to run every controller in (comma-separated: sequential, parallel;
-    /// default: each scenario's own `[turns] mode`). Parallel needs a top speed.
+    /// Turn modes to run every controller in (comma-separated: sequential, parallel,
+    /// simultaneous, the last for orca only; default: each scenario's own `[turns] mode`,
+    /// orca in its own model wherever every agent has a top speed). Parallel and
+    /// simultaneous need a top speed.
     #[arg(long, value_name = "MODE", value_delimiter = ',', value_parser = parse_turn_mode)]
     pub turns: Vec<TurnMode>,
     /// Output folder for `compare.csv`, `compare.md` and one folder per run (default
@@ -330,7 +332,8 @@ fn parse_controller(s: &str) -> Result<ControllerKind, String> {
 
 /// A turn mode name.
 fn parse_turn_mode(s: &str) -> Result<TurnMode, String> {
-    TurnMode::from_name(s).ok_or_else(|| format!("{s:?}: one of sequential, parallel"))
+    TurnMode::from_name(s)
+        .ok_or_else(|| format!("{s:?}: one of sequential, parallel, simultaneous"))
 }
 
 /// `AGENT@STEP`.

@@ -86,14 +86,15 @@ pub(crate) fn with_turn_mode(
     source: &str,
     mode: TurnMode,
 ) -> Result<Scenario, ScenarioError> {
-    if mode == TurnMode::Parallel
+    if mode != TurnMode::Sequential
         && let Some(i) = scenario.agents.iter().position(|a| a.max_step_m.is_none())
     {
         return Err(ScenarioError::Invalid {
             file: source.to_string(),
             field: "turns.mode".into(),
             reason: format!(
-                "parallel turns need a top speed for every agent (formation.max_step_m), and agent {i} has none"
+                "{} turns need a top speed for every agent (formation.max_step_m), and agent {i} has none",
+                mode.name()
             ),
         });
     }
@@ -275,7 +276,15 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
                     eprintln!("left out: {why}");
                     continue;
                 }
-                let scenario = in_mode.with_controller(controller);
+                let mut scenario = in_mode.with_controller(controller);
+                // Without a mode asked for, ORCA runs in its own model (every agent at
+                // once) wherever every agent has a top speed.
+                if asked.is_none()
+                    && controller == ControllerKind::Orca
+                    && scenario.agents.iter().all(|a| a.max_step_m.is_some())
+                {
+                    scenario.turns = TurnMode::Simultaneous;
+                }
                 let folder = run_folder_name(&scenario.name, controller, *asked, &mut taken);
                 // The turn mode is named wherever it was asked for.
                 let label = match asked {

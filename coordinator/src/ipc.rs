@@ -18,7 +18,7 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use iceoryx2_bb_posix::unique_system_id::UniqueSystemId;
 use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
-use shared::geometry::Pose;
+use shared::geometry::{Pose, Vector};
 use shared::scenario::Scenario;
 use shared::vocabulary::Body;
 use wire::{
@@ -82,6 +82,9 @@ pub struct TurnWorld<'a> {
     pub visible: Option<&'a [usize]>,
     /// The centre's next poses along its plan that the turn's agent looks ahead to.
     pub ahead: &'a [Pose],
+    /// With simultaneous turns: how far each agent moved over the last step (indexed by
+    /// agent).
+    pub velocities: Option<&'a [Vector]>,
 }
 
 /// The turn a world was published for.
@@ -368,6 +371,9 @@ impl CoordinatorIpc {
         match world.visible {
             Some(v) => w.set_bodies(bodies, alive, v.iter().copied())?,
             None => w.set_bodies(bodies, alive, 0..bodies.len())?,
+        }
+        if let Some(v) = world.velocities {
+            w.set_velocities(v);
         }
         sample.send().context("sending the world")?;
         Ok(grant)

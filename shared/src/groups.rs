@@ -52,6 +52,14 @@ pub fn turn_groups(
     match mode {
         TurnMode::Sequential => live.map(|i| vec![i]).collect(),
         TurnMode::Parallel => parallel_groups(specs, bodies, live),
+        TurnMode::Simultaneous => {
+            let all: Vec<usize> = live.collect();
+            if all.is_empty() {
+                Vec::new()
+            } else {
+                vec![all]
+            }
+        }
     }
 }
 

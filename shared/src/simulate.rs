@@ -14,9 +14,23 @@ use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
 use crate::tracking::MAX_HORIZON_STEPS;
-use crate::turn::TurnController;
+use crate::turn::{TurnController, Velocities};
 use crate::vocabulary::CbfSettingsError;
 use crate::vocabulary::Move;
+use crate::vocabulary::TurnMode;
+
+/// Every velocity of `all` but agent `agent`'s, in order: the other bodies' (as
+/// [`Recorder::others`] lists them).
+pub fn agent_velocities_but(
+    all: &[crate::geometry::Vector],
+    agent: usize,
+) -> Vec<crate::geometry::Vector> {
+    all.iter()
+        .enumerate()
+        .filter(|(j, _)| *j != agent)
+        .map(|(_, v)| *v)
+        .collect()
+}
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
@@ -134,6 +148,8 @@ pub fn simulate_along_with_deaths(
             recorder.alive(),
         );
         recorder.note_groups(groups.len());
+        // Every agent moving at once knows how each body moved over the last step.
+        let velocities = (scenario.turns == TurnMode::Simultaneous).then(|| recorder.velocities());
         for group in groups {
             for &agent in &group {
                 if deaths.contains(&(agent, step)) {
@@ -161,6 +177,10 @@ pub fn simulate_along_with_deaths(
                     let me = recorder.bodies()[agent].position;
                     let others = recorder.others(agent);
                     let heading_rad = recorder.headings()[agent];
+                    let velocities = velocities.as_ref().map(|v| Velocities {
+                        me: v[agent],
+                        others: agent_velocities_but(v, agent),
+                    });
                     let mv = controllers[agent].plan_turn_ahead(
                         step,
                         centre,
@@ -168,6 +188,7 @@ pub fn simulate_along_with_deaths(
                         &me,
                         heading_rad,
                         &others,
+                        velocities.as_ref(),
                     );
                     (agent, mv)
                 })

@@ -53,13 +53,18 @@ pub enum Refusal {
         /// The share of the step the move takes at the least.
         share: f64,
     },
-    /// The move meets the move of another agent of the same parallel group.
-    #[error("the move comes within {distance_m} m of agent {agent}'s move in the same group")]
+    /// The move meets the move of another agent of the same group (parallel or
+    /// simultaneous turns).
+    #[error(
+        "the move comes within {distance_m} m of agent {agent}'s move in the same group (radii sum {reach_m} m)"
+    )]
     GroupMate {
         /// The other agent.
         agent: usize,
         /// Smallest distance between the two moves' polylines.
         distance_m: f64,
+        /// The two agents' radii summed: the least distance allowed.
+        reach_m: f64,
     },
     /// The agent would leave the field.
     #[error("waypoint {0} leaves the field")]

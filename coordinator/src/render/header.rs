@@ -363,8 +363,10 @@ pub fn model_note(s: &Scenario) -> Option<String> {
             format!("sensing {}-{} m", fmt_m(lo), fmt_m(hi))
         });
     }
-    if s.turns == TurnMode::Parallel {
-        parts.push("parallel turns".to_string());
+    match s.turns {
+        TurnMode::Parallel => parts.push("parallel turns".to_string()),
+        TurnMode::Simultaneous => parts.push("simultaneous turns".to_string()),
+        TurnMode::Sequential => {}
     }
     (!parts.is_empty()).then(|| parts.join(", "))
 }

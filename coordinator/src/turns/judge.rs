@@ -88,6 +88,7 @@ pub(super) fn settle_group(recorder: &mut Recorder, step: usize, moves: Vec<(usi
                 let why = Refusal::GroupMate {
                     agent: mates[m.mate],
                     distance_m: m.distance_m,
+                    reach_m: m.reach_m,
                 }
                 .to_string();
                 tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");

@@ -9,6 +9,7 @@ use shared::geometry::{Point, Pose};
 use shared::record::FaultKind;
 use shared::sensing::SensedAgents;
 use shared::vocabulary::Move;
+use shared::vocabulary::TurnMode;
 use wire::{StateMsg, monotonic_ns};
 
 use super::answer::{Answer, Turn};
@@ -63,6 +64,9 @@ impl Driver<'_, '_> {
         sensing: Option<&SensedAgents>,
     ) -> anyhow::Result<Vec<Turn>> {
         let mut turns = Vec::with_capacity(group.len());
+        // Agents moving at once know how every body moved over the last step.
+        let velocities =
+            (self.scenario.turns == TurnMode::Simultaneous).then(|| self.recorder.velocities());
         for &agent in group {
             self.drain(step, agent)?;
             if !self.recorder.alive()[agent] {
@@ -85,6 +89,7 @@ impl Driver<'_, '_> {
                     Some(_) => &ahead[..spec.horizon_steps.min(ahead.len())],
                     None => &[],
                 },
+                velocities: velocities.as_deref(),
             };
             let grant = self.ipc.publish_world(step, agent, &world)?;
             let rung = !self.hand_over.polls_world(agent, self.procs.pid(agent));

@@ -50,6 +50,9 @@ pub struct NetTurn {
     pub ahead: Vec<[f64; 3]>,
     /// The agents this agent may sense, itself included: (index, [x, y] in m).
     pub bodies: Vec<(u32, [f64; 2])>,
+    /// With simultaneous turns, how far each of `bodies` moved over the last step ([x,
+    /// y] in m, same order); empty otherwise.
+    pub velocities: Vec<[f64; 2]>,
 }
 
 /// From the agent to its relay.
@@ -176,6 +179,7 @@ mod tests {
             heading_rad: Some(0.75),
             ahead: vec![[1.75, -0.25, 3.0], [2.0, 1e-300, -0.5]],
             bodies: vec![(0, [0.3, 0.1]), (7, [-1.0, 2.0])],
+            velocities: vec![[0.25, 0.0], [-0.5, 1e-300]],
         });
         assert_eq!(decode::<Down>(&encode(&turn).unwrap()).unwrap(), turn);
         let up = a_move();

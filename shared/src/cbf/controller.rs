@@ -90,8 +90,10 @@ impl CbfController {
             let distance_m = away.norm();
             // (d - R)(d + R) keeps its precision near the boundary, unlike d^2 - R^2.
             let h = (distance_m - reach_m) * (distance_m + reach_m);
-            let share = if is_agent { 0.5 } else { 1.0 };
-            rows.push(HalfPlane::new(-2.0 * away, gamma * share * h));
+            // The whole responsibility, mates included: they stand still during this
+            // turn (or, in a parallel group, cannot reach this agent within the step).
+            let _ = is_agent;
+            rows.push(HalfPlane::new(-2.0 * away, gamma * h));
         }
         rows
     }

@@ -4,7 +4,7 @@
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
 use crate::geometry::{
-    DiskGrid, Point, Pose, distance_polyline_polyline, polyline_length_m, wrap_angle_rad,
+    DiskGrid, Point, Pose, Vector, distance_polyline_polyline, polyline_length_m, wrap_angle_rad,
 };
 use crate::groups::{GroupMove, group_meetings};
 use crate::kinematics::{CarLimits, UnicycleLimits, check_car_move, unicycle_step_share};
@@ -207,6 +207,23 @@ impl<'a> Recorder<'a> {
             .filter(|(j, _)| *j != agent)
             .map(|(_, b)| *b)
             .collect()
+    }
+
+    /// How far each agent moved over the last recorded step (metres per step: its
+    /// velocity), from the positions recorded at the end of the last two steps; zero
+    /// before two steps are recorded. What agents moving simultaneously know of each
+    /// other ([`crate::vocabulary::TurnMode::Simultaneous`]).
+    pub fn velocities(&self) -> Vec<Vector> {
+        let steps = &self.run.steps;
+        match steps.len() {
+            0 | 1 => vec![Vector::zeros(); self.bodies.len()],
+            n => steps[n - 1]
+                .agents
+                .iter()
+                .zip(&steps[n - 2].agents)
+                .map(|(now, before)| now.position - before.position)
+                .collect(),
+        }
     }
 
     /// The steps recorded so far.

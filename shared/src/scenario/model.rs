@@ -70,6 +70,13 @@ impl Scenario {
     /// Why this scenario cannot be run by controller `kind` (`None`: it can): only the
     /// best-point controller plans round polygon obstacles yet.
     pub fn refuses_controller(&self, kind: ControllerKind) -> Option<String> {
+        if self.turns == TurnMode::Simultaneous && kind != ControllerKind::Orca {
+            return Some(format!(
+                "controller {}: scenario {:?} takes simultaneous turns, ORCA's own model, for the orca controller only",
+                kind.name(),
+                self.name
+            ));
+        }
         (!self.polygons.is_empty() && kind != ControllerKind::BestPoint).then(|| {
             format!(
                 "controller {}: scenario {:?} has polygon obstacles, which only best-point plans round yet",

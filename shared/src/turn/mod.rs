@@ -14,7 +14,8 @@ use std::borrow::Cow;
 
 use crate::cbf::{CbfController, ZcbfLogSumExpController};
 use crate::geometry::{
-    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, polyline_prefix,
+    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, Vector,
+    polyline_prefix,
 };
 use crate::kinematics::{CarLimits, UnicycleLimits, drive_unicycle};
 use crate::moving_obstacle::MovingObstacle;
@@ -46,6 +47,16 @@ pub const PLANNING_MARGIN_M: f64 = 1e-3;
 /// step whose time runs out inside a chord that cuts into a disk's margin ends at the
 /// chord's start, so short chords keep such a step from losing more than this share.
 const UNICYCLE_CHORD_SHARE: f64 = 0.25;
+
+/// How the bodies moved over the last step (metres per step), what an agent knows when
+/// every agent moves at once ([`crate::vocabulary::TurnMode::Simultaneous`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Velocities {
+    /// This agent's.
+    pub me: Vector,
+    /// Each other body's, in the order of the `others` they come with.
+    pub others: Vec<Vector>,
+}
 
 /// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
 /// top speed applied: what the reference simulation and the agent processes call.
@@ -220,6 +231,10 @@ impl TurnController {
     /// `aim`), without a top speed or with a horizon of 0, and an agent that can follow
     /// its slot, plan exactly as
     /// [`Self::plan_turn_with_heading`] does, bit for bit.
+    ///
+    /// With `velocities` (every agent moves at once) the ORCA controller plans in its own
+    /// model ([`OrcaController::plan_move_reciprocal`]); the other controllers ignore them.
+    #[allow(clippy::too_many_arguments)]
     pub fn plan_turn_ahead(
         &self,
         step: usize,
@@ -228,7 +243,17 @@ impl TurnController {
         me: &Point,
         heading_rad: Option<f64>,
         others: &[Body],
+        velocities: Option<&Velocities>,
     ) -> Move {
+        if let (Controller::Orca(p), Some(v)) = (&self.controller, velocities) {
+            let (sensed, sensed_velocities): (Vec<Body>, Vec<Vector>) = others
+                .iter()
+                .zip(&v.others)
+                .filter(|(b, _)| self.spec.senses(me, &b.position, b.radius_m))
+                .map(|(b, v)| (*b, *v))
+                .unzip();
+            return p.plan_move_reciprocal(centre, me, &v.me, &sensed, &sensed_velocities);
+        }
         let aim = self.aim(centre, ahead, me);
         let aim = aim.as_ref();
         match heading_rad {

@@ -1,5 +1,5 @@
-//! How the agents of a step take their turns: one at a time, or in groups that cannot
-//! meet.
+//! How the agents of a step take their turns: one at a time, in groups that cannot
+//! meet, or all at once (ORCA's own model).
 
 use serde::{Deserialize, Serialize};
 
@@ -17,17 +17,23 @@ pub enum TurnMode {
     /// are split into groups ([`crate::groups::turn_groups`]); a group's agents plan
     /// against the same snapshot and the groups follow one another. Needs a top speed.
     Parallel,
+    /// Every live agent moves at once, knowing how each body moved over the last step:
+    /// ORCA's own model (reciprocal avoidance, RVO2), for the `orca` controller only. No
+    /// group is kept apart, so the safety monitor checks every move against every mate's
+    /// whole move and refuses those that would meet. Needs a top speed.
+    Simultaneous,
 }
 
 impl TurnMode {
-    /// Both modes.
-    pub const ALL: [TurnMode; 2] = [Self::Sequential, Self::Parallel];
+    /// Every mode.
+    pub const ALL: [TurnMode; 3] = [Self::Sequential, Self::Parallel, Self::Simultaneous];
 
     /// The name used in files and on the command line.
     pub fn name(&self) -> &'static str {
         match self {
             Self::Sequential => "sequential",
             Self::Parallel => "parallel",
+            Self::Simultaneous => "simultaneous",
         }
     }
 

@@ -9,7 +9,7 @@
 use super::file::{DiskFile, PoseFile, ScenarioFile};
 use super::{PathSpec, Scenario, ScenarioError};
 use crate::geometry::{Disk, Field, Point, Pose};
-use crate::vocabulary::TurnMode;
+use crate::vocabulary::{ControllerKind, TurnMode};
 
 mod feasibility;
 mod formation;
@@ -234,13 +234,23 @@ impl Checker<'_> {
         let controller = self.controller(raw.controller, raw.cbf.as_ref(), &agents, side_m)?;
         self.polygons_supported(&polygons, &agents, &controller)?;
         let turns = raw.turns.mode;
-        if turns == TurnMode::Parallel
+        if turns != TurnMode::Sequential
             && let Some(i) = agents.iter().position(|a| a.max_step_m.is_none())
         {
             return Err(self.invalid(
                 "turns.mode",
                 format!(
-                    "parallel turns need a top speed for every agent (formation.max_step_m), and agent {i} has none"
+                    "{} turns need a top speed for every agent (formation.max_step_m), and agent {i} has none",
+                    turns.name()
+                ),
+            ));
+        }
+        if turns == TurnMode::Simultaneous && controller.kind != ControllerKind::Orca {
+            return Err(self.invalid(
+                "turns.mode",
+                format!(
+                    "simultaneous turns are ORCA's own model: they need controller = \"orca\", not {:?}",
+                    controller.kind.name()
                 ),
             ));
         }

@@ -2,7 +2,7 @@
 
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
-use shared::geometry::Pose;
+use shared::geometry::{self, Pose};
 use shared::tracking::MAX_HORIZON_STEPS;
 use shared::vocabulary::{Body, MAX_AGENTS};
 
@@ -19,6 +19,9 @@ pub struct WireBody {
     pub alive: u32,
     /// The agent's index (the radius is in the mission).
     pub agent: u32,
+    /// How far it moved over the last step (metres per step), with simultaneous turns
+    /// (zero otherwise).
+    pub velocity: WirePoint,
 }
 
 /// The world before a turn: published by the coordinator, read by the agent whose turn it
@@ -74,6 +77,16 @@ impl World {
         }
     }
 
+    /// Give each body listed its agent's entry of `velocities` (indexed by agent; a body
+    /// without one keeps zero). Call after [`Self::set_bodies`].
+    pub fn set_velocities(&mut self, velocities: &[geometry::Vector]) {
+        for b in self.bodies.iter_mut() {
+            if let Some(v) = velocities.get(b.agent as usize) {
+                b.velocity = WirePoint { x_m: v.x, y_m: v.y };
+            }
+        }
+    }
+
     /// Replace the bodies with the agents `visible` (indices, increasing) of `bodies`
     /// (positions) with their `alive` flags.
     pub fn set_bodies(
@@ -92,6 +105,7 @@ impl World {
                     position: b.position.into(),
                     alive: u32::from(a),
                     agent: i as u32,
+                    velocity: WirePoint::default(),
                 })
                 .map_err(|_| CapacityError::Agents(bodies.len()))?;
         }
