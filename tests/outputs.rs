@@ -114,6 +114,23 @@ fn a_folder_holding_a_run_is_refused_without_force_and_replaced_whole_with_it() 
         serde_json::from_slice(&std::fs::read(out.join("summary.json")).expect("summary"))
             .expect("summary.json parses");
     assert_eq!(summary["completed"], true);
+    // The start-up's phases, each measured, add up to the start-up.
+    let phases = &summary["startup_phases_s"];
+    let phase = |k: &str| {
+        phases[k]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{k}: {phases}"))
+    };
+    let sum: f64 = ["prepare", "spawn", "handshakes", "intruder_scan"]
+        .iter()
+        .map(|k| phase(k))
+        .sum();
+    let startup = summary["startup_s"].as_f64().expect("startup_s");
+    assert!(phase("spawn") > 0.0 && phase("prepare") > 0.0);
+    assert!(
+        sum <= startup + 1e-9 && sum > 0.9 * startup,
+        "{sum} of {startup}"
+    );
     // The controller as run is the one in the folder's scenario.
     let text = std::fs::read_to_string(out.join("scenario.toml")).expect("scenario.toml");
     let resolved = Scenario::parse(&text, "scenario.toml").expect("resolved scenario loads");

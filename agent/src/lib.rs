@@ -80,8 +80,28 @@ fn serve_as<T: Transport>(
     serve(&mut transport, agent)
 }
 
+/// Started by a coordinator ([`wire::PARENT_ENV`] names its process): be killed with it,
+/// and leave at once if it is gone already (this process's parent is then another).
+fn die_with_the_coordinator() -> anyhow::Result<()> {
+    let Ok(text) = std::env::var(wire::PARENT_ENV) else {
+        return Ok(());
+    };
+    let coordinator: u32 = text
+        .parse()
+        .with_context(|| format!("{}: {text:?} is not a process id", wire::PARENT_ENV))?;
+    #[cfg(target_os = "linux")]
+    nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGKILL)
+        .context("asking to die with the coordinator")?;
+    let parent = std::os::unix::process::parent_id();
+    if parent != coordinator {
+        bail!("the coordinator (process {coordinator}) is gone: the parent is {parent}");
+    }
+    Ok(())
+}
+
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    die_with_the_coordinator()?;
     let mode = test_mode(args)?;
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.die_with_parent {

@@ -180,29 +180,18 @@ impl AgentProcesses {
     pub fn spawn(&mut self, agent: usize, extra_args: &[String]) -> anyhow::Result<u32> {
         set_cloexec_on_all_fds();
         let mut command = Command::new(&self.bin);
+        // Nothing runs between fork and exec, so the standard library starts the
+        // process with posix_spawn (no copy of this process's page tables, which with
+        // many agents' shared memory mapped made each fork cost tens of milliseconds).
+        // The agent asks to die with the coordinator itself, first thing, and exits if
+        // the coordinator is already gone ([`wire::PARENT_ENV`]).
         command
             .args(["--prefix", &self.prefix, "--agent", &agent.to_string()])
             .args(extra_args)
             .env(wire::RUN_ENV, &self.prefix)
+            .env(wire::PARENT_ENV, std::process::id().to_string())
             .stdin(Stdio::null())
             .process_group(0);
-        let coordinator = std::process::id();
-        // SAFETY: between fork and exec the child makes only async-signal-safe calls
-        // (prctl, getppid, _exit) and touches no memory of the parent's.
-        unsafe {
-            command.pre_exec(move || {
-                // Killed with the coordinator, from before the agent's first instruction
-                // (the agent sets its own later); a coordinator already gone (killed
-                // between the fork and here) is not waited for.
-                if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL, 0, 0, 0) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                if libc::getppid() as u32 != coordinator {
-                    libc::_exit(1);
-                }
-                Ok(())
-            });
-        }
         let child = command
             .spawn()
             .with_context(|| format!("starting {} for agent {agent}", self.bin.display()))?;

@@ -23,12 +23,29 @@ pub struct Timing {
     pub compute_us: Distribution,
     /// Wall time of the whole run, seconds.
     pub wall_s: f64,
-    /// From the first spawn to the last ready handshake, seconds.
+    /// From the start of the run to the last ready handshake, seconds.
     pub startup_s: f64,
+    /// Where `startup_s` went, phase by phase.
+    pub startup_phases_s: StartupPhases,
     /// Steps per second of the step loop (start-up excluded).
     pub steps_per_s: f64,
     /// Resident set size of the agent processes at the end of the run, KiB.
     pub agent_rss_kib: Distribution,
+}
+
+/// The phases of a run's start-up, in seconds; they add up to `startup_s`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StartupPhases {
+    /// Before any agent process: the run's private folder, the mission file, every
+    /// agent's shared-memory services, the log.
+    pub prepare: f64,
+    /// Starting the agent processes (fork and exec, one after the other).
+    pub spawn: f64,
+    /// Waiting for the agents' ready handshakes (each reads and checks the mission and
+    /// opens its ports meanwhile).
+    pub handshakes: f64,
+    /// Checking the agents' services for processes that have no business there.
+    pub intruder_scan: f64,
 }
 
 /// `summary.json` as written: the run's figures and its timing, side by side.

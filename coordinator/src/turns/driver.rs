@@ -161,6 +161,7 @@ impl Driver<'_, '_> {
             }
         };
         let to_start: Vec<usize> = (0..n).filter(|&i| self.recorder.alive()[i]).collect();
+        let spawning = Instant::now();
         for &i in &to_start {
             // A spawn that fails (the machine out of processes, say) fails that agent
             // alone: it is frozen where it starts, or replaced with `--respawn`.
@@ -168,6 +169,7 @@ impl Driver<'_, '_> {
                 self.on_failed_start(step, i, &format!("its process could not be started: {e:#}"))?;
             }
         }
+        self.progress.startup_phases.spawn = spawning.elapsed().as_secs_f64();
         self.start_agents(
             step,
             &to_start,

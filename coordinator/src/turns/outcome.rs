@@ -6,7 +6,7 @@ use std::time::Instant;
 use shared::record::Run;
 
 use crate::ipc::TurnSplit;
-use crate::output::Timing;
+use crate::output::{StartupPhases, Timing};
 use crate::procfs::IdleCpu;
 use crate::stats::Distribution;
 
@@ -78,6 +78,8 @@ pub(crate) struct TurnSample {
 #[derive(Default)]
 pub(super) struct Progress {
     pub(super) startup_s: f64,
+    /// Where the start-up went.
+    pub(super) startup_phases: StartupPhases,
     /// The steps already logged when the run was resumed (none otherwise): the step
     /// loop's speed is of the steps run here.
     pub(super) steps_before: usize,
@@ -117,6 +119,7 @@ pub(super) fn outcome(
             compute_us: Distribution::of(&progress.compute_us),
             wall_s: started.elapsed().as_secs_f64(),
             startup_s: progress.startup_s,
+            startup_phases_s: progress.startup_phases,
             agent_rss_kib: Distribution::of(&progress.rss_kib),
         },
         run,

@@ -146,6 +146,7 @@ pub fn run_scenario_with(
         .as_ref()
         .and_then(|_| sandbox_cgroup(&prefix));
     let mut procs = AgentProcesses::new(bin, &prefix, n).with_cgroup(run_cgroup.clone());
+    progress.startup_phases.prepare = started.elapsed().as_secs_f64();
 
     let driven = catch_unwind(AssertUnwindSafe(|| {
         Driver {

@@ -26,7 +26,8 @@ impl Driver<'_, '_> {
         timeout: Duration,
         replacements: bool,
     ) -> anyhow::Result<()> {
-        let deadline = Instant::now() + timeout;
+        let waiting = Instant::now();
+        let deadline = waiting + timeout;
         let mut pending: Vec<usize> = agents.to_vec();
         let mut failed: Vec<(usize, String)> = Vec::new();
         // The process each agent started with: one quarantined meanwhile and replaced
@@ -135,7 +136,13 @@ impl Driver<'_, '_> {
             .copied()
             .filter(|a| !failed.iter().any(|(f, _)| f == a))
             .collect();
+        let scanning = Instant::now();
         self.scan_for_intruders(step, &started)?;
+        if !replacements {
+            let phases = &mut self.progress.startup_phases;
+            phases.handshakes = (scanning - waiting).as_secs_f64();
+            phases.intruder_scan = scanning.elapsed().as_secs_f64();
+        }
         for (agent, why) in failed {
             if replacements {
                 tracing::warn!("agent {agent}: the replacement did not start: {why}");

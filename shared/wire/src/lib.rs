@@ -64,7 +64,7 @@ pub use mission_file::{
     BadMissionDigest, MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionDigest, MissionFileError,
     mission_path, read_mission, write_mission,
 };
-pub use prefix::{MAX_PREFIX_LEN, PrefixError, RUN_ENV, RunPrefix};
+pub use prefix::{MAX_PREFIX_LEN, PARENT_ENV, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{
     RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private,
     remove_run_files_in_shm, remove_run_root, run_root,
