@@ -322,6 +322,25 @@ fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_
     assert_nothing_left(next);
 }
 
+/// An agent is started with `posix_spawn`, so it asks to die with the coordinator itself;
+/// one whose named coordinator is not its parent (that coordinator died before the agent
+/// could ask) leaves at once, saying why, before it opens anything.
+#[test]
+fn an_agent_whose_coordinator_is_already_gone_leaves_at_once() {
+    let out = std::process::Command::new(support::agent_bin())
+        .args(["--prefix", "fc1x0_", "--agent", "0"])
+        // Process 1 is never this test's own process, the agent's parent.
+        .env(wire::PARENT_ENV, "1")
+        .output()
+        .expect("the agent runs");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("the coordinator (process 1) is gone"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
     for signal in [Signal::SIGTERM, Signal::SIGINT] {

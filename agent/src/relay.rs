@@ -219,6 +219,8 @@ fn spawn_agent(settings: &RelaySettings, extra: &[String]) -> anyhow::Result<Spa
             &settings.channel.liveness.as_millis().to_string(),
         ])
         .args(extra)
+        // Its parent is this relay, not the coordinator (`wire::PARENT_ENV`).
+        .env_remove(wire::PARENT_ENV)
         .stdin(Stdio::null());
     if let Some(dir) = settings.tls_dir {
         command.arg("--tls-dir").arg(dir);

@@ -160,8 +160,11 @@ pub fn spawn_sandboxed(
         None => exe_file.as_raw_fd(),
     };
     let mut command = Command::new(exe);
+    // Its parent is this relay, not the coordinator: it is not told the coordinator's
+    // process to check against (`wire::PARENT_ENV`).
     command
         .current_dir("/")
+        .env_remove(wire::PARENT_ENV)
         .stdin(Stdio::null())
         .stderr(Stdio::piped());
     // SAFETY: between fork and exec the closure makes only async-signal-safe system

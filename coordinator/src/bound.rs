@@ -238,14 +238,22 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         per_agent,
     };
     let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.2}x"));
+    // A bound of a few micrometres is shown as such, not as 0.0000.
+    let metres = |m: f64| {
+        if m == 0.0 || m >= 1e-3 {
+            format!("{m:.4}")
+        } else {
+            format!("{m:.1e}")
+        }
+    };
     eprintln!(
-        "{}: mean deviation {:.4} m against the bound {:.4} m ({}), max {:.3} m against {:.3} m ({})",
+        "{}: mean deviation {:.4} m against the bound {} m ({}), max {:.3} m against {} m ({})",
         report.scenario,
         report.mean_deviation_m,
-        report.bound_mean_deviation_m,
+        metres(report.bound_mean_deviation_m),
         show(report.mean_ratio),
         report.max_deviation_m,
-        report.bound_max_deviation_m,
+        metres(report.bound_max_deviation_m),
         show(report.max_ratio)
     );
     let json = serde_json::to_string_pretty(&report).context("writing the report")?;
