@@ -68,7 +68,8 @@ impl Scenario {
     }
 
     /// Why this scenario cannot be run by controller `kind` (`None`: it can): only the
-    /// best-point controller plans round polygon obstacles yet.
+    /// best-point controller plans round polygon obstacles yet, and simultaneous turns
+    /// are ORCA's own model, for the orca controller alone.
     pub fn refuses_controller(&self, kind: ControllerKind) -> Option<String> {
         if self.turns == TurnMode::Simultaneous && kind != ControllerKind::Orca {
             return Some(format!(
