@@ -55,7 +55,7 @@ use dodgy_2d::{Agent, AvoidanceOptions, Vec2};
 use crate::cbf::AT_SLOT_TOLERANCE_M;
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
-use crate::vocabulary::{AgentSpec, Body, Move, MoveStatus};
+use crate::vocabulary::{AgentSpec, Body, Move, MoveStatus, OrcaSettings};
 
 /// ORCA's time horizon, in steps: velocities that would bring the agent into contact with
 /// a neighbour within this many steps are avoided.
@@ -70,18 +70,6 @@ pub const ORCA_CLEARANCE_MARGIN_M: f64 = 1e-6;
 /// velocity obstacle is tangent to the grown disk, and the agent slides around a body
 /// instead of being cut at [`ORCA_CLEARANCE_MARGIN_M`] and stopping there.
 pub const ORCA_RADIUS_MARGIN_M: f64 = 1e-3;
-
-/// ORCA's time horizon in its own model ([`OrcaController::plan_move_reciprocal`]), in
-/// steps, for agents and obstacles alike. Measured on the paper, dense, narrow and large
-/// scenarios capped at twice the centre's step, against the reference RVO2 (time horizon
-/// 1.0 s, obstacle horizon 0.5 s, 20 neighbours, 0.1 s a step): 5 steps came within 25 %
-/// of RVO2's mean deviation on all four (10, RVO2's own, was 46 % worse on large, where
-/// our obstacles are disks seen as static agents rather than polygons).
-pub const ORCA_RECIPROCAL_TIME_HORIZON_STEPS: f32 = 5.0;
-
-/// The most neighbouring agents ORCA weighs in its own model, nearest first (RVO2's
-/// `maxNeighbors`); every sensed obstacle is weighed.
-pub const ORCA_MAX_NEIGHBOURS: usize = 20;
 
 /// Relative slack on the speed limit given to `dodgy_2d`, so that a preferred velocity
 /// of exactly `max_step_m` is not rescaled by its `f32` rounding (the result is capped
@@ -100,6 +88,8 @@ pub struct OrcaController {
     obstacles: DiskGrid,
     max_step_m: f64,
     sensing_radius_m: Option<f64>,
+    /// RVO2's settings in ORCA's own model.
+    settings: OrcaSettings,
 }
 
 impl OrcaController {
@@ -128,7 +118,15 @@ impl OrcaController {
                 0.0
             },
             sensing_radius_m,
+            settings: OrcaSettings::default(),
         }
+    }
+
+    /// The same controller with RVO2's `settings` for its own model
+    /// ([`Self::plan_move_reciprocal`]).
+    pub fn with_settings(mut self, settings: OrcaSettings) -> Self {
+        self.settings = settings;
+        self
     }
 
     /// This agent's radius, in metres.
@@ -217,9 +215,9 @@ impl OrcaController {
     /// This agent's move in ORCA's own model (every agent moves at once,
     /// [`crate::vocabulary::TurnMode::Simultaneous`]): it moved by `velocity` over the
     /// last step, and each of `others` by the matching entry of `others_velocity`.
-    /// Reciprocal avoidance, RVO2's way: each other agent (the
-    /// [`ORCA_MAX_NEIGHBOURS`] nearest it senses) takes half of the responsibility, each
-    /// obstacle none; the time horizon is [`ORCA_RECIPROCAL_TIME_HORIZON_STEPS`]. The
+    /// Reciprocal avoidance, RVO2's way: each other agent (the `max_neighbours` nearest
+    /// it senses) takes half of the responsibility, each obstacle none, with the time
+    /// horizon of its settings ([`OrcaSettings`], `[orca]` in a scenario). The
     /// velocity is then kept in the field and cut before any contact with a body where
     /// it stands now, as in [`Self::plan_move`]; the mates' own moves are the safety
     /// monitor's to check (a move that would meet one is refused).
@@ -304,8 +302,8 @@ impl OrcaController {
         };
         // The sensed obstacles (in the order given) within RVO2's obstacle range (how far
         // the agent gets within the time horizon), as static agents taking no share.
-        let range_m =
-            f64::from(ORCA_RECIPROCAL_TIME_HORIZON_STEPS) * self.max_step_m + self.radius_m;
+        let horizon = self.settings.time_horizon_steps;
+        let range_m = horizon * self.max_step_m + self.radius_m;
         let mut neighbours: Vec<Cow<'_, Agent>> = self
             .sensed(me, &[])
             .iter()
@@ -329,7 +327,7 @@ impl OrcaController {
             .map(|(i, b)| ((b.position - me).norm(), i))
             .collect();
         near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        for &(_, i) in near.iter().take(ORCA_MAX_NEIGHBOURS) {
+        for &(_, i) in near.iter().take(self.settings.max_neighbours) {
             let (b, v) = (
                 &others[i],
                 others_velocity.get(i).copied().unwrap_or_default(),
@@ -359,8 +357,8 @@ impl OrcaController {
         };
         let options = AvoidanceOptions {
             obstacle_margin: 0.0,
-            time_horizon: ORCA_RECIPROCAL_TIME_HORIZON_STEPS,
-            obstacle_time_horizon: ORCA_RECIPROCAL_TIME_HORIZON_STEPS,
+            time_horizon: horizon as f32,
+            obstacle_time_horizon: horizon as f32,
         };
         let v = agent.compute_avoiding_velocity(
             &neighbours,

@@ -299,3 +299,29 @@ proptest! {
         prop_assert_eq!(bits(&mv), bits(&fewer), "removing far bodies changed the move");
     }
 }
+
+/// ORCA's own model reads RVO2's settings from `[orca]` (defaults 5 steps, 20
+/// neighbours), and they reach the agents: another time horizon gives another run, as
+/// safe.
+#[test]
+fn the_orca_table_sets_rvo2s_parameters_of_its_own_model() {
+    let file = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/dense-orca.toml"
+    ));
+    let text = std::fs::read_to_string(&file).expect("dense-orca.toml");
+    let default = shared::scenario::Scenario::parse(&text, "dense-orca.toml").expect("loads");
+    assert_eq!(default.controller.orca.time_horizon_steps, 5.0);
+    assert_eq!(default.controller.orca.max_neighbours, 20);
+    let short = format!("{text}\n[orca]\ntime_horizon_steps = 2.0\nmax_neighbours = 3\n");
+    let short = shared::scenario::Scenario::parse(&short, "short.toml").expect("loads");
+    assert_eq!(short.controller.orca.time_horizon_steps, 2.0);
+    assert_eq!(short.controller.orca.max_neighbours, 3);
+    let (a, b) = (
+        shared::simulate::simulate(&default).expect("runs"),
+        shared::simulate::simulate(&short).expect("runs"),
+    );
+    assert_eq!(a.summary().collisions, 0);
+    assert_eq!(b.summary().collisions, 0);
+    assert_ne!(a.steps, b.steps, "the horizon changed nothing");
+}

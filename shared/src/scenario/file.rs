@@ -34,8 +34,20 @@ pub(super) struct ScenarioFile {
     pub(super) controller: ControllerKind,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) cbf: Option<CbfFile>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) orca: Option<OrcaFile>,
     #[serde(default)]
     pub(super) turns: TurnsFile,
+}
+
+/// `[orca]`: ORCA's settings in its own model (RVO2's).
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct OrcaFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) time_horizon_steps: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) max_neighbours: Option<usize>,
 }
 
 #[derive(Deserialize, Serialize, Default)]

@@ -6,8 +6,8 @@
 
 use super::check::MAX_ANGLE_DEG;
 use super::file::{
-    CbfFile, DiskFile, FieldFile, FormationFile, MapFile, MovingFile, ObstaclesFile, PathFile,
-    PolygonFile, PoseFile, ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m,
+    CbfFile, DiskFile, FieldFile, FormationFile, MapFile, MovingFile, ObstaclesFile, OrcaFile,
+    PathFile, PolygonFile, PoseFile, ScenarioFile, SlotFile, TurnsFile, default_agent_radius_m,
     default_obstacle_radius_m,
 };
 use super::{Scenario, ScenarioMap};
@@ -107,6 +107,10 @@ impl Scenario {
                 max_speed_m_per_s: Some(c.max_speed_m_per_s),
                 sensing_radius_m: Some(c.sensing_radius_m),
                 lse_sharpness_per_m: Some(self.controller.lse_sharpness_per_m),
+            }),
+            orca: Some(OrcaFile {
+                time_horizon_steps: Some(self.controller.orca.time_horizon_steps),
+                max_neighbours: Some(self.controller.orca.max_neighbours),
             }),
             turns: TurnsFile { mode: self.turns },
         })

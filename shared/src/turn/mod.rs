@@ -119,13 +119,16 @@ impl TurnController {
                 )?)
             }
             // Its maximum speed is the top speed; without one, the barrier controllers' step.
-            ControllerKind::Orca => Controller::Orca(OrcaController::new(
-                field,
-                obstacles,
-                spec,
-                spec.max_step_m.unwrap_or(cbf.max_speed_m_per_s * cbf.dt_s),
-                spec.sensing_radius_m,
-            )),
+            ControllerKind::Orca => Controller::Orca(
+                OrcaController::new(
+                    field,
+                    obstacles,
+                    spec,
+                    spec.max_step_m.unwrap_or(cbf.max_speed_m_per_s * cbf.dt_s),
+                    spec.sensing_radius_m,
+                )
+                .with_settings(controller.orca),
+            ),
         };
         Ok(Self {
             controller,

@@ -80,6 +80,34 @@ pub struct ControllerSpec {
     pub cbf: CbfSettings,
     /// Sharpness of the LogSumExp smooth max, in 1/m (`zcbf-logsumexp` only).
     pub lse_sharpness_per_m: f64,
+    /// Settings of ORCA in its own model (`orca` in simultaneous turns).
+    pub orca: OrcaSettings,
+}
+
+/// RVO2's settings of ORCA in its own model (`[orca]` in a scenario; used by the `orca`
+/// controller in simultaneous turns).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrcaSettings {
+    /// How far ahead, in steps, velocities are kept from leading into a body (RVO2's
+    /// `timeHorizon`, and `timeHorizonObst` for the obstacles, which ORCA sees as agents
+    /// standing still).
+    pub time_horizon_steps: f64,
+    /// The most neighbouring agents weighed, nearest first (RVO2's `maxNeighbors`).
+    pub max_neighbours: usize,
+}
+
+impl Default for OrcaSettings {
+    /// 5 steps and 20 neighbours: measured on the paper, dense, narrow and large
+    /// scenarios capped at twice the centre's step against the reference RVO2 (time
+    /// horizon 1.0 s, obstacle horizon 0.5 s, 20 neighbours, 0.1 s a step), 5 steps came
+    /// within 25 % of its mean deviation on all four; 10, RVO2's own, was 46 % worse on
+    /// large, where our obstacles are disks seen as static agents, not polygons.
+    fn default() -> Self {
+        Self {
+            time_horizon_steps: 5.0,
+            max_neighbours: 20,
+        }
+    }
 }
 
 impl Default for ControllerSpec {
@@ -88,6 +116,7 @@ impl Default for ControllerSpec {
             kind: ControllerKind::BestPoint,
             cbf: CbfSettings::default(),
             lse_sharpness_per_m: DEFAULT_LSE_SHARPNESS_PER_M,
+            orca: OrcaSettings::default(),
         }
     }
 }

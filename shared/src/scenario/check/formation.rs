@@ -5,7 +5,7 @@ use super::{Checker, num};
 use crate::formation::Slot;
 use crate::geometry::{Field, Pose};
 use crate::scenario::ScenarioError;
-use crate::scenario::file::{CbfFile, FormationFile};
+use crate::scenario::file::{CbfFile, FormationFile, OrcaFile};
 use crate::tracking::{DEFAULT_HORIZON_STEPS, MAX_HORIZON_STEPS};
 use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, Kinematics, MAX_AGENTS};
 
@@ -14,6 +14,7 @@ impl Checker<'_> {
         &self,
         kind: ControllerKind,
         raw: Option<&CbfFile>,
+        orca: Option<&OrcaFile>,
         agents: &[AgentSpec],
         side_m: f64,
     ) -> Result<ControllerSpec, ScenarioError> {
@@ -49,6 +50,21 @@ impl Checker<'_> {
         }
         spec.check(agents)
             .map_err(|e| self.invalid("cbf", e.to_string()))?;
+        if let Some(o) = orca {
+            if let Some(v) = o.time_horizon_steps {
+                spec.orca.time_horizon_steps = self.positive("orca.time_horizon_steps", v, 1e3)?;
+            }
+            match o.max_neighbours {
+                Some(n) if n == 0 || n > MAX_AGENTS => {
+                    return Err(self.invalid(
+                        "orca.max_neighbours",
+                        format!("{n}: from 1 to {MAX_AGENTS}"),
+                    ));
+                }
+                Some(n) => spec.orca.max_neighbours = n,
+                None => {}
+            }
+        }
         Ok(spec)
     }
 

@@ -231,7 +231,13 @@ impl Checker<'_> {
                 ),
             ));
         }
-        let controller = self.controller(raw.controller, raw.cbf.as_ref(), &agents, side_m)?;
+        let controller = self.controller(
+            raw.controller,
+            raw.cbf.as_ref(),
+            raw.orca.as_ref(),
+            &agents,
+            side_m,
+        )?;
         self.polygons_supported(&polygons, &agents, &controller)?;
         let turns = raw.turns.mode;
         if turns != TurnMode::Sequential
