@@ -76,6 +76,17 @@ pub const ORCA_RADIUS_MARGIN_M: f64 = 1e-3;
 /// again in `f64`).
 const SPEED_SLACK: f64 = 1e-6;
 
+/// A body standing still at `position` (relative to the agent) as ORCA sees it: the
+/// agent takes the whole responsibility for it (share 1 / (1 + 0)).
+fn standing_still(position: Vec2, radius: f32) -> Cow<'static, Agent> {
+    Cow::Owned(Agent {
+        position,
+        velocity: Vec2::ZERO,
+        radius,
+        avoidance_responsibility: 0.0,
+    })
+}
+
 /// The ORCA controller of one agent: ORCA's velocity towards the slot, kept in the field and
 /// cut before the first contact (see the module documentation). Same turn interface as
 /// [`crate::cbf::CbfController`].
@@ -155,6 +166,22 @@ impl OrcaController {
     /// ([`MoveStatus::Stayed`], or [`MoveStatus::AtSlot`] at the slot) when it cannot
     /// move, and when it already overlaps a body.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
+        self.step_at(centre, me, others, |preferred| {
+            self.orca_velocity(me, others, preferred)
+        })
+    }
+
+    /// One straight step at the velocity `orca` gives for the preferred one (straight to
+    /// the slot, at most `max_step_m`; zero when it is not finite), kept in the field and
+    /// cut before any contact with `others` or an obstacle; staying put when it cannot
+    /// move or already overlaps a body.
+    fn step_at(
+        &self,
+        centre: &Pose,
+        me: &Point,
+        others: &[Body],
+        orca: impl FnOnce(&Vector) -> Vector,
+    ) -> Move {
         let slot = self.slot_position(centre);
         let stay = || {
             let status = if (slot - me).norm() <= AT_SLOT_TOLERANCE_M {
@@ -183,7 +210,7 @@ impl OrcaController {
         } else {
             to_slot * (self.max_step_m / distance_m)
         };
-        let v = self.keep_in_field(me, self.orca_velocity(me, others, &preferred));
+        let v = self.keep_in_field(me, orca(&preferred));
         let t = self.clear_fraction(me, &v, others).unwrap_or(0.0);
         if v == Vector::zeros() || t <= 0.0 {
             return stay();
@@ -229,59 +256,9 @@ impl OrcaController {
         others: &[Body],
         others_velocity: &[Vector],
     ) -> Move {
-        let slot = self.slot_position(centre);
-        let stay = || Move {
-            end_heading_rad: None,
-            slot,
-            best: *me,
-            status: if (slot - me).norm() <= AT_SLOT_TOLERANCE_M {
-                MoveStatus::AtSlot
-            } else {
-                MoveStatus::Stayed
-            },
-            waypoints: vec![*me],
-        };
-        if self.clear_fraction(me, &Vector::zeros(), others).is_none() {
-            return stay();
-        }
-        let to_slot = slot - me;
-        let distance_m = to_slot.norm();
-        if !(distance_m.is_finite() && self.max_step_m > 0.0) || distance_m == 0.0 {
-            return stay();
-        }
-        let preferred = if distance_m <= self.max_step_m {
-            to_slot
-        } else {
-            to_slot * (self.max_step_m / distance_m)
-        };
-        let v = self.keep_in_field(
-            me,
-            self.reciprocal_velocity(me, velocity, others, others_velocity, &preferred),
-        );
-        let t = self.clear_fraction(me, &v, others).unwrap_or(0.0);
-        if v == Vector::zeros() || t <= 0.0 {
-            return stay();
-        }
-        let end = if t >= 1.0 {
-            if v == to_slot { slot } else { me + v }
-        } else {
-            me + t * v
-        };
-        if end == *me {
-            return stay();
-        }
-        let status = if (slot - end).norm() <= AT_SLOT_TOLERANCE_M {
-            MoveStatus::AtSlot
-        } else {
-            MoveStatus::Deviated
-        };
-        Move {
-            end_heading_rad: None,
-            slot,
-            best: end,
-            status,
-            waypoints: vec![*me, end],
-        }
+        self.step_at(centre, me, others, |preferred| {
+            self.reciprocal_velocity(me, velocity, others, others_velocity, preferred)
+        })
     }
 
     /// ORCA's velocity in its own model (see [`Self::plan_move_reciprocal`]), at most
@@ -294,6 +271,9 @@ impl OrcaController {
         others_velocity: &[Vector],
         preferred: &Vector,
     ) -> Vector {
+        if self.max_step_m == 0.0 || *preferred == Vector::zeros() {
+            return Vector::zeros();
+        }
         let to_f32 = |v: &Vector| Vec2::new(v.x as f32, v.y as f32);
         let usable = |v: Vec2, radius: f32| v.is_finite() && radius.is_finite() && radius >= 0.0;
         let seen = |centre: &Point, radius_m: f64| match self.sensing_radius_m {
@@ -310,14 +290,7 @@ impl OrcaController {
             .filter(|(centre, radius_m)| (centre - me).norm() - radius_m <= range_m)
             .map(|(centre, radius_m)| (to_f32(&(centre - me)), *radius_m as f32))
             .filter(|&(position, radius)| usable(position, radius))
-            .map(|(position, radius)| {
-                Cow::Owned(Agent {
-                    position,
-                    velocity: Vec2::ZERO,
-                    radius,
-                    avoidance_responsibility: 0.0,
-                })
-            })
+            .map(|(position, radius)| standing_still(position, radius))
             .collect();
         // The nearest sensed agents, ties by index, each sharing the avoidance.
         let mut near: Vec<(f64, usize)> = others
@@ -368,18 +341,7 @@ impl OrcaController {
             1.0,
             &options,
         );
-        if v == preferred_f32 {
-            return *preferred;
-        }
-        let v = Vector::new(f64::from(v.x), f64::from(v.y));
-        let speed = v.norm();
-        if !speed.is_finite() {
-            Vector::zeros()
-        } else if speed > self.max_step_m {
-            v * (self.max_step_m / speed)
-        } else {
-            v
-        }
+        self.capped_answer(v, preferred_f32, preferred)
     }
 
     /// The bodies ORCA sees from `me`, as `(centre, radius_m)`: the sensed obstacles in
@@ -444,15 +406,7 @@ impl OrcaController {
             .iter()
             .map(|(centre, radius_m)| (to_f32(&(centre - me)), *radius_m as f32))
             .filter(|&(position, radius)| usable(position, radius))
-            .map(|(position, radius)| {
-                Cow::Owned(Agent {
-                    position,
-                    velocity: Vec2::ZERO,
-                    radius,
-                    // The agent takes the whole responsibility: share 1 / (1 + 0).
-                    avoidance_responsibility: 0.0,
-                })
-            })
+            .map(|(position, radius)| standing_still(position, radius))
             .collect();
         if neighbours.is_empty() || !usable(preferred_f32, radius) || !max_speed.is_finite() {
             return *preferred;
@@ -478,6 +432,13 @@ impl OrcaController {
             1.0,
             &options,
         );
+        self.capped_answer(v, preferred_f32, preferred)
+    }
+
+    /// ORCA's answer `v` for the preferred velocity `preferred` (given to it as
+    /// `preferred_f32`) in metres per step: the exact `preferred` when ORCA left it
+    /// unchanged, else `v` capped at `max_step_m` (zero when not finite).
+    fn capped_answer(&self, v: Vec2, preferred_f32: Vec2, preferred: &Vector) -> Vector {
         if v == preferred_f32 {
             return *preferred;
         }

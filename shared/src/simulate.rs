@@ -19,19 +19,6 @@ use crate::vocabulary::CbfSettingsError;
 use crate::vocabulary::Move;
 use crate::vocabulary::TurnMode;
 
-/// Every velocity of `all` but agent `agent`'s, in order: the other bodies' (as
-/// [`Recorder::others`] lists them).
-pub fn agent_velocities_but(
-    all: &[crate::geometry::Vector],
-    agent: usize,
-) -> Vec<crate::geometry::Vector> {
-    all.iter()
-        .enumerate()
-        .filter(|(j, _)| *j != agent)
-        .map(|(_, v)| *v)
-        .collect()
-}
-
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
     let p = &scenario.path;
@@ -177,10 +164,9 @@ pub fn simulate_along_with_deaths(
                     let me = recorder.bodies()[agent].position;
                     let others = recorder.others(agent);
                     let heading_rad = recorder.headings()[agent];
-                    let velocities = velocities.as_ref().map(|v| Velocities {
-                        me: v[agent],
-                        others: agent_velocities_but(v, agent),
-                    });
+                    let velocities = velocities
+                        .as_ref()
+                        .map(|all| Velocities::of_agent(all, agent));
                     let mv = controllers[agent].plan_turn_ahead(
                         step,
                         centre,

@@ -82,7 +82,10 @@ impl CbfController {
                 gamma * (self.field.height_m - inset_m - me.y),
             ),
         ];
-        for (centre, body_radius_m, is_agent) in
+        // The whole responsibility for every body, mates included: they stand still
+        // during this turn (or, in a parallel group, cannot reach this agent within the
+        // step).
+        for (centre, body_radius_m) in
             sensed(&self.obstacles, others, me, self.settings.sensing_radius_m)
         {
             let away = me - centre;
@@ -90,9 +93,6 @@ impl CbfController {
             let distance_m = away.norm();
             // (d - R)(d + R) keeps its precision near the boundary, unlike d^2 - R^2.
             let h = (distance_m - reach_m) * (distance_m + reach_m);
-            // The whole responsibility, mates included: they stand still during this
-            // turn (or, in a parallel group, cannot reach this agent within the step).
-            let _ = is_agent;
             rows.push(HalfPlane::new(-2.0 * away, gamma * h));
         }
         rows

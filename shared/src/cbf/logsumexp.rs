@@ -84,7 +84,7 @@ impl ZcbfLogSumExpController {
                 terms.push((self.base.radius_m - inset_m, inward));
             }
         }
-        for (centre, radius_m, _) in sensed(&self.base.obstacles, others, me, sensing_m) {
+        for (centre, radius_m) in sensed(&self.base.obstacles, others, me, sensing_m) {
             let away = me - centre;
             let distance_m = away.norm();
             let direction = if distance_m > 0.0 {

@@ -140,23 +140,23 @@ pub(super) fn step_move(slot: Point, me: &Point, u: Option<Vector>, dt_s: f64) -
 
 /// The obstacles and other agents sensed from `me`: every body with a point within
 /// `sensing_radius_m` of `me`, obstacles first (in grid order), then `others` (in order),
-/// with whether it is an agent.
+/// as (centre, radius).
 pub(super) fn sensed(
     obstacles: &DiskGrid,
     others: &[Body],
     me: &Point,
     sensing_radius_m: f64,
-) -> Vec<(Point, f64, bool)> {
+) -> Vec<(Point, f64)> {
     let mut out = Vec::new();
     let _ = obstacles.visit_near(me, sensing_radius_m, |_, d| {
         if (me - d.centre).norm() - d.radius_m <= sensing_radius_m {
-            out.push((d.centre, d.radius_m, false));
+            out.push((d.centre, d.radius_m));
         }
         ControlFlow::<()>::Continue(())
     });
     for o in others {
         if (me - o.position).norm() - o.radius_m <= sensing_radius_m {
-            out.push((o.position, o.radius_m, true));
+            out.push((o.position, o.radius_m));
         }
     }
     out

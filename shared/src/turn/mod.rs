@@ -58,6 +58,22 @@ pub struct Velocities {
     pub others: Vec<Vector>,
 }
 
+impl Velocities {
+    /// Agent `agent`'s view of `all` (every agent's, by index): its own, and the others'
+    /// in index order, as [`crate::record::Recorder::others`] lists their bodies.
+    pub fn of_agent(all: &[Vector], agent: usize) -> Self {
+        Self {
+            me: all.get(agent).copied().unwrap_or_default(),
+            others: all
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != agent)
+                .map(|(_, v)| *v)
+                .collect(),
+        }
+    }
+}
+
 /// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
 /// top speed applied: what the reference simulation and the agent processes call.
 #[derive(Clone, Debug)]
