@@ -31,20 +31,16 @@ pub struct RelayedChannel<'a> {
 }
 
 impl RelayedChannel<'_> {
-    /// Open the agent's channel, and read the mission as the resolved TOML the agent is
-    /// handed.
+    /// Open the agent's channel, and read the mission file: the resolved TOML the agent
+    /// is handed, as the coordinator wrote it.
     pub fn open(&self) -> anyhow::Result<(IpcTransport, String)> {
-        let (ipc, mission) = IpcTransport::open_with_mission(
+        IpcTransport::open_with_mission(
             self.prefix,
             self.agent,
             self.generation,
             self.liveness,
             self.mission_digest,
-        )?;
-        let toml = mission
-            .to_resolved_toml("the coordinator")
-            .map_err(|e| anyhow::anyhow!("the mission as TOML: {e}"))?;
-        Ok((ipc, toml))
+        )
     }
 }
 

@@ -193,14 +193,15 @@ impl IpcTransport {
             .map(|(transport, _)| transport)
     }
 
-    /// [`Self::open`], handing back the mission it read too (a relay passes it on).
+    /// [`Self::open`], handing back the mission file's text too (a relay passes it on as
+    /// it is).
     pub fn open_with_mission(
         prefix: &str,
         agent: usize,
         generation: u32,
         liveness: Duration,
         mission_digest: Option<wire::MissionDigest>,
-    ) -> anyhow::Result<(Self, shared::scenario::Scenario)> {
+    ) -> anyhow::Result<(Self, String)> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
         #[cfg(target_os = "linux")]
@@ -217,8 +218,8 @@ impl IpcTransport {
         let _ = node.wait(Duration::ZERO);
 
         // Read (and validated) before the handshake: the first turn does not pay for it.
-        let scenario = wire::read_mission(prefix, mission_digest).context("the mission file")?;
-        let mission = MissionView::of(scenario.clone());
+        let text = wire::read_mission_text(prefix, mission_digest).context("the mission file")?;
+        let mission = MissionView::of(text.parse().context("the mission file")?);
         let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
         let world = node
@@ -273,7 +274,7 @@ impl IpcTransport {
             mission,
             woke_ns: 0,
         };
-        Ok((transport, scenario))
+        Ok((transport, text.text))
     }
 }
 

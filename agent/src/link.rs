@@ -7,15 +7,18 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 use net::{NetMove, NetTurn};
 use shared::geometry::{Point, Pose, Vector};
-use shared::scenario::Scenario;
+use shared::scenario::{Checks, Scenario};
 use shared::vocabulary::{MAX_AGENTS, MAX_WAYPOINTS, Move, MoveStatus};
 
 use crate::transport::{MissionView, Reply, TurnInput};
 
-/// The mission of agent `agent` from the scenario's resolved TOML, as a relay sends it.
-pub fn mission_view(toml: &str, agent: usize) -> anyhow::Result<MissionView> {
-    let scenario =
-        Scenario::parse(toml, "the mission from the coordinator").context("the mission")?;
+/// The mission of agent `agent` from the mission file's text, as a relay sends it,
+/// checked as `checks` says: [`Checks::Values`] for a sandboxed agent, whose own relay
+/// read the file by the digest the coordinator handed over; [`Checks::All`] over a
+/// network.
+pub fn mission_view(json: &str, agent: usize, checks: Checks) -> anyhow::Result<MissionView> {
+    let scenario = Scenario::from_mission_json(json, "the mission from the coordinator", checks)
+        .context("the mission")?;
     if agent >= scenario.agents.len() {
         bail!(
             "agent {agent} is not in the mission's {} agents",

@@ -12,6 +12,7 @@ use net::zenoh::liveliness::LivelinessToken;
 use net::zenoh::pubsub::{Publisher, Subscriber};
 use net::zenoh::sample::Sample;
 use net::{Down, Endpoint, Security, Up};
+use shared::scenario::Checks;
 
 use crate::link::{mission_view, net_move, turn_input};
 use crate::relay::Token;
@@ -115,8 +116,8 @@ impl NetTransport {
                 })?;
                 Ok(false)
             }
-            Down::Mission { nonce, toml } => {
-                self.mission = Some(mission_view(toml, self.agent)?);
+            Down::Mission { nonce, json } => {
+                self.mission = Some(mission_view(json, self.agent, Checks::All)?);
                 self.send(&Up::Ready {
                     agent,
                     nonce: *nonce,

@@ -143,7 +143,7 @@ impl Link {
 /// agent is told too) or the agent is gone (an error: the coordinator sees the exit).
 pub fn serve_relay(settings: &RelaySettings) -> anyhow::Result<()> {
     let agent = settings.channel.agent;
-    let (mut ipc, toml) = settings.channel.open()?;
+    let (mut ipc, json) = settings.channel.open()?;
     let session = net::open_client(settings.connect, settings.security)
         .with_context(|| format!("connecting to {}", settings.connect))?;
     let z = |e: net::zenoh::Error| anyhow::anyhow!("zenoh: {e}");
@@ -189,7 +189,7 @@ pub fn serve_relay(settings: &RelaySettings) -> anyhow::Result<()> {
             Some(Up::Hello { agent: a, nonce: n }) if a == agent_u32 && n == nonce => {
                 link.send(&Down::Mission {
                     nonce,
-                    toml: toml.clone(),
+                    json: json.clone(),
                 })?;
                 mission_sent = true;
             }

@@ -55,7 +55,7 @@ impl AgentLink for SocketLink {
 pub fn serve_sandboxed(settings: &SandboxRelaySettings) -> anyhow::Result<()> {
     let channel = &settings.channel;
     let agent = channel.agent;
-    let (mut ipc, toml) = channel.open()?;
+    let (mut ipc, json) = channel.open()?;
     let (ours, theirs) = UnixStream::pair().context("the agent's socket")?;
     let exe = std::env::current_exe().context("the agent executable")?;
     let mut args = vec![
@@ -73,7 +73,7 @@ pub fn serve_sandboxed(settings: &SandboxRelaySettings) -> anyhow::Result<()> {
     let agent_u32 = u32::try_from(agent).context("the agent's index")?;
 
     // The handshake: the mission, then the agent's word that it is ready.
-    AgentLink::send(&mut link, &Down::Mission { nonce: 0, toml })
+    AgentLink::send(&mut link, &Down::Mission { nonce: 0, json })
         .context("handing the agent its mission")?;
     loop {
         if ipc.should_leave() {

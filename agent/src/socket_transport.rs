@@ -8,6 +8,7 @@ use std::os::unix::net::UnixStream;
 
 use anyhow::{Context, bail};
 use net::{Down, MAX_MESSAGE_BYTES, Up};
+use shared::scenario::Checks;
 
 use crate::link::{mission_view, net_move, turn_input};
 use crate::socket_link::{LinkError, SocketLink};
@@ -55,8 +56,9 @@ impl Transport for SocketTransport {
         let agent = u32::try_from(self.agent).context("the agent's index")?;
         loop {
             match self.receive()? {
-                Some(Down::Mission { nonce, toml }) => {
-                    self.mission = Some(mission_view(&toml, self.agent)?);
+                Some(Down::Mission { nonce, json }) => {
+                    // From this agent's own relay, which read the file by its digest.
+                    self.mission = Some(mission_view(&json, self.agent, Checks::Values)?);
                     return self.send(&Up::Ready { agent, nonce });
                 }
                 Some(Down::Quit) | None => bail!("the relay left before the mission"),

@@ -1,13 +1,14 @@
 //! The resolved form of a scenario (`Scenario::to_resolved_toml`, the `scenario.toml` of
-//! a run folder and the agents' mission file) loads back to the same scenario, bit for
-//! bit: every shipped scenario, every test scenario that loads, and random valid
+//! a run folder) and its JSON twin (`Scenario::to_mission_json`, the agents' mission
+//! file) load back to the same scenario, bit for bit, whether validated whole or value by
+//! value: every shipped scenario, every test scenario that loads, and random valid
 //! scenarios with awkward numbers (`-0.0`, subnormals, full-precision values, long
 //! decimals).
 
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
-use shared::scenario::Scenario;
+use shared::scenario::{Checks, Scenario};
 use shared::vocabulary::{ControllerKind, TurnMode};
 
 /// `a` and `b` equal with `==`, and bit for bit: Debug prints every float in its
@@ -58,6 +59,15 @@ fn round_trip(s: &Scenario, what: &str) -> String {
         .to_resolved_toml(what)
         .unwrap_or_else(|e| panic!("{what}: {e}"));
     assert_eq!(again, text, "{what}");
+    // The mission file: the same scenario, however much is checked.
+    let json = s
+        .to_mission_json()
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    for checks in [Checks::All, Checks::Values] {
+        let back = Scenario::from_mission_json(&json, "mission.json", checks)
+            .unwrap_or_else(|e| panic!("{what}: the mission does not load ({checks:?}): {e}"));
+        assert_same(&back, s, &format!("{what}: mission, {checks:?}"));
+    }
     text
 }
 
@@ -508,4 +518,40 @@ proptest! {
             .unwrap_or_else(|e| panic!("the generator made an invalid scenario: {e}\n{text}"));
         round_trip(&s, "random.toml");
     }
+}
+
+/// A mission checked value by value still refuses every bad value, naming the field, and
+/// refuses text that is not a mission; only the rules relating the parts are left to the
+/// coordinator (here two slots on top of each other, which `Checks::All` refuses).
+#[test]
+fn a_mission_checked_value_by_value_still_refuses_bad_values() {
+    let json = Scenario::paper().to_mission_json().expect("json");
+    let cases = [
+        ("\"step_m\":0.25", "\"step_m\":-1.0", "path.step_m"),
+        ("\"width_m\":", "\"width_m\":1e999,\"x\":", "(top level)"),
+        (
+            "\"turning_radius_m\":",
+            "\"turning_radius_m\":\"far\",\"x\":",
+            "path.turning_radius_m",
+        ),
+        ("\"name\":", "\"speed\":1,\"name\":", "(top level)"),
+    ];
+    for (from, to, field) in cases {
+        assert!(json.contains(from), "{from}");
+        let bad = json.replacen(from, to, 1);
+        let e = Scenario::from_mission_json(&bad, "mission.json", Checks::Values).expect_err(&bad);
+        assert!(e.to_string().starts_with("mission.json: "), "{e}");
+        assert!(!e.to_string().contains('\n'), "one line: {e}");
+        if field != "(top level)" {
+            assert_eq!(e.field(), field, "{e}");
+        }
+    }
+    assert!(Scenario::from_mission_json("{}", "m", Checks::Values).is_err());
+    assert!(Scenario::from_mission_json(&format!("{json} {{}}"), "m", Checks::Values).is_err());
+    // Two slots on one spot: only the whole check sees it.
+    let mut crowded = Scenario::paper();
+    crowded.agents[1].slot = crowded.agents[0].slot;
+    let json = crowded.to_mission_json().expect("json");
+    assert!(Scenario::from_mission_json(&json, "m", Checks::All).is_err());
+    assert!(Scenario::from_mission_json(&json, "m", Checks::Values).is_ok());
 }

@@ -19,12 +19,13 @@ pub enum Down {
         /// The relay's nonce.
         nonce: u64,
     },
-    /// The scenario as run, in its resolved TOML form; the agent answers [`Up::Ready`].
+    /// The scenario as run, in its resolved form as JSON (the run's mission file); the
+    /// agent answers [`Up::Ready`].
     Mission {
         /// The relay's nonce.
         nonce: u64,
-        /// The scenario's resolved TOML.
-        toml: String,
+        /// The mission file's text.
+        json: String,
     },
     /// Take a turn.
     Turn(NetTurn),

@@ -290,6 +290,32 @@ impl PoseFile {
     }
 }
 
+/// The raw file structures of a mission in JSON ([`Scenario::to_mission_json`]); `file`
+/// names it in errors, with the path of the field at fault.
+///
+/// [`Scenario::to_mission_json`]: super::Scenario::to_mission_json
+pub(super) fn parse_json_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
+    let error = |field: String, e: serde_json::Error| ScenarioError::Parse {
+        file: file.to_string(),
+        field,
+        reason: one_line(&e.to_string()),
+    };
+    let mut deserializer = serde_json::Deserializer::from_str(text);
+    let raw = serde_path_to_error::deserialize(&mut deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." || path.is_empty() {
+            "(top level)".to_string()
+        } else {
+            path
+        };
+        error(field, e.into_inner())
+    })?;
+    deserializer
+        .end()
+        .map_err(|e| error("(after the mission)".into(), e))?;
+    Ok(raw)
+}
+
 pub(super) fn parse_file(text: &str, file: &str) -> Result<ScenarioFile, ScenarioError> {
     let syntax = |e: toml::de::Error| ScenarioError::Parse {
         file: file.to_string(),

@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use super::check::Checker;
-use super::file::parse_file;
+use super::check::{Checker, Checks};
+use super::file::{parse_file, parse_json_file};
 use super::{Scenario, ScenarioError};
 
 /// The paper's example (section III), embedded so `coordinator run` works with no file.
@@ -71,6 +71,38 @@ impl Scenario {
     /// ```
     pub fn parse(text: &str, file: &str) -> Result<Self, ScenarioError> {
         let raw = parse_file(text, file)?;
-        Checker { file }.check(raw)
+        Checker {
+            file,
+            checks: Checks::All,
+        }
+        .check(raw)
+    }
+
+    /// The scenario of a run's mission, `text` as [`Scenario::to_mission_json`] wrote
+    /// it; `file` names it in errors. `checks`: [`Checks::All`] for text from elsewhere
+    /// (over a network, say); [`Checks::Values`] for the very text a coordinator
+    /// validated (an agent whose mission file matches the digest its coordinator handed
+    /// it): every value is still checked on its own, so nothing computed from the
+    /// result can go undefined, but not the O(n^2) rules relating the parts.
+    ///
+    /// ```
+    /// use shared::scenario::{Checks, Scenario};
+    /// let paper = Scenario::paper();
+    /// let json = paper.to_mission_json().unwrap();
+    /// for checks in [Checks::All, Checks::Values] {
+    ///     assert_eq!(Scenario::from_mission_json(&json, "mission.json", checks).unwrap(), paper);
+    /// }
+    /// // Each value is still checked.
+    /// let bad = json.replace("\"step_m\":0.25", "\"step_m\":-0.25");
+    /// let e = Scenario::from_mission_json(&bad, "mission.json", Checks::Values).unwrap_err();
+    /// assert_eq!(e.to_string(), "mission.json: path.step_m: must be positive, got -0.25");
+    /// ```
+    pub fn from_mission_json(
+        text: &str,
+        file: &str,
+        checks: Checks,
+    ) -> Result<Self, ScenarioError> {
+        let raw = parse_json_file(text, file)?;
+        Checker { file, checks }.check(raw)
     }
 }

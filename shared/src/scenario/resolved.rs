@@ -30,6 +30,9 @@ pub enum ResolveError {
     /// The TOML serialiser refused the file structures.
     #[error("writing TOML: {0}")]
     Toml(#[from] toml::ser::Error),
+    /// The JSON serialiser refused the file structures (its message).
+    #[error("writing JSON: {0}")]
+    Json(String),
 }
 
 impl Scenario {
@@ -58,6 +61,17 @@ impl Scenario {
             self.obstacles.len(),
             source = comment_safe(source),
         ))
+    }
+
+    /// The scenario as a run's mission, the form its agents read at start-up: the
+    /// structures of [`Scenario::to_resolved_toml`], as compact JSON. It reads back with
+    /// [`Scenario::from_mission_json`] to this scenario, bit for bit (shortest round-trip
+    /// digits), and parses several times faster than TOML: at 1000 agents every agent
+    /// reading a 95 kB TOML file was the largest share of a run's start-up.
+    ///
+    /// Fails as [`Scenario::to_resolved_toml`] does.
+    pub fn to_mission_json(&self) -> Result<String, ResolveError> {
+        serde_json::to_string(&self.to_file()?).map_err(|e| ResolveError::Json(e.to_string()))
     }
 
     /// The file structures [`Scenario::parse`] reads, filled so that they check back into

@@ -62,7 +62,7 @@ pub use message::{
 };
 pub use mission_file::{
     BadMissionDigest, MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionDigest, MissionFileError,
-    mission_path, read_mission, write_mission,
+    MissionText, mission_path, read_mission, read_mission_text, write_mission,
 };
 pub use prefix::{MAX_PREFIX_LEN, PARENT_ENV, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{

@@ -3,22 +3,25 @@
 //! per agent would hold five open files per agent in the coordinator for the whole run
 //! (the coordinator's open-file limit is what bounds the number of agents).
 //!
-//! The file is the scenario's resolved TOML form ([`Scenario::to_resolved_toml`]), which
-//! loads back to the same scenario bit for bit; it is written under a temporary name and
-//! renamed, mode 0600, in the folder only this user can reach ([`check_run_root`]), before
-//! any agent starts. An agent reads it with the same checks as a file a user hands in:
-//! regular file, owned by this user, mode 0600, at most [`MAX_MISSION_BYTES`], then
-//! parsed and validated like any scenario.
+//! The file is the scenario's resolved form as JSON ([`Scenario::to_mission_json`]),
+//! which loads back to the same scenario bit for bit; it is written under a temporary
+//! name and renamed, mode 0600, in the folder only this user can reach
+//! ([`check_run_root`]), before any agent starts. An agent reads it with the same checks
+//! as a file a user hands in: regular file, owned by this user, mode 0600, at most
+//! [`MAX_MISSION_BYTES`], and its SHA-256 digest the one its coordinator handed it. Then
+//! it is the very text the coordinator validated, so each value is checked but not the
+//! rules relating the parts ([`Checks::Values`]: at 1000 agents, every agent parsing
+//! the TOML form and checking the slot pairs was the largest share of the start-up).
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
-use shared::scenario::{Scenario, ScenarioError};
+use shared::scenario::{Checks, Scenario, ScenarioError};
 
 use crate::run_folder::{RunFilesError, check_run_root, effective_uid, run_root};
 
 /// The mission file's name in the run folder.
-pub const MISSION_FILE_NAME: &str = "mission.toml";
+pub const MISSION_FILE_NAME: &str = "mission.json";
 
 /// Largest mission file an agent reads: far more than the largest scenario the
 /// capacities allow (16 384 obstacles and 1 024 agents take about 1.5 MB).
@@ -131,9 +134,9 @@ pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest,
         check_run_root(folder)?;
     }
     let text = scenario
-        .to_resolved_toml("the coordinator")
+        .to_mission_json()
         .map_err(|e| MissionFileError::NotRepresentable(e.to_string()))?;
-    let temporary = path.with_extension("toml.tmp");
+    let temporary = path.with_extension("json.tmp");
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| MissionFileError::Io { path, source }
@@ -150,12 +153,51 @@ pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest,
     Ok(MissionDigest::of(text.as_bytes()))
 }
 
-/// Read and validate run `prefix`'s mission file (an agent, at start-up), refusing it if
-/// its digest is not `expected` (when given).
+/// Read run `prefix`'s mission file (an agent, at start-up) into a [`Scenario`],
+/// refusing it if its digest is not `expected` (when given).
+///
+/// A file whose digest matches is the text the coordinator validated whole before it
+/// wrote it: each value is checked but not the O(n^2) rules relating the parts
+/// ([`Checks::Values`]). Without a digest it is validated whole.
 pub fn read_mission(
     prefix: &str,
     expected: Option<MissionDigest>,
 ) -> Result<Scenario, MissionFileError> {
+    read_mission_text(prefix, expected)?.parse()
+}
+
+/// Run `prefix`'s mission file as read: its text, and whether its digest was checked.
+#[derive(Clone, Debug)]
+pub struct MissionText {
+    /// The file's path, named in errors.
+    pub path: PathBuf,
+    /// The file's text, the scenario's resolved form as JSON.
+    pub text: String,
+    /// Whether the text's digest matched the one the coordinator handed over (then the
+    /// coordinator validated this very text).
+    pub digest_checked: bool,
+}
+
+impl MissionText {
+    /// The scenario: its values checked when the digest was ([`Checks::Values`]),
+    /// validated whole otherwise.
+    pub fn parse(&self) -> Result<Scenario, MissionFileError> {
+        let checks = if self.digest_checked {
+            Checks::Values
+        } else {
+            Checks::All
+        };
+        let file = self.path.display().to_string();
+        Ok(Scenario::from_mission_json(&self.text, &file, checks)?)
+    }
+}
+
+/// Read run `prefix`'s mission file, refusing it if it is not a regular file of this
+/// user's with mode 0600, is too large, or its digest is not `expected` (when given).
+pub fn read_mission_text(
+    prefix: &str,
+    expected: Option<MissionDigest>,
+) -> Result<MissionText, MissionFileError> {
     use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
     let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
     if let Some(folder) = path.parent() {
@@ -212,7 +254,11 @@ pub fn read_mission(
             });
         }
     }
-    Ok(Scenario::parse(&text, &path.display().to_string())?)
+    Ok(MissionText {
+        path,
+        text,
+        digest_checked: expected.is_some(),
+    })
 }
 
 #[cfg(test)]
