@@ -403,3 +403,63 @@ fn bench_measures_what_the_run_log_costs() {
         (number(l, "log_bytes_per_agent_step") - bytes as f64 / agent_steps as f64).abs() < 1e-9
     );
 }
+
+/// `--scale`: a generated swarm at each size, run for real beside `simulate()` and the
+/// spawn floor; every figure present and consistent, the ratios the quotients of the times
+/// they name, the plot written, and sizes out of range refused before anything runs.
+#[test]
+fn bench_measures_the_runtime_against_the_number_of_agents() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let out_file = dir.path().join("scale.json");
+    let report = bench_report(&["--scale", "3,8", "--scale-steps", "6"], None, &out_file);
+    assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
+    let sizes = report["scale"]["sizes"].as_array().expect("sizes");
+    assert_eq!(sizes.len(), 2);
+    for (p, n) in sizes.iter().zip([3, 8]) {
+        assert_eq!(p["agents"], n);
+        assert_eq!(p["steps"], 6);
+        assert_eq!(p["collisions"], 0, "{p}");
+        assert_eq!(p["faults"], 0, "{p}");
+        let startup = number(p, "startup_s");
+        let phases: f64 = ["prepare", "spawn", "handshakes", "intruder_scan"]
+            .iter()
+            .map(|k| number(&p["startup_phases_s"], k))
+            .sum();
+        assert!(phases > 0.0 && phases <= startup + 1e-6, "{p}");
+        for (ratio, a, b) in [
+            ("startup_vs_floor", "startup_s", "spawn_floor_s"),
+            ("loop_vs_simulate", "loop_s", "simulate_s"),
+        ] {
+            let (a, b) = (number(p, a), number(p, b));
+            assert!(a > 0.0 && b > 0.0, "{p}");
+            assert!(
+                (number(p, ratio) - a / b).abs() <= 1e-9 * (a / b),
+                "{ratio}: {p}"
+            );
+        }
+        // Parallel turns: fewer groups than agents once there is more than one.
+        let groups = number(p, "mean_groups_per_step");
+        assert!(groups >= 1.0 && groups <= f64::from(n), "{p}");
+        for key in [
+            "turn_us",
+            "compute_us",
+            "agent_cpu_s",
+            "agent_pss_kib",
+            "agent_rss_kib",
+        ] {
+            check_distribution(p, key);
+        }
+        // One figure per agent process, each alive at the end.
+        assert_eq!(p["agent_pss_kib"]["count"], n, "{p}");
+        assert!(number(&p["agent_pss_kib"], "p50") <= number(&p["agent_rss_kib"], "p50"));
+    }
+    let svg = report["scale"]["plot_svg"].as_str().expect("plot");
+    let text = std::fs::read_to_string(svg).expect("the plot");
+    assert!(
+        text.starts_with("<svg") && text.contains("spawn floor"),
+        "{svg}"
+    );
+    for bad in ["0", "5000"] {
+        bench_refusal(&["--scale", bad].map(std::ffi::OsStr::new));
+    }
+}

@@ -452,6 +452,17 @@ pub struct BenchArgs {
     /// root and iproute2).
     #[arg(long)]
     pub zenoh_netns: bool,
+    /// Also measure the runtime against the number of agents: for each N given
+    /// (comma-separated, e.g. `100,300,1000`), a generated swarm of N agents (a top speed,
+    /// a 3 m sensing radius, parallel turns) runs for real beside `simulate()` and the
+    /// spawn floor (N `agent --help` processes); start-up and its phases, steps/s, turn
+    /// latency, agent CPU and memory (PSS), the ratios, and a plot against N (`--out` with
+    /// the extension `.scale.svg`).
+    #[arg(long, value_name = "N", value_delimiter = ',')]
+    pub scale: Vec<usize>,
+    /// With `--scale`: steps of the swarm's straight path (default 48).
+    #[arg(long, value_name = "K")]
+    pub scale_steps: Option<usize>,
     /// With `--turns-scenario`: also run each mode with every agent sandboxed (its own
     /// user and control group behind a relay; needs root), beside the trusted agents, and
     /// report what the sandbox costs.

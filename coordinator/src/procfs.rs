@@ -108,6 +108,22 @@ pub fn rss_kib(pid: u32) -> Option<f64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
+/// Process `pid`'s proportional set size (`Pss` of `/proc/PID/smaps_rollup`: each page
+/// it shares counted as its share), KiB: what one more such process costs the machine.
+pub fn pss_kib(pid: u32) -> Option<f64> {
+    let rollup = std::fs::read_to_string(format!("/proc/{pid}/smaps_rollup")).ok()?;
+    let line = rollup.lines().find(|l| l.starts_with("Pss:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// The CPU time process `pid` has used so far, from the scheduler's nanosecond counter
+/// (`/proc/PID/schedstat`; its threads included), seconds.
+pub fn cpu_s(pid: u32) -> Option<f64> {
+    let schedstat = std::fs::read_to_string(format!("/proc/{pid}/schedstat")).ok()?;
+    let ns: u64 = schedstat.split_whitespace().next()?.parse().ok()?;
+    Some(ns as f64 * 1e-9)
+}
+
 /// The machine's load average over the last minute.
 pub fn load_average() -> Option<f64> {
     std::fs::read_to_string("/proc/loadavg")

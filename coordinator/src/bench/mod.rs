@@ -33,6 +33,7 @@ pub mod loops;
 pub mod plot;
 pub mod report;
 pub mod run_options;
+pub mod scale;
 pub mod scenario;
 pub mod split;
 pub mod turns;
@@ -84,7 +85,10 @@ pub const DEFAULT_AGENTS: [usize; 2] = [6, 200];
 pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
     let scenario_only = args.turns_scenario.is_some()
         || args.loop_scenario.is_some()
-        || args.log_scenario.is_some();
+        || args.log_scenario.is_some()
+        || !args.scale.is_empty();
+    let scale_steps = args.scale_steps.unwrap_or(scale::DEFAULT_SCALE_STEPS);
+    scale::check_sizes(&args.scale, scale_steps)?;
     let agents: Vec<usize> = match (scenario_only, args.agents.is_empty()) {
         (true, true) => Vec::new(),
         (false, true) => DEFAULT_AGENTS.to_vec(),
@@ -185,6 +189,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
         turns: None,
         loops: None,
         log_cost: None,
+        scale: None,
     };
     let mut samples = Vec::new();
     for &n in &agents {
@@ -234,6 +239,15 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             &out.with_extension("mcap"),
             !args.json,
         )?);
+    }
+
+    if !args.scale.is_empty() {
+        let mut r = scale::measure(&args.scale, scale_steps, &bin, !args.json)?;
+        let scale_svg = out.with_extension("scale.svg");
+        let svg = plot::scale_svg(&scale::charts(&r)).context("drawing the scale plot")?;
+        write_atomically(&scale_svg, svg.as_bytes())?;
+        r.plot_svg = Some(scale_svg.display().to_string());
+        report.scale = Some(r);
     }
 
     // The latency histogram, when latency was measured.

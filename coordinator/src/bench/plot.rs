@@ -4,7 +4,7 @@
 
 use anyhow::Context;
 use plotters::prelude::{
-    ChartBuilder, IntoDrawingArea, IntoLogRange, LineSeries, PathElement, SVGBackend,
+    ChartBuilder, Circle, IntoDrawingArea, IntoLogRange, LineSeries, PathElement, SVGBackend,
     SeriesLabelPosition,
 };
 use plotters::style::{Color, IntoFont, RGBColor, WHITE};
@@ -140,6 +140,119 @@ where
     Ok(())
 }
 
+/// One curve of a plot against the number of agents.
+pub struct Curve {
+    /// Legend text.
+    pub label: String,
+    /// (agents, value) points, in the order measured.
+    pub points: Vec<(f64, f64)>,
+    /// Colour.
+    pub color: RGBColor,
+}
+
+/// A chart of `curves` against the number of agents, both axes logarithmic: `title`
+/// above, `y_desc` along the value axis.
+pub struct ScaleChart {
+    /// Chart title.
+    pub title: String,
+    /// What the values are, with their unit.
+    pub y_desc: String,
+    /// The curves.
+    pub curves: Vec<Curve>,
+}
+
+/// Draw `charts` one above the other as one SVG document (the bench's `--scale` plot).
+pub fn scale_svg(charts: &[ScaleChart]) -> anyhow::Result<String> {
+    font::ensure_registered()?;
+    let mut svg = String::new();
+    {
+        let height = PANEL_H * charts.len().max(1) as u32;
+        let root = SVGBackend::with_string(&mut svg, (PANEL_W, height)).into_drawing_area();
+        root.fill(&WHITE).context("filling the background")?;
+        let areas = root.split_evenly((charts.len().max(1), 1));
+        for (chart, area) in charts.iter().zip(&areas) {
+            draw_scale_chart(chart, area)?;
+        }
+        root.present().context("finishing the SVG")?;
+    }
+    Ok(svg)
+}
+
+fn draw_scale_chart<DB: plotters::prelude::DrawingBackend>(
+    c: &ScaleChart,
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let positive = || {
+        c.curves
+            .iter()
+            .flat_map(|k| k.points.iter().copied())
+            .filter(|(x, y)| x.is_finite() && y.is_finite() && *x > 0.0 && *y > 0.0)
+    };
+    let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
+    for (x, y) in positive() {
+        (x_lo, x_hi, y_lo, y_hi) = (x_lo.min(x), x_hi.max(x), y_lo.min(y), y_hi.max(y));
+    }
+    if !x_lo.is_finite() || !y_lo.is_finite() {
+        return Ok(());
+    }
+    let mut chart = ChartBuilder::on(area)
+        .caption(&c.title, (font::FAMILY, 18).into_font())
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(
+            (x_lo * 0.8..x_hi * 1.25).log_scale(),
+            (y_lo * 0.7..y_hi * 1.5).log_scale(),
+        )
+        .context("laying out the chart")?;
+    chart
+        .configure_mesh()
+        .x_desc("agents (log scale)")
+        .y_desc(&c.y_desc)
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.3}"))
+        .label_style((font::FAMILY, 13).into_font())
+        .axis_desc_style((font::FAMILY, 14).into_font())
+        .light_line_style(WHITE)
+        .draw()
+        .context("drawing the axes")?;
+    for k in &c.curves {
+        let color = k.color;
+        let points: Vec<(f64, f64)> = k
+            .points
+            .iter()
+            .copied()
+            .filter(|(x, y)| *x > 0.0 && *y > 0.0 && y.is_finite())
+            .collect();
+        chart
+            .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+            .with_context(|| format!("drawing {}", k.label))?
+            .label(&k.label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+            });
+        chart
+            .draw_series(
+                points
+                    .into_iter()
+                    .map(|p| Circle::new(p, 4, color.filled())),
+            )
+            .with_context(|| format!("drawing the points of {}", k.label))?;
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font((font::FAMILY, 13).into_font())
+        .background_style(WHITE.mix(0.85))
+        .border_style(GREY)
+        .draw()
+        .context("drawing the legend")?;
+    Ok(())
+}
+
 /// The histogram of `values` over `edges` as a step outline: fraction of all values per
 /// bin (values outside the edges count in the total but are not drawn).
 fn step_outline(edges: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
@@ -173,6 +286,30 @@ mod tests {
         assert_eq!(pts.len(), 8);
         assert_eq!(pts[1], (1.0, 0.25));
         assert_eq!(pts[3], (2.0, 0.5));
+    }
+
+    #[test]
+    fn a_scale_chart_draws_every_curve() {
+        let svg = scale_svg(&[ScaleChart {
+            title: "test".into(),
+            y_desc: "seconds".into(),
+            curves: vec![
+                Curve {
+                    label: "start-up".into(),
+                    points: vec![(100.0, 0.3), (300.0, 0.9), (1000.0, 2.8)],
+                    color: BLUE,
+                },
+                Curve {
+                    label: "floor".into(),
+                    points: vec![(100.0, 0.07), (300.0, 0.2), (1000.0, 0.7)],
+                    color: GREY,
+                },
+            ],
+        }])
+        .unwrap();
+        assert!(svg.starts_with("<svg"), "{}", &svg[..200]);
+        assert_eq!(svg.matches("<circle").count(), 6, "a marker per point");
+        assert!(svg.contains("start-up") && svg.contains("floor"));
     }
 
     #[test]

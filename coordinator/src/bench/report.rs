@@ -35,6 +35,9 @@ pub struct Report {
     /// The step loop with the run log and without (`--log-scenario`); absent without it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub log_cost: Option<super::log_cost::LogCostReport>,
+    /// The runtime against the number of agents (`--scale`); absent without it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<super::scale::ScaleReport>,
 }
 
 /// The figures of one formation size.
@@ -247,6 +250,12 @@ pub fn table(report: &Report) -> String {
     }
     if let Some(l) = &report.loops {
         s.push_str(&super::loops::table(l));
+    }
+    if let Some(r) = &report.scale {
+        s.push_str(&super::scale::table(r));
+        if let Some(svg) = &r.plot_svg {
+            let _ = writeln!(s, "scale plot: {svg}");
+        }
     }
     if let Some(svg) = &report.histogram_svg {
         let _ = writeln!(s, "\nhistogram: {svg}");

@@ -1,6 +1,8 @@
 //! The benchmark's generated scenario: N agents in a block formation crossing an open
 //! field on a straight line, with a few obstacles beside the line (close enough that
-//! every agent's controller sees them, never in the formation's way).
+//! every agent's controller sees them, never in the formation's way); as a swarm
+//! ([`Kind::Swarm`]), with time in the model as in `scenarios/swarm1000.toml`: a top
+//! speed, a sensing radius and parallel turns.
 
 use anyhow::Context;
 use shared::geometry::Pose;
@@ -19,10 +21,35 @@ const LANE_GAP_M: f64 = 3.0;
 /// Free space around everything, in metres.
 const MARGIN_M: f64 = 8.0;
 
+/// The swarm's top speed, metres per step (four times the centre's step, as in
+/// `scenarios/swarm1000.toml`).
+const SWARM_MAX_STEP_M: f64 = 1.0;
+/// The swarm's sensing radius, metres (that file's, too).
+const SWARM_SENSING_RADIUS_M: f64 = 3.0;
+
+/// Which scenario [`generate_kind`] makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// The paper's model: no top speed, every agent sees everything, sequential turns.
+    Sequential,
+    /// A swarm: a top speed of [`SWARM_MAX_STEP_M`], a sensing radius of
+    /// [`SWARM_SENSING_RADIUS_M`] and parallel turns.
+    Swarm,
+}
+
 /// The generated scenario for `agents` agents and `steps` steps: its TOML text (parsed
 /// and validated like any scenario file), the scenario, and the straight centre path of
 /// `steps + 1` poses.
 pub fn generate(agents: usize, steps: usize) -> anyhow::Result<(String, Scenario, Vec<Pose>)> {
+    generate_kind(agents, steps, Kind::Sequential)
+}
+
+/// [`generate`], of the kind `kind`.
+pub fn generate_kind(
+    agents: usize,
+    steps: usize,
+    kind: Kind,
+) -> anyhow::Result<(String, Scenario, Vec<Pose>)> {
     let agents = agents.max(1);
     // A block about twice as long (along the path) as it is wide, like scenarios/swarm200.
     let rows = ((agents as f64 / 2.0).sqrt().ceil() as usize).max(1);
@@ -72,9 +99,9 @@ radius_m = {OBSTACLE_RADIUS_M}
 
 {disks}[formation]
 agent_radius_m = {AGENT_RADIUS_M}
-slots = [
+{swarm}slots = [
 {slots}]
-
+{turns}
 [path]
 start = {{ x_m = {x0:.3}, y_m = {y0:.3}, heading_deg = 0.0 }}
 goal = {{ x_m = {gx:.3}, y_m = {y0:.3}, heading_deg = 0.0 }}
@@ -83,6 +110,16 @@ step_m = {STEP_M}
 centre_clearance_m = 0.5
 ",
         gx = x0 + travel,
+        swarm = match kind {
+            Kind::Sequential => String::new(),
+            Kind::Swarm => format!(
+                "max_step_m = {SWARM_MAX_STEP_M}\nsensing_radius_m = {SWARM_SENSING_RADIUS_M}\n"
+            ),
+        },
+        turns = match kind {
+            Kind::Sequential => "",
+            Kind::Swarm => "\n[turns]\nmode = \"parallel\"\n",
+        },
     );
     let name = format!("<bench {agents} agents>");
     let scenario = Scenario::parse(&text, &name).with_context(|| format!("generated {name}"))?;
@@ -110,6 +147,17 @@ mod tests {
             assert_eq!(s.agents.len(), n);
             assert_eq!(s.obstacles.len(), 4);
             assert_eq!(path.len(), 21);
+            assert_eq!(s.turns, shared::vocabulary::TurnMode::Sequential);
+            let (_, swarm, _) = generate_kind(n, 20, Kind::Swarm).unwrap();
+            assert_eq!(swarm.turns, shared::vocabulary::TurnMode::Parallel);
+            assert!(
+                swarm
+                    .agents
+                    .iter()
+                    .all(|a| a.max_step_m == Some(SWARM_MAX_STEP_M)
+                        && a.sensing_radius_m == Some(SWARM_SENSING_RADIUS_M))
+            );
+            assert_eq!(swarm.agents.len(), n);
         }
     }
 }

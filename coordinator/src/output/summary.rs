@@ -31,6 +31,12 @@ pub struct Timing {
     pub steps_per_s: f64,
     /// Resident set size of the agent processes at the end of the run, KiB.
     pub agent_rss_kib: Distribution,
+    /// Proportional set size of the agent processes at the end of the run (shared pages
+    /// counted as their share), KiB.
+    pub agent_pss_kib: Distribution,
+    /// CPU time of each agent process over its whole life (start-up, every turn, every
+    /// wait), seconds.
+    pub agent_cpu_s: Distribution,
 }
 
 /// The phases of a run's start-up, in seconds; they add up to `startup_s`.

@@ -260,12 +260,10 @@ impl Driver<'_, '_> {
         self.recorder.note_course(&course);
         self.progress.gave_up = course.gave_up();
         self.progress.steps_s = stepping.elapsed().as_secs_f64();
-        self.progress.rss_kib = self
-            .pids()
-            .into_iter()
-            .flatten()
-            .filter_map(procfs::rss_kib)
-            .collect();
+        let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
+        self.progress.rss_kib = pids.iter().filter_map(|&p| procfs::rss_kib(p)).collect();
+        self.progress.pss_kib = pids.iter().filter_map(|&p| procfs::pss_kib(p)).collect();
+        self.progress.cpu_s = pids.iter().filter_map(|&p| procfs::cpu_s(p)).collect();
         self.progress.completed = !self.progress.interrupted;
         Ok(())
     }

@@ -90,6 +90,8 @@ pub(super) struct Progress {
     pub(super) turn_samples: Vec<TurnSample>,
     pub(super) idle_cpu: Option<IdleCpu>,
     pub(super) rss_kib: Vec<f64>,
+    pub(super) pss_kib: Vec<f64>,
+    pub(super) cpu_s: Vec<f64>,
     pub(super) interrupted: bool,
     pub(super) completed: bool,
     /// The centre waited too long for a way through: the run ended short of the goal.
@@ -121,6 +123,8 @@ pub(super) fn outcome(
             startup_s: progress.startup_s,
             startup_phases_s: progress.startup_phases,
             agent_rss_kib: Distribution::of(&progress.rss_kib),
+            agent_pss_kib: Distribution::of(&progress.pss_kib),
+            agent_cpu_s: Distribution::of(&progress.cpu_s),
         },
         run,
         interrupted: progress.interrupted,

@@ -1,0 +1,313 @@
+//! `coordinator bench --scale 100,300,1000`: the multi-process runtime against the size of
+//! the formation, in one bench run. For every size N, a generated swarm
+//! ([`Kind::Swarm`]: a block of N agents with a top speed, a sensing radius and parallel
+//! turns) is measured three ways, one after the other, so that all three see the same
+//! (shared, noisy) machine:
+//! 1. the spawn floor: N processes of the agent executable that only print their help,
+//!    started at once and waited for (what starting N processes costs, nothing else);
+//! 2. `simulate()`: the reference simulation of the same scenario, every agent in this
+//!    process, one after the other;
+//! 3. the real run: N agent processes over iceoryx2, its start-up split into phases, its
+//!    step loop, its turns, and each agent's CPU time and memory (PSS) at the end.
+//!
+//! Reported per N, with the two ratios the runtime is judged by (start-up against the
+//! spawn floor, step loop against `simulate()`), and drawn against N in an SVG.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use anyhow::Context;
+use serde::Serialize;
+use shared::simulate::simulate_along;
+
+use super::plot::{BLUE, Curve, GREEN, GREY, ScaleChart, VERMILLION};
+use super::run_options::bench_run_options;
+use super::scenario::{Kind, generate_kind};
+use crate::error::CliError;
+use crate::output::StartupPhases;
+use crate::stats::Distribution;
+use crate::turns::run_scenario;
+
+/// Steps of the swarm's straight path when `--scale-steps` is not given (the length of
+/// `scenarios/swarm1000.toml`'s path).
+pub const DEFAULT_SCALE_STEPS: usize = 48;
+
+/// The measurements of every size (`scale` in the report).
+#[derive(Clone, Debug, Serialize)]
+pub struct ScaleReport {
+    /// One entry per size, in the order given.
+    pub sizes: Vec<ScalePoint>,
+    /// The plot of the figures against N, if drawn.
+    pub plot_svg: Option<String>,
+}
+
+/// The figures of one size.
+#[derive(Clone, Debug, Serialize)]
+pub struct ScalePoint {
+    /// Agents (one process each).
+    pub agents: usize,
+    /// Steps of the centre path.
+    pub steps: usize,
+    /// Starting N help-printing processes of the agent executable at once and waiting
+    /// for them all, seconds.
+    pub spawn_floor_s: f64,
+    /// The run's start-up: from its start to the last agent's ready handshake, seconds.
+    pub startup_s: f64,
+    /// Where the start-up went.
+    pub startup_phases_s: StartupPhases,
+    /// `startup_s / spawn_floor_s`.
+    pub startup_vs_floor: f64,
+    /// `simulate()` on the same scenario and path, seconds.
+    pub simulate_s: f64,
+    /// The run's step loop (start-up excluded), seconds.
+    pub loop_s: f64,
+    /// `loop_s / simulate_s`: what the processes and the hand-overs cost.
+    pub loop_vs_simulate: f64,
+    /// Steps per second of the step loop.
+    pub steps_per_s: f64,
+    /// Turn groups per step (agents granted together), mean.
+    pub mean_groups_per_step: f64,
+    /// Turn latency (world published to move held), microseconds.
+    pub turn_us: Distribution,
+    /// The agents' own compute time per turn, microseconds.
+    pub compute_us: Distribution,
+    /// Each agent process's CPU time over its whole life, seconds.
+    pub agent_cpu_s: Distribution,
+    /// Each agent process's proportional set size at the end of the run, KiB.
+    pub agent_pss_kib: Distribution,
+    /// Each agent process's resident set size at the end of the run, KiB.
+    pub agent_rss_kib: Distribution,
+    /// Collisions the run's record holds (0 when safe).
+    pub collisions: usize,
+    /// Faults of the run (0 when every agent answered every turn).
+    pub faults: usize,
+}
+
+/// The sizes of `--scale`, checked before anything runs (exit code 2 when bad).
+pub fn check_sizes(sizes: &[usize], steps: usize) -> Result<(), CliError> {
+    if let Some(&n) = sizes
+        .iter()
+        .find(|&&n| n == 0 || n > shared::vocabulary::MAX_AGENTS)
+    {
+        return Err(CliError::Usage(format!(
+            "--scale {n}: a formation has 1 to {} agents",
+            shared::vocabulary::MAX_AGENTS
+        )));
+    }
+    if !(2..=super::MAX_BENCH_STEPS).contains(&steps) {
+        return Err(CliError::Usage(format!(
+            "--scale-steps: 2 to {}",
+            super::MAX_BENCH_STEPS
+        )));
+    }
+    Ok(())
+}
+
+/// Measure every size of `sizes` with the agent executable `bin`, `steps` steps each;
+/// progress on stderr when `verbose`.
+pub fn measure(
+    sizes: &[usize],
+    steps: usize,
+    bin: &Path,
+    verbose: bool,
+) -> anyhow::Result<ScaleReport> {
+    let mut points = Vec::with_capacity(sizes.len());
+    for &n in sizes {
+        if verbose {
+            eprintln!("bench: scale, {n} agents, {steps} steps: spawn floor, simulate(), run ...");
+        }
+        let point = measure_one(n, steps, bin)?;
+        if verbose {
+            eprintln!(
+                "bench: scale, {n} agents: start-up {:.2} s ({:.1}x the floor), step loop {:.3} s ({:.1}x simulate())",
+                point.startup_s, point.startup_vs_floor, point.loop_s, point.loop_vs_simulate
+            );
+        }
+        points.push(point);
+    }
+    Ok(ScaleReport {
+        sizes: points,
+        plot_svg: None,
+    })
+}
+
+fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScalePoint> {
+    let (_, scenario, path) = generate_kind(agents, steps, Kind::Swarm)?;
+    let spawn_floor_s = spawn_floor(bin, agents)?;
+    let started = Instant::now();
+    simulate_along(&scenario, &path)
+        .map_err(|e| anyhow::anyhow!("the reference simulation: {e}"))?;
+    let simulate_s = started.elapsed().as_secs_f64();
+    let outcome =
+        run_scenario(&scenario, &path, &bench_run_options(bin)).map_err(|failure| failure.error)?;
+    if outcome.interrupted {
+        anyhow::bail!("interrupted");
+    }
+    let summary = outcome.run.summary();
+    let timing = &outcome.timing;
+    let steps_run = outcome.run.steps.len().saturating_sub(1) as f64;
+    let loop_s = if timing.steps_per_s > 0.0 {
+        steps_run / timing.steps_per_s
+    } else {
+        0.0
+    };
+    Ok(ScalePoint {
+        agents,
+        steps,
+        spawn_floor_s,
+        startup_s: timing.startup_s,
+        startup_phases_s: timing.startup_phases_s,
+        startup_vs_floor: super::ratio(timing.startup_s, spawn_floor_s),
+        simulate_s,
+        loop_s,
+        loop_vs_simulate: super::ratio(loop_s, simulate_s),
+        steps_per_s: timing.steps_per_s,
+        mean_groups_per_step: summary.mean_groups_per_step,
+        turn_us: timing.turn_latency_us,
+        compute_us: timing.compute_us,
+        agent_cpu_s: timing.agent_cpu_s,
+        agent_pss_kib: timing.agent_pss_kib,
+        agent_rss_kib: timing.agent_rss_kib,
+        collisions: summary.collisions,
+        faults: outcome.run.faults.len(),
+    })
+}
+
+/// Start `agents` processes of `bin --help` at once and wait for every one: the floor of
+/// starting that many agent processes, seconds.
+fn spawn_floor(bin: &Path, agents: usize) -> anyhow::Result<f64> {
+    let started = Instant::now();
+    let mut children = Vec::with_capacity(agents);
+    for _ in 0..agents {
+        let child = Command::new(bin)
+            .arg("--help")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .with_context(|| format!("starting {} --help", bin.display()));
+        match child {
+            Ok(c) => children.push(c),
+            Err(e) => {
+                // Every process started so far is waited for before giving up.
+                for mut c in children {
+                    let _ = c.wait();
+                }
+                return Err(e);
+            }
+        }
+    }
+    for mut c in children {
+        let status = c.wait().context("waiting for an agent --help")?;
+        if !status.success() {
+            anyhow::bail!("{} --help failed: {status}", bin.display());
+        }
+    }
+    Ok(started.elapsed().as_secs_f64())
+}
+
+/// The plot of `r`: the times against N (start-up and its floor, the step loop and
+/// `simulate()`), then the two ratios.
+pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
+    let curve = |label: &str, color, value: &dyn Fn(&ScalePoint) -> f64| Curve {
+        label: label.into(),
+        points: r
+            .sizes
+            .iter()
+            .map(|p| (p.agents as f64, value(p)))
+            .collect(),
+        color,
+    };
+    vec![
+        ScaleChart {
+            title: "start-up and step loop against the number of agents".into(),
+            y_desc: "seconds (log scale)".into(),
+            curves: vec![
+                curve("start-up", BLUE, &|p| p.startup_s),
+                curve("spawn floor (N agent --help)", GREY, &|p| p.spawn_floor_s),
+                curve("step loop", VERMILLION, &|p| p.loop_s),
+                curve("simulate(), one process", GREEN, &|p| p.simulate_s),
+            ],
+        },
+        ScaleChart {
+            title: "the ratios: start-up / spawn floor, step loop / simulate()".into(),
+            y_desc: "ratio (log scale)".into(),
+            curves: vec![
+                curve("start-up / spawn floor", BLUE, &|p| p.startup_vs_floor),
+                curve("step loop / simulate()", VERMILLION, &|p| {
+                    p.loop_vs_simulate
+                }),
+            ],
+        },
+    ]
+}
+
+/// The table of the scale figures, for people.
+pub fn table(r: &ScaleReport) -> String {
+    use std::fmt::Write as _;
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "\nscale (generated swarm, parallel turns, trusted agents; ratios measured side by side):"
+    );
+    let _ = writeln!(
+        t,
+        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>8} {:>9} {:>9}",
+        "agents",
+        "steps",
+        "start s",
+        "floor s",
+        "ratio",
+        "prepare",
+        "spawn",
+        "handshk",
+        "scan",
+        "loop s",
+        "simul s",
+        "ratio",
+        "steps/s",
+        "turn p50",
+        "groups",
+        "cpu ms",
+        "PSS KiB"
+    );
+    for p in &r.sizes {
+        let ph = &p.startup_phases_s;
+        let _ = writeln!(
+            t,
+            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.1} {:>8.2} {:>9.1} {:>9.0}",
+            p.agents,
+            p.steps,
+            p.startup_s,
+            p.spawn_floor_s,
+            p.startup_vs_floor,
+            ph.prepare,
+            ph.spawn,
+            ph.handshakes,
+            ph.intruder_scan,
+            p.loop_s,
+            p.simulate_s,
+            p.loop_vs_simulate,
+            p.steps_per_s,
+            p.turn_us.p50,
+            p.mean_groups_per_step,
+            p.agent_cpu_s.p50 * 1e3,
+            p.agent_pss_kib.p50
+        );
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_out_of_range_are_refused_before_anything_runs() {
+        assert!(check_sizes(&[1, 300, 1000], DEFAULT_SCALE_STEPS).is_ok());
+        assert!(check_sizes(&[0], DEFAULT_SCALE_STEPS).is_err());
+        assert!(check_sizes(&[shared::vocabulary::MAX_AGENTS + 1], DEFAULT_SCALE_STEPS).is_err());
+        assert!(check_sizes(&[10], 1).is_err());
+    }
+}
