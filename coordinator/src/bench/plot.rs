@@ -3,9 +3,10 @@
 //! turns and a few thousand round trips compare at a glance.
 
 use anyhow::Context;
+use plotters::coord::Shift;
 use plotters::prelude::{
-    ChartBuilder, Circle, IntoDrawingArea, IntoLogRange, LineSeries, PathElement, SVGBackend,
-    SeriesLabelPosition,
+    ChartBuilder, Circle, DrawingArea, IntoDrawingArea, IntoLogRange, LineSeries, PathElement,
+    SVGBackend, SeriesLabelPosition,
 };
 use plotters::style::{Color, IntoFont, RGBColor, WHITE};
 
@@ -47,15 +48,24 @@ const PANEL_H: u32 = 340;
 
 /// Draw `panels` as one SVG document.
 pub fn histogram_svg(panels: &[Panel<'_>]) -> anyhow::Result<String> {
+    stacked_svg(panels, |panel, area| draw_panel(panel, area))
+}
+
+/// `items` drawn one above the other by `draw`, each in a [`PANEL_W`] x [`PANEL_H`]
+/// area, as one SVG document.
+fn stacked_svg<T>(
+    items: &[T],
+    draw: impl Fn(&T, &DrawingArea<SVGBackend<'_>, Shift>) -> anyhow::Result<()>,
+) -> anyhow::Result<String> {
     font::ensure_registered()?;
     let mut svg = String::new();
     {
-        let height = PANEL_H * panels.len().max(1) as u32;
+        let height = PANEL_H * items.len().max(1) as u32;
         let root = SVGBackend::with_string(&mut svg, (PANEL_W, height)).into_drawing_area();
         root.fill(&WHITE).context("filling the background")?;
-        let areas = root.split_evenly((panels.len().max(1), 1));
-        for (panel, area) in panels.iter().zip(&areas) {
-            draw_panel(panel, area)?;
+        let areas = root.split_evenly((items.len().max(1), 1));
+        for (item, area) in items.iter().zip(&areas) {
+            draw(item, area)?;
         }
         root.present().context("finishing the SVG")?;
     }
@@ -162,20 +172,12 @@ pub struct ScaleChart {
 }
 
 /// Draw `charts` one above the other as one SVG document (the bench's `--scale` plot).
+#[allow(
+    clippy::redundant_closure,
+    reason = "the function itself is not general enough over the SVG backend's lifetime"
+)]
 pub fn scale_svg(charts: &[ScaleChart]) -> anyhow::Result<String> {
-    font::ensure_registered()?;
-    let mut svg = String::new();
-    {
-        let height = PANEL_H * charts.len().max(1) as u32;
-        let root = SVGBackend::with_string(&mut svg, (PANEL_W, height)).into_drawing_area();
-        root.fill(&WHITE).context("filling the background")?;
-        let areas = root.split_evenly((charts.len().max(1), 1));
-        for (chart, area) in charts.iter().zip(&areas) {
-            draw_scale_chart(chart, area)?;
-        }
-        root.present().context("finishing the SVG")?;
-    }
-    Ok(svg)
+    stacked_svg(charts, |chart, area| draw_scale_chart(chart, area))
 }
 
 fn draw_scale_chart<DB: plotters::prelude::DrawingBackend>(
