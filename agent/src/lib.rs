@@ -99,9 +99,28 @@ fn die_with_the_coordinator() -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Wait until standard input ends: the coordinator closes the other end once the run's
+/// channels exist (or dies, which closes it too: then opening them fails).
+fn pass_the_gate() -> anyhow::Result<()> {
+    use std::io::Read as _;
+    let mut sink = [0u8; 64];
+    let mut stdin = std::io::stdin().lock();
+    loop {
+        match stdin.read(&mut sink) {
+            Ok(0) => return Ok(()),
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e).context("waiting for the run's channels (standard input)"),
+        }
+    }
+}
+
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     die_with_the_coordinator()?;
+    if args.gate_stdin {
+        pass_the_gate()?;
+    }
     let mode = test_mode(args)?;
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.die_with_parent {

@@ -123,6 +123,45 @@ fn set_cloexec_on_all_fds() {
     }
 }
 
+/// The gate agents started early wait behind ([`AgentProcesses::spawn_behind`]): a pipe
+/// that is their standard input. They pass it when it ends, once [`StartGate::open`]
+/// closes its writing end (or this process dies, which closes it too).
+///
+/// What it is for: every `posix_spawn` copies this process's table of open files and
+/// the new program then closes each of them, and the run's channels hold 15 files per
+/// agent. Started one after the other once the channels exist, N agents cost O(N^2)
+/// closed files (at 1000 agents, 15 000 files for each start); started behind the gate
+/// before the channels exist, each start copies a handful.
+pub struct StartGate {
+    read: std::io::PipeReader,
+    write: Option<std::io::PipeWriter>,
+}
+
+impl StartGate {
+    /// A closed gate.
+    pub fn new() -> anyhow::Result<Self> {
+        let (read, write) = std::io::pipe().context("the agents' start gate")?;
+        Ok(Self {
+            read,
+            write: Some(write),
+        })
+    }
+
+    /// The standard input of one more process behind the gate.
+    pub fn stdin(&self) -> anyhow::Result<Stdio> {
+        let read = self
+            .read
+            .try_clone()
+            .context("the start gate for one more agent")?;
+        Ok(Stdio::from(read))
+    }
+
+    /// Open the gate: every process behind it goes on.
+    pub fn open(&mut self) {
+        self.write = None;
+    }
+}
+
 /// How an agent process ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Exit {
@@ -178,6 +217,28 @@ impl AgentProcesses {
     /// terminal reaches only the coordinator, which then stops the agents cleanly, and so
     /// a signal to the agent reaches whatever it started in its group too).
     pub fn spawn(&mut self, agent: usize, extra_args: &[String]) -> anyhow::Result<u32> {
+        self.spawn_with_stdin(agent, extra_args, Stdio::null())
+    }
+
+    /// [`Self::spawn`], the process waiting behind `gate` (`--gate-stdin`) until it
+    /// opens.
+    pub fn spawn_behind(
+        &mut self,
+        agent: usize,
+        extra_args: &[String],
+        gate: &StartGate,
+    ) -> anyhow::Result<u32> {
+        let mut args = vec!["--gate-stdin".to_string()];
+        args.extend_from_slice(extra_args);
+        self.spawn_with_stdin(agent, &args, gate.stdin()?)
+    }
+
+    fn spawn_with_stdin(
+        &mut self,
+        agent: usize,
+        extra_args: &[String],
+        stdin: Stdio,
+    ) -> anyhow::Result<u32> {
         set_cloexec_on_all_fds();
         let mut command = Command::new(&self.bin);
         // Nothing runs between fork and exec, so the standard library starts the
@@ -190,7 +251,7 @@ impl AgentProcesses {
             .args(extra_args)
             .env(wire::RUN_ENV, &self.prefix)
             .env(wire::PARENT_ENV, std::process::id().to_string())
-            .stdin(Stdio::null())
+            .stdin(stdin)
             .process_group(0);
         let child = command
             .spawn()
@@ -476,5 +537,35 @@ impl Drop for AgentProcesses {
             }
         }
         self.sweep();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two processes reading their standard input behind one gate cannot finish before
+    /// it opens, and both reach its end when it does: this process's writing end reaches
+    /// neither of them (were it inherited, the input would never end and the test would
+    /// hang).
+    #[test]
+    fn every_process_behind_a_gate_goes_on_when_it_opens() {
+        let mut gate = StartGate::new().expect("gate");
+        let mut children: Vec<Child> = (0..2)
+            .map(|_| {
+                Command::new("sh")
+                    .args(["-c", "cat > /dev/null"])
+                    .stdin(gate.stdin().expect("stdin"))
+                    .spawn()
+                    .expect("sh")
+            })
+            .collect();
+        for child in &mut children {
+            assert!(child.try_wait().expect("try_wait").is_none(), "waits");
+        }
+        gate.open();
+        for child in &mut children {
+            assert!(child.wait().expect("wait").success());
+        }
     }
 }

@@ -42,10 +42,12 @@ pub struct Timing {
 /// The phases of a run's start-up, in seconds; they add up to `startup_s`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct StartupPhases {
-    /// Before any agent process: the run's private folder, the mission file, every
-    /// agent's shared-memory services, the log.
+    /// The run's private folder, the mission file, every agent's shared-memory
+    /// services, the log (`spawn` not included).
     pub prepare: f64,
-    /// Starting the agent processes (fork and exec, one after the other).
+    /// Starting the agent processes (`posix_spawn`, one after the other). They start
+    /// once the mission file exists and wait behind a gate until their services do
+    /// (over a network, after the router: once the services exist).
     pub spawn: f64,
     /// Waiting for the agents' ready handshakes (each reads and checks the mission and
     /// opens its ports meanwhile).

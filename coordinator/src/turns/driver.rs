@@ -18,7 +18,7 @@ use super::hand_over::HandOver;
 use super::lateness::TurnHistory;
 use super::options::RunOptions;
 use super::outcome::Progress;
-use crate::agents::{AgentProcesses, Exit};
+use crate::agents::{AgentProcesses, Exit, StartGate};
 use crate::ipc::CoordinatorIpc;
 use crate::monitor::SafetyMonitor;
 use crate::network::NetworkOptions;
@@ -68,31 +68,66 @@ pub(super) struct Driver<'a, 's> {
     pub(super) turns_logged: usize,
     /// The mission file's digest, handed to every process started.
     pub(super) mission_digest: wire::MissionDigest,
+    /// The agents already started, behind their gate (none over a network).
+    pub(super) early: Option<EarlyStart>,
     /// Called after every step.
     pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
+}
+
+/// The agents started before the run's channels existed, waiting behind a gate
+/// ([`crate::agents::StartGate`]) that [`Driver::drive`] opens.
+pub(super) struct EarlyStart {
+    /// The gate they wait behind.
+    pub(super) gate: StartGate,
+    /// The agents whose process could not be started, and why.
+    pub(super) failed: Vec<(usize, String)>,
+    /// How long starting them took, seconds.
+    pub(super) spawn_s: f64,
+}
+
+/// The command-line arguments of agent `agent`'s process beyond its prefix and index:
+/// its channel's `generation`, the mission's digest, its test mode unless it is a
+/// `replacement` (a replacement never misbehaves), and its relay's settings.
+pub(super) fn agent_args(
+    options: &RunOptions,
+    agent: usize,
+    replacement: bool,
+    generation: u32,
+    mission_digest: &wire::MissionDigest,
+    network: Option<&NetworkOptions>,
+    run_cgroup: bool,
+) -> Vec<String> {
+    let mut extra = vec![
+        "--generation".to_string(),
+        generation.to_string(),
+        "--mission-sha256".to_string(),
+        mission_digest.to_string(),
+    ];
+    if !replacement && let Some((_, mode)) = options.misbehave.iter().find(|(a, _)| *a == agent) {
+        extra.extend(["--misbehave".to_string(), mode.to_string()]);
+    }
+    if let Some(network) = network {
+        extra.extend(network.relay_args(agent));
+    }
+    if let Some(sandbox) = &options.sandbox {
+        extra.extend(sandbox.relay_args(agent, run_cgroup));
+    }
+    extra
 }
 
 impl Driver<'_, '_> {
     /// Start `agent`'s process on its open channel; a replacement never misbehaves.
     pub(super) fn spawn(&mut self, agent: usize, replacement: bool) -> anyhow::Result<()> {
         let generation = self.ipc.generation(agent).unwrap_or(0);
-        let mut extra = vec![
-            "--generation".to_string(),
-            generation.to_string(),
-            "--mission-sha256".to_string(),
-            self.mission_digest.to_string(),
-        ];
-        if !replacement
-            && let Some((_, mode)) = self.options.misbehave.iter().find(|(a, _)| *a == agent)
-        {
-            extra.extend(["--misbehave".to_string(), mode.to_string()]);
-        }
-        if let Some(network) = self.network {
-            extra.extend(network.relay_args(agent));
-        }
-        if let Some(sandbox) = &self.options.sandbox {
-            extra.extend(sandbox.relay_args(agent, self.run_cgroup));
-        }
+        let extra = agent_args(
+            self.options,
+            agent,
+            replacement,
+            generation,
+            &self.mission_digest,
+            self.network,
+            self.run_cgroup,
+        );
         self.procs.spawn(agent, &extra)?;
         Ok(())
     }
@@ -161,15 +196,29 @@ impl Driver<'_, '_> {
             }
         };
         let to_start: Vec<usize> = (0..n).filter(|&i| self.recorder.alive()[i]).collect();
-        let spawning = Instant::now();
-        for &i in &to_start {
-            // A spawn that fails (the machine out of processes, say) fails that agent
-            // alone: it is frozen where it starts, or replaced with `--respawn`.
-            if let Err(e) = self.spawn(i, false) {
-                self.on_failed_start(step, i, &format!("its process could not be started: {e:#}"))?;
+        match self.early.take() {
+            Some(mut early) => {
+                // Started already, waiting for their channels, which exist now.
+                early.gate.open();
+                for (i, why) in early.failed {
+                    self.on_failed_start(step, i, &why)?;
+                }
+                self.progress.startup_phases.spawn = early.spawn_s;
+            }
+            None => {
+                let spawning = Instant::now();
+                for &i in &to_start {
+                    // A spawn that fails (the machine out of processes, say) fails that
+                    // agent alone: it is frozen where it starts, or replaced with
+                    // `--respawn`.
+                    if let Err(e) = self.spawn(i, false) {
+                        let why = format!("its process could not be started: {e:#}");
+                        self.on_failed_start(step, i, &why)?;
+                    }
+                }
+                self.progress.startup_phases.spawn = spawning.elapsed().as_secs_f64();
             }
         }
-        self.progress.startup_phases.spawn = spawning.elapsed().as_secs_f64();
         self.start_agents(
             step,
             &to_start,

@@ -10,12 +10,12 @@ use shared::record::Recorder;
 use shared::scenario::Scenario;
 use wire::{RunPrefix, RunRoot};
 
-use super::driver::{BetweenSteps, Driver, tell_step_done};
+use super::driver::{BetweenSteps, Driver, EarlyStart, agent_args, tell_step_done};
 use super::hand_over::HandOver;
 use super::lateness::TurnHistory;
 use super::options::RunOptions;
 use super::outcome::{Progress, RunFailure, RunOutcome, outcome};
-use crate::agents::{self, AgentProcesses};
+use crate::agents::{self, AgentProcesses, StartGate};
 use crate::ipc::CoordinatorIpc;
 use crate::network::Router;
 
@@ -95,9 +95,31 @@ pub fn run_scenario_with(
         Ok(digest) => digest,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
     };
+    let run_cgroup = options
+        .sandbox
+        .as_ref()
+        .and_then(|_| sandbox_cgroup(&prefix));
+    let mut procs = AgentProcesses::new(bin, &prefix, n).with_cgroup(run_cgroup.clone());
+    // The agents start now, while this process has few open files for each start to
+    // copy, and wait behind a gate until their channels exist ([`StartGate`]). Over a
+    // network their relays need the router's settings first: they start later.
+    let mut early = match options.network {
+        Some(_) => None,
+        None => start_early(options, &mut procs, &recorder, &mission_digest, &run_cgroup),
+    };
+    // Whatever fails from here on stops the agents started and removes their group.
+    let abort = |procs: &mut AgentProcesses| {
+        procs.stop_all(Duration::from_secs(2));
+        if let Some(group) = &run_cgroup
+            && let Err(e) = group.remove(Duration::from_secs(2))
+        {
+            tracing::warn!("the run's control group: {e}");
+        }
+    };
     let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
         Ok(ipc) => ipc,
         Err(e) => {
+            abort(&mut procs);
             crate::stale_runs::remove_run_files(&prefix);
             return Err(fail(e, &recorder, progress));
         }
@@ -110,6 +132,7 @@ pub fn run_scenario_with(
     {
         Ok(router) => router,
         Err(e) => {
+            abort(&mut procs);
             drop(ipc);
             crate::stale_runs::remove_run_files(&prefix);
             return Err(fail(e, &recorder, progress));
@@ -133,6 +156,7 @@ pub fn run_scenario_with(
     {
         Ok(log) => log,
         Err(e) => {
+            abort(&mut procs);
             if let Some(router) = router {
                 router.close();
             }
@@ -141,12 +165,8 @@ pub fn run_scenario_with(
             return Err(fail(e.into(), &recorder, progress));
         }
     };
-    let run_cgroup = options
-        .sandbox
-        .as_ref()
-        .and_then(|_| sandbox_cgroup(&prefix));
-    let mut procs = AgentProcesses::new(bin, &prefix, n).with_cgroup(run_cgroup.clone());
-    progress.startup_phases.prepare = started.elapsed().as_secs_f64();
+    let spawn_s = early.as_ref().map_or(0.0, |e| e.spawn_s);
+    progress.startup_phases.prepare = started.elapsed().as_secs_f64() - spawn_s;
 
     let driven = catch_unwind(AssertUnwindSafe(|| {
         Driver {
@@ -168,6 +188,7 @@ pub fn run_scenario_with(
             log: log.as_mut(),
             turns_logged: 0,
             mission_digest,
+            early: early.take(),
             between_steps,
         }
         .drive(centre_path, started)
@@ -219,6 +240,47 @@ pub fn run_scenario_with(
             partial: Box::new(result),
         }),
     }
+}
+
+/// Start every agent alive in `recorder` behind a new gate. Each fails alone: its failure
+/// is handed to the driver, which freezes or replaces it. Without a gate (no pipe to be
+/// had), none: the driver starts them once the channels exist.
+fn start_early(
+    options: &RunOptions,
+    procs: &mut AgentProcesses,
+    recorder: &Recorder<'_>,
+    mission_digest: &wire::MissionDigest,
+    run_cgroup: &Option<wire::cgroup::CgroupDirs>,
+) -> Option<EarlyStart> {
+    let spawning = Instant::now();
+    let gate = match StartGate::new() {
+        Ok(gate) => gate,
+        Err(e) => {
+            tracing::warn!("{e:#}: the agents start once their channels exist");
+            return None;
+        }
+    };
+    let mut failed = Vec::new();
+    for (agent, _) in recorder.alive().iter().enumerate().filter(|(_, a)| **a) {
+        // A fresh run's channels start at generation 0, and so do a resumed run's.
+        let args = agent_args(
+            options,
+            agent,
+            false,
+            0,
+            mission_digest,
+            None,
+            run_cgroup.is_some(),
+        );
+        if let Err(e) = procs.spawn_behind(agent, &args, &gate) {
+            failed.push((agent, format!("its process could not be started: {e:#}")));
+        }
+    }
+    Some(EarlyStart {
+        gate,
+        failed,
+        spawn_s: spawning.elapsed().as_secs_f64(),
+    })
 }
 
 /// The run's control group for its sandboxed agents, made; `None` (with a warning) where
