@@ -17,6 +17,9 @@ use support::{assert_nothing_left, assert_safe, run_to_end, summary};
 
 /// The first agent's user id in these tests.
 const FIRST_UID: u32 = SandboxOptions::DEFAULT_FIRST_UID;
+/// The first agent's user in `attacks_from_inside_the_sandbox_reach_nothing`, apart from
+/// the default users the other tests' runs take at the same time.
+const ATTACK_FIRST_UID: u32 = FIRST_UID + 10_000;
 
 fn assert_root() {
     // SAFETY: geteuid(2) cannot fail.
@@ -176,7 +179,19 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
     assert_root();
     let temp = tempfile::tempdir().expect("tempdir");
     let honest_out = temp.path().join("honest");
-    let (output, pid) = run_to_end(&["--sandbox", "--turn-deadline-ms", "10000"], &honest_out);
+    // Users of its own, so that no other test's sandboxed agent (the default users,
+    // concurrently) is taken for a process this test's attacker left behind.
+    let uids = ATTACK_FIRST_UID.to_string();
+    let (output, pid) = run_to_end(
+        &[
+            "--sandbox",
+            "--agent-uids",
+            &uids,
+            "--turn-deadline-ms",
+            "10000",
+        ],
+        &honest_out,
+    );
     assert!(
         output.status.success(),
         "{}",
@@ -203,6 +218,8 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
         let (output, pid) = run_to_end(
             &[
                 "--sandbox",
+                "--agent-uids",
+                &uids,
                 "--misbehave",
                 &rogue,
                 "--turn-deadline-ms",
@@ -249,7 +266,7 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
             "{mode}: the trajectory differs from the honest run"
         );
         assert_nothing_left(pid);
-        let uid = FIRST_UID + 3;
+        let uid = ATTACK_FIRST_UID + 3;
         let left: Vec<u32> = std::fs::read_dir("/proc")
             .into_iter()
             .flatten()

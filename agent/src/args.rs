@@ -40,9 +40,10 @@ pub struct Args {
     /// Leave when the parent process dies (set by a relay for the agent it starts).
     #[arg(long, hide = true)]
     pub die_with_parent: bool,
-    /// Wait until standard input ends before anything else (set by the coordinator,
-    /// which starts its agents before it opens the run's channels, while it has few
-    /// open files for every start to copy, and closes the other end once they exist).
+    /// Having read the mission, wait until standard input ends before opening anything
+    /// (set by the coordinator, which starts its agents before it makes the run's
+    /// channels, while it has few open files for every start to copy, and closes the
+    /// other end once they exist).
     #[arg(long, hide = true)]
     pub gate_stdin: bool,
     /// This agent's index in the formation.

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use net::{Down, Up};
 
-use crate::ipc::IpcTransport;
+use crate::ipc::{IpcTransport, Mission};
 use crate::link::{move_of, net_turn};
 use crate::transport::{Command, Reply, Transport};
 
@@ -24,23 +24,24 @@ pub struct RelayedChannel<'a> {
     pub agent: usize,
     /// Its process generation.
     pub generation: u32,
-    /// The mission file's digest, as the coordinator handed it.
-    pub mission_digest: Option<wire::MissionDigest>,
+    /// The run's mission, read by the digest the coordinator handed over.
+    pub mission: &'a Mission,
     /// How often to check the coordinator while waiting.
     pub liveness: Duration,
 }
 
 impl RelayedChannel<'_> {
-    /// Open the agent's channel, and read the mission file: the resolved TOML the agent
-    /// is handed, as the coordinator wrote it.
+    /// Open the agent's channel; with it, the mission file's text the agent is handed,
+    /// as the coordinator wrote it.
     pub fn open(&self) -> anyhow::Result<(IpcTransport, String)> {
-        IpcTransport::open_with_mission(
+        let ipc = IpcTransport::open(
             self.prefix,
             self.agent,
             self.generation,
             self.liveness,
-            self.mission_digest,
-        )
+            self.mission,
+        )?;
+        Ok((ipc, self.mission.text.clone()))
     }
 }
 

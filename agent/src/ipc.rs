@@ -178,30 +178,40 @@ pub struct IpcTransport<C = IpcPorts> {
     woke_ns: u64,
 }
 
+/// The run's mission as an agent holds it: the file's text (a relay passes it on as it
+/// is) and what the agent sees of the scenario.
+#[derive(Clone, Debug)]
+pub struct Mission {
+    /// The mission file's text.
+    pub text: String,
+    /// The scenario as the agent sees it.
+    pub view: MissionView,
+}
+
+impl Mission {
+    /// Read run `prefix`'s mission file, refused unless its digest is `digest` (when
+    /// given; then its values alone are checked, see [`wire::read_mission`]).
+    pub fn read(prefix: &str, digest: Option<wire::MissionDigest>) -> anyhow::Result<Self> {
+        let text = wire::read_mission_text(prefix, digest).context("the mission file")?;
+        let view = MissionView::of(text.parse().context("the mission file")?);
+        Ok(Self {
+            text: text.text,
+            view,
+        })
+    }
+}
+
 impl IpcTransport {
     /// Open the channel of agent `agent`, process generation `generation`, in run
-    /// `prefix`. `liveness` is how often the agent checks, while it waits, that its
-    /// coordinator is still there.
+    /// `prefix`, with the run's `mission` read before. `liveness` is how often the agent
+    /// checks, while it waits, that its coordinator is still there.
     pub fn open(
         prefix: &str,
         agent: usize,
         generation: u32,
         liveness: Duration,
-        mission_digest: Option<wire::MissionDigest>,
+        mission: &Mission,
     ) -> anyhow::Result<Self> {
-        Self::open_with_mission(prefix, agent, generation, liveness, mission_digest)
-            .map(|(transport, _)| transport)
-    }
-
-    /// [`Self::open`], handing back the mission file's text too (a relay passes it on as
-    /// it is).
-    pub fn open_with_mission(
-        prefix: &str,
-        agent: usize,
-        generation: u32,
-        liveness: Duration,
-        mission_digest: Option<wire::MissionDigest>,
-    ) -> anyhow::Result<(Self, String)> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
         #[cfg(target_os = "linux")]
@@ -217,9 +227,7 @@ impl IpcTransport {
         // SIGINT interrupt a blocking wait instead of killing the process mid-write.
         let _ = node.wait(Duration::ZERO);
 
-        // Read (and validated) before the handshake: the first turn does not pay for it.
-        let text = wire::read_mission_text(prefix, mission_digest).context("the mission file")?;
-        let mission = MissionView::of(text.parse().context("the mission file")?);
+        let mission = mission.view.clone();
         let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
         let world = node
@@ -274,7 +282,7 @@ impl IpcTransport {
             mission,
             woke_ns: 0,
         };
-        Ok((transport, text.text))
+        Ok(transport)
     }
 }
 

@@ -118,9 +118,6 @@ fn pass_the_gate() -> anyhow::Result<()> {
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     die_with_the_coordinator()?;
-    if args.gate_stdin {
-        pass_the_gate()?;
-    }
     let mode = test_mode(args)?;
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.die_with_parent {
@@ -159,13 +156,27 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(root) = wire::run_root(prefix) {
         wire::check_run_root(&root).with_context(|| format!("opening run {prefix}"))?;
     }
+    // The mission is read before the gate, while the coordinator makes the channels (a
+    // trusted agent's test-mode attack on the file comes first; a relay attacks nothing).
+    #[cfg(feature = "misbehave")]
+    if args.sandbox_uid.is_none()
+        && args.relay.is_none()
+        && let Some(mode) = mode
+    {
+        misbehave::before_reading(prefix, args.agent, mode);
+    }
+    let mission = ipc::Mission::read(prefix, args.mission_sha256)
+        .with_context(|| format!("opening run {prefix}"))?;
+    if args.gate_stdin {
+        pass_the_gate()?;
+    }
     if let Some(uid) = args.sandbox_uid {
-        return run_sandbox_relay(args, prefix, uid, liveness);
+        return run_sandbox_relay(args, prefix, uid, liveness, &mission);
     }
     if let Some(connect) = &args.relay {
         net::check_security(connect, &security, args.allow_plain_tcp)?;
         #[cfg(feature = "zenoh")]
-        return run_relay(args, prefix, connect, &security, liveness);
+        return run_relay(args, prefix, connect, &security, liveness, &mission);
         #[cfg(not(feature = "zenoh"))]
         bail!("{NO_ZENOH}");
     }
@@ -175,14 +186,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(mode) => misbehave::before_opening(prefix, args.agent, mode)?,
         None => Vec::new(),
     };
-    let transport = ipc::IpcTransport::open(
-        prefix,
-        args.agent,
-        args.generation,
-        liveness,
-        args.mission_sha256,
-    )
-    .with_context(|| format!("opening run {prefix}"))?;
+    let transport =
+        ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, &mission)
+            .with_context(|| format!("opening run {prefix}"))?;
     #[cfg(feature = "misbehave")]
     if let Some(mode) = mode {
         return misbehave::serve_ipc(transport, args.agent, mode);
@@ -195,12 +201,13 @@ fn relayed_channel<'a>(
     args: &Args,
     prefix: &'a str,
     liveness: Duration,
+    mission: &'a ipc::Mission,
 ) -> forward::RelayedChannel<'a> {
     forward::RelayedChannel {
         prefix,
         agent: args.agent,
         generation: args.generation,
-        mission_digest: args.mission_sha256,
+        mission,
         liveness,
     }
 }
@@ -212,6 +219,7 @@ fn run_sandbox_relay(
     prefix: &str,
     uid: u32,
     liveness: Duration,
+    mission: &ipc::Mission,
 ) -> anyhow::Result<()> {
     let limits = Limits {
         pids_max: args.pids_max,
@@ -229,7 +237,7 @@ fn run_sandbox_relay(
         None => Vec::new(),
     };
     sandbox_relay::serve_sandboxed(&sandbox_relay::SandboxRelaySettings {
-        channel: relayed_channel(args, prefix, liveness),
+        channel: relayed_channel(args, prefix, liveness, mission),
         sandbox: sandbox::Sandbox {
             uid,
             cgroup,
@@ -272,6 +280,7 @@ fn run_relay(
     connect: &net::Endpoint,
     security: &net::Security,
     liveness: Duration,
+    mission: &ipc::Mission,
 ) -> anyhow::Result<()> {
     let mut extra = vec!["--die-with-parent".to_string()];
     if let Some(mode) = args.misbehave {
@@ -281,7 +290,7 @@ fn run_relay(
         extra.push("--allow-plain-tcp".to_string());
     }
     relay::serve_relay(&relay::RelaySettings {
-        channel: relayed_channel(args, prefix, liveness),
+        channel: relayed_channel(args, prefix, liveness, mission),
         connect,
         security,
         tls_dir: args.tls_dir.as_deref(),

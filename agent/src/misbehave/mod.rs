@@ -30,6 +30,16 @@ pub use moves::{Misbehaving, corrupt};
 pub use strays::{start_strays, stray_marker};
 pub use tamper::Tampered;
 
+/// What test mode `mode` does before agent `agent` of run `prefix` reads the mission:
+/// `rewrite-mission` forges the file (the agent then reads its own forgery, as any agent
+/// that reads it after). A trusted agent only: a sandboxed one tries it from inside its
+/// sandbox ([`before_opening`]), and a relay attacks nothing.
+pub fn before_reading(prefix: &str, agent: usize, mode: Misbehave) {
+    if mode == Misbehave::RewriteMission {
+        sandbox_attacks::rewrite_mission(prefix, agent);
+    }
+}
+
 /// Carry out what mode `mode` of agent `agent` does before the agent opens its channel
 /// in run `prefix`: start the `fork` mode's strays, then the attacks on other agents'
 /// channels (which race their owners). Returns what must stay open (ports, services,

@@ -105,7 +105,9 @@ fn stop_others(prefix: &str, agent: usize) {
     );
 }
 
-fn rewrite_mission(prefix: &str, agent: usize) {
+/// Rewrite run `prefix`'s mission file without its disk obstacles, saying on stderr
+/// whether it could.
+pub fn rewrite_mission(prefix: &str, agent: usize) {
     let outcome = match wire::mission_path(prefix) {
         None => "no mission path".to_string(),
         Some(path) => match std::fs::read_to_string(&path) {

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use shared::scenario::{Checks, Scenario, ScenarioError};
 
+use crate::prefix::{PrefixError, is_valid_prefix};
 use crate::run_folder::{RunFilesError, check_run_root, effective_uid, run_root};
 
 /// The mission file's name in the run folder.
@@ -30,6 +31,9 @@ pub const MAX_MISSION_BYTES: u64 = 16 << 20;
 /// Why the mission file cannot be written or read.
 #[derive(Debug, thiserror::Error)]
 pub enum MissionFileError {
+    /// The run prefix is not one a run can have.
+    #[error(transparent)]
+    Prefix(#[from] PrefixError),
     /// There is no private run folder (no /dev/shm on this machine).
     #[error("run {0}: no private run folder (/dev/shm) to hand the mission over in")]
     NoRunFolder(String),
@@ -129,6 +133,9 @@ pub fn mission_path(prefix: &str) -> Option<PathBuf> {
 pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest, MissionFileError> {
     use std::io::Write as _;
     use std::os::unix::fs::OpenOptionsExt;
+    if !is_valid_prefix(prefix) {
+        return Err(PrefixError::Invalid(prefix.to_string()).into());
+    }
     let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
     if let Some(folder) = path.parent() {
         check_run_root(folder)?;
@@ -199,6 +206,9 @@ pub fn read_mission_text(
     expected: Option<MissionDigest>,
 ) -> Result<MissionText, MissionFileError> {
     use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+    if !is_valid_prefix(prefix) {
+        return Err(PrefixError::Invalid(prefix.to_string()).into());
+    }
     let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
     if let Some(folder) = path.parent() {
         check_run_root(folder)?;
