@@ -39,7 +39,7 @@ impl RelayedChannel<'_> {
             self.agent,
             self.generation,
             self.liveness,
-            self.mission,
+            self.mission.view.clone(),
         )?;
         Ok((ipc, self.mission.text.clone()))
     }

@@ -203,14 +203,15 @@ impl Mission {
 
 impl IpcTransport {
     /// Open the channel of agent `agent`, process generation `generation`, in run
-    /// `prefix`, with the run's `mission` read before. `liveness` is how often the agent
-    /// checks, while it waits, that its coordinator is still there.
+    /// `prefix`, with what the agent sees of the run's mission, read before ([`Mission`]).
+    /// `liveness` is how often the agent checks, while it waits, that its coordinator is
+    /// still there.
     pub fn open(
         prefix: &str,
         agent: usize,
         generation: u32,
         liveness: Duration,
-        mission: &Mission,
+        mission: MissionView,
     ) -> anyhow::Result<Self> {
         // Ask the kernel for SIGTERM if the coordinator dies: the blocking wait below is
         // then interrupted at once instead of at the next liveness check.
@@ -227,7 +228,6 @@ impl IpcTransport {
         // SIGINT interrupt a blocking wait instead of killing the process mid-write.
         let _ = node.wait(Duration::ZERO);
 
-        let mission = mission.view.clone();
         let names = AgentServiceNames::new(agent, generation);
         let name = |s: &str| ServiceName::new(s).with_context(|| format!("service name {s}"));
         let world = node

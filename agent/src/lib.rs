@@ -186,9 +186,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(mode) => misbehave::before_opening(prefix, args.agent, mode)?,
         None => Vec::new(),
     };
-    let transport =
-        ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, &mission)
-            .with_context(|| format!("opening run {prefix}"))?;
+    // The agent keeps what it sees of the mission, not the file's text.
+    let ipc::Mission { view, text } = mission;
+    drop(text);
+    let transport = ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, view)
+        .with_context(|| format!("opening run {prefix}"))?;
     #[cfg(feature = "misbehave")]
     if let Some(mode) = mode {
         return misbehave::serve_ipc(transport, args.agent, mode);
