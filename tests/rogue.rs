@@ -111,7 +111,7 @@ fn hostile_lengths_are_refused_as_malformed_without_a_panic() {
 #[test]
 fn agents_that_fail_to_start_are_frozen_or_replaced_and_the_run_goes_on() {
     let dir = tempfile::tempdir().expect("tempdir");
-    for mode in ["exit-before-ready", "spoof-ready=1"] {
+    for mode in ["exit-before-ready", "spoof-ready=1", "killed-connecting"] {
         let out = dir.path().join(mode.replace('=', "-"));
         let s = attacked_run(&["--misbehave", &format!("{ROGUE}={mode}")], &out);
         let failed = faults_against(&s, "failed-to-start", ROGUE);

@@ -66,7 +66,7 @@ pub struct Args {
     /// attack on purpose (the coordinator must survive it): nan, teleport,
     /// through-obstacle, silent, garbage, overspeed, raw-length, raw-length-ready, replay,
     /// early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork, exit-before-ready,
-    /// deaf-to-prepare, late-some, sluggish, log-flood; against a sandbox only: scribble,
+    /// killed-connecting, deaf-to-prepare, late-some, sluggish, log-flood; against a sandbox only: scribble,
     /// stop-others, rewrite-mission, fork-bomb.
     #[arg(long)]
     pub misbehave: Option<Misbehave>,

@@ -99,7 +99,7 @@ pub struct RunArgs {
     /// Test mode: agent AGENT misbehaves or attacks on purpose: nan, teleport,
     /// through-obstacle, silent, garbage, overspeed (unsafe moves); raw-length,
     /// raw-length-ready, replay, early, flood, impersonate=J, spoof-ready=J, hoard, fork,
-    /// exit-before-ready (attacks on the protocol); deaf-to-prepare (an agent that ignores
+    /// exit-before-ready, killed-connecting (attacks on the protocol); deaf-to-prepare (an agent that ignores
     /// `--wait spin`'s notice); late-some, sluggish (late agents); log-flood, scribble, stop-others,
     /// rewrite-mission, fork-bomb (attacks a `--sandbox` must hold against); repeatable,
     /// e.g. `--misbehave 3=nan`.

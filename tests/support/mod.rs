@@ -191,10 +191,40 @@ pub fn assert_nothing_left(pid: u32) {
     assert!(left.is_empty(), "iceoryx2 files left: {left:?}");
 }
 
+/// How long [`run_to_end`] lets a run go before it kills it as hung: far beyond what any
+/// test run takes on a loaded machine, so that a hang fails its test instead of the
+/// whole suite.
+const HUNG_RUN: Duration = Duration::from_secs(600);
+
+/// Run the coordinator with `args` (outputs into `out`) to its end; a run still going
+/// after [`HUNG_RUN`] is killed and the test fails.
 pub fn run_to_end(args: &[&str], out: &Path) -> (Output, u32) {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::{Arc, mpsc};
     let child = coordinator(args, out).spawn().expect("start coordinator");
     let pid = child.id();
+    let (finished, ended) = mpsc::channel::<()>();
+    let killed = Arc::new(AtomicBool::new(false));
+    let watchdog = {
+        let killed = Arc::clone(&killed);
+        std::thread::spawn(move || {
+            if ended.recv_timeout(HUNG_RUN).is_err() {
+                killed.store(true, Ordering::SeqCst);
+                let _ = nix::sys::signal::kill(
+                    nix::unistd::Pid::from_raw(pid as i32),
+                    nix::sys::signal::Signal::SIGKILL,
+                );
+            }
+        })
+    };
     let output = child.wait_with_output().expect("coordinator output");
+    let _ = finished.send(());
+    let _ = watchdog.join();
+    assert!(
+        !killed.load(Ordering::SeqCst),
+        "{args:?}: the run was still going after {HUNG_RUN:?} and was killed: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     (output, pid)
 }
 

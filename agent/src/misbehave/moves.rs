@@ -203,6 +203,7 @@ pub fn corrupt(
         | Misbehave::Hoard
         | Misbehave::Fork
         | Misbehave::ExitBeforeReady
+        | Misbehave::KilledConnecting
         | Misbehave::DeafToPrepare
         | Misbehave::Scribble
         | Misbehave::StopOthers

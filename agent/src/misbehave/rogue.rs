@@ -22,6 +22,7 @@ pub fn before_opening(prefix: &str, me: usize, mode: Misbehave) -> Vec<Box<dyn A
     let result = match mode {
         Misbehave::Impersonate { victim } => impersonate(prefix, victim, &mut held),
         Misbehave::Hoard => hoard(prefix, me, &mut held),
+        Misbehave::KilledConnecting => killed_connecting(prefix, me, &mut held),
         _ => Ok(()),
     };
     if let Err(e) = result {
@@ -100,6 +101,40 @@ fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> any
     }
     held.push(Box::new(node));
     Ok(())
+}
+
+/// Make a publisher on this agent's own state service, leave an empty segment for a
+/// connection of it (as a process killed between iceoryx2's `shm_open` and its sizing of
+/// the segment does), then die by SIGKILL: the coordinator's cleanup of this dead node
+/// must not wait on the segment forever.
+fn killed_connecting(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
+    let node = rogue_node(prefix, held)?;
+    let names = AgentServiceNames::new(me, 0);
+    let state = node
+        .service_builder(&service_name(&names.state)?)
+        .publish_subscribe::<AgentState>()
+        .open()
+        .with_context(|| format!("opening {}", names.state))?;
+    let publisher = state
+        .publisher_builder()
+        .create()
+        .with_context(|| format!("publisher on {}", names.state))?;
+    // iceoryx2 names a connection's segment after its sender and receiver ports; this
+    // one's receiver no one has (the name is all the cleanup goes by). The name's other
+    // parts are those of the publisher's connection to the coordinator, made just now.
+    let sender = format!("_{}_", publisher.id().value());
+    let made = std::fs::read_dir("/dev/shm")
+        .context("listing /dev/shm")?
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .find(|name| name.starts_with(prefix) && name.contains(&sender))
+        .context("the publisher has no connection")?;
+    let (head, _) = made.split_once(&sender).context("the connection's name")?;
+    let segment = format!("/dev/shm/{head}{sender}{}.connection", u128::MAX / 3);
+    std::fs::File::create(&segment).with_context(|| format!("creating {segment}"))?;
+    tracing::warn!("agent {me} (killed-connecting): left {segment} empty; killing itself");
+    nix::sys::signal::raise(nix::sys::signal::Signal::SIGKILL).context("SIGKILL")?;
+    unreachable!("a process survived its own SIGKILL")
 }
 
 /// Create ports with `make` until it fails or [`HOARD_PER_SERVICE`] are held; returns

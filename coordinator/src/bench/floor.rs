@@ -351,6 +351,8 @@ impl PingPongSession {
         self.procs.stop_all(Duration::from_secs(2));
         drop(self.ports.take());
         if let Some(node) = self.node.take() {
+            // The peer is reaped: an empty segment it left would hang the cleanup.
+            wire::remove_abandoned_shm_files(&self.prefix);
             let _ = node.try_cleanup_dead_nodes();
         }
         let _ = std::fs::remove_file(&self.socket_path);

@@ -67,7 +67,7 @@ pub use mission_file::{
 pub use prefix::{MAX_PREFIX_LEN, PARENT_ENV, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{
     RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private,
-    remove_run_files_in_shm, remove_run_root, run_root,
+    remove_abandoned_shm_files, remove_run_files_in_shm, remove_run_root, run_root,
 };
 pub use services::{
     AgentServiceNames, DONE_SERVICE, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN,

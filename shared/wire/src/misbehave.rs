@@ -63,6 +63,10 @@ pub enum Misbehave {
     Fork,
     /// Open its services, then exit before the ready handshake.
     ExitBeforeReady,
+    /// Make a publisher on its own state service, leave an empty segment for one of its
+    /// connections (as a process killed between iceoryx2's `shm_open` and its sizing of
+    /// the segment does), then kill itself (SIGKILL) before the ready handshake.
+    KilledConnecting,
     /// Ignore the notice that its turn comes next (`--wait spin`) and sleep until its turn
     /// is rung, as an agent that does not know the notice would; its moves are honest.
     DeafToPrepare,
@@ -101,7 +105,7 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 25] = [
+    pub const ALL: [Self; 26] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
@@ -119,6 +123,7 @@ impl Misbehave {
         Self::Hoard,
         Self::Fork,
         Self::ExitBeforeReady,
+        Self::KilledConnecting,
         Self::DeafToPrepare,
         Self::Scribble,
         Self::StopOthers,
@@ -150,6 +155,7 @@ impl Misbehave {
             Self::Hoard => "hoard",
             Self::Fork => "fork",
             Self::ExitBeforeReady => "exit-before-ready",
+            Self::KilledConnecting => "killed-connecting",
             Self::DeafToPrepare => "deaf-to-prepare",
             Self::Scribble => "scribble",
             Self::StopOthers => "stop-others",

@@ -251,6 +251,65 @@ pub fn remove_run_files_in_shm(prefix: &str) -> usize {
         .count()
 }
 
+/// Remove the files of run `prefix` in /dev/shm that a process killed while it made
+/// them left empty (size zero) and that no process holds open any more; returns how many
+/// were removed.
+///
+/// iceoryx2 0.10 creates a segment with `shm_open` and only then sizes it. A process
+/// killed between the two leaves a file of size zero, and iceoryx2's dead-node cleanup,
+/// opening that file to detach the dead port, waits for it to be sized without a
+/// deadline: the cleaner hangs. A live process making a segment holds it open from
+/// `shm_open` on, so an empty file no process holds open can only be abandoned. Call it
+/// once the processes that died are gone (not merely dying: an exiting process closes its
+/// files one by one).
+pub fn remove_abandoned_shm_files(prefix: &str) -> usize {
+    let empty: Vec<std::path::PathBuf> = run_files_in_shm(prefix)
+        .into_iter()
+        .filter(|(_, meta)| meta.file_type().is_file() && meta.len() == 0)
+        .map(|(path, _)| path)
+        .collect();
+    if empty.is_empty() {
+        return 0;
+    }
+    let open = files_held_open(&empty);
+    empty
+        .iter()
+        .filter(|path| !open.contains(*path))
+        .filter(|path| std::fs::remove_file(path).is_ok())
+        .count()
+}
+
+/// Which of `paths` some process on this machine holds open (by its /proc/PID/fd links;
+/// those of processes this user may not read are not seen).
+fn files_held_open(paths: &[std::path::PathBuf]) -> Vec<std::path::PathBuf> {
+    let mut open = Vec::new();
+    let Ok(processes) = std::fs::read_dir("/proc") else {
+        return open;
+    };
+    for process in processes.flatten() {
+        if !process
+            .file_name()
+            .to_string_lossy()
+            .bytes()
+            .all(|b| b.is_ascii_digit())
+        {
+            continue;
+        }
+        let Ok(fds) = std::fs::read_dir(process.path().join("fd")) else {
+            continue;
+        };
+        for fd in fds.flatten() {
+            if let Ok(target) = std::fs::read_link(fd.path())
+                && paths.contains(&target)
+                && !open.contains(&target)
+            {
+                open.push(target);
+            }
+        }
+    }
+    open
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -260,6 +319,26 @@ mod tests {
     fn test_prefix() -> Option<RunPrefix> {
         let p = RunPrefix::new_random().expect("OS random source");
         run_root(p.as_str()).map(|_| p)
+    }
+
+    #[test]
+    fn only_empty_files_no_process_holds_open_are_abandoned() {
+        let Some(prefix) = test_prefix() else { return };
+        let shm = std::path::Path::new("/dev/shm");
+        let held = shm.join(format!("{prefix}held.connection"));
+        let left = shm.join(format!("{prefix}left.connection"));
+        let sized = shm.join(format!("{prefix}sized.connection"));
+        let holder = std::fs::File::create(&held).expect("an empty file, held open");
+        drop(std::fs::File::create(&left).expect("an empty file, closed"));
+        std::fs::write(&sized, b"made").expect("a sized file");
+        assert_eq!(remove_abandoned_shm_files(prefix.as_str()), 1);
+        assert!(held.exists(), "a file being made is left alone");
+        assert!(!left.exists(), "an abandoned file is removed");
+        assert!(sized.exists(), "a finished segment is left alone");
+        drop(holder);
+        assert_eq!(remove_abandoned_shm_files(prefix.as_str()), 1);
+        assert!(!held.exists(), "closed, it is abandoned too");
+        std::fs::remove_file(&sized).expect("clean up");
     }
 
     #[test]
