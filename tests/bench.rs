@@ -440,6 +440,20 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
         // Parallel turns: fewer groups than agents once there is more than one.
         let groups = number(p, "mean_groups_per_step");
         assert!(groups >= 1.0 && groups <= f64::from(n), "{p}");
+        // Every group of every step is timed, none larger than the formation.
+        let timed = &p["groups"];
+        let steps = number(p, "steps");
+        assert_eq!(
+            number(&timed["size"], "count"),
+            (groups * steps).round(),
+            "{p}"
+        );
+        assert!(number(&timed["size"], "max") <= f64::from(n), "{p}");
+        assert!(number(&timed["size"], "p50") >= 1.0, "{p}");
+        if let Some(idle) = timed["loop_idle_share"].as_f64() {
+            assert!((0.0..=1.0).contains(&idle), "{p}");
+        }
+        check_distribution(timed, "wall_us");
         for key in [
             "turn_us",
             "compute_us",

@@ -124,6 +124,30 @@ pub fn cpu_s(pid: u32) -> Option<f64> {
     Some(ns as f64 * 1e-9)
 }
 
+/// The machine's CPU time so far, summed over its cores, in clock ticks: `(idle, total)`
+/// (the `cpu` line of `/proc/stat`; idle counts `idle` and `iowait`, total the first
+/// eight fields, guest time being counted in user time already).
+pub fn machine_cpu_ticks() -> Option<(u64, u64)> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    let fields: Vec<u64> = stat
+        .lines()
+        .next()?
+        .strip_prefix("cpu ")?
+        .split_whitespace()
+        .map(|f| f.parse().ok())
+        .collect::<Option<_>>()?;
+    let idle = fields.get(3)? + fields.get(4)?;
+    Some((idle, fields.iter().take(8).sum()))
+}
+
+/// The share of the machine's CPU time that was idle between two readings of
+/// [`machine_cpu_ticks`] (`None` when no tick passed).
+pub fn idle_share(from: (u64, u64), to: (u64, u64)) -> Option<f64> {
+    let total = to.1.checked_sub(from.1).filter(|&t| t > 0)?;
+    let idle = to.0.checked_sub(from.0)?;
+    Some(idle as f64 / total as f64)
+}
+
 /// The machine's load average over the last minute.
 pub fn load_average() -> Option<f64> {
     std::fs::read_to_string("/proc/loadavg")
@@ -227,6 +251,26 @@ impl IdleCpu {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_machine_is_idle_while_this_thread_sleeps_and_busy_while_it_spins() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let before = machine_cpu_ticks().expect("/proc/stat");
+        let spin_until = std::time::Instant::now() + Duration::from_millis(300);
+        while std::time::Instant::now() < spin_until {
+            std::hint::spin_loop();
+        }
+        let after = machine_cpu_ticks().expect("/proc/stat");
+        let idle = idle_share(before, after).expect("ticks passed in 300 ms");
+        // One core of `cores` spun the whole time: at most the others were idle.
+        assert!((0.0..=1.0).contains(&idle), "{idle}");
+        assert!(
+            idle <= 1.0 - 0.5 / cores as f64,
+            "{idle} with {cores} cores"
+        );
+        assert_eq!(idle_share(after, after), None, "no tick, no share");
+        assert_eq!(idle_share((5, 10), (7, 20)), Some(0.2));
+    }
 
     #[test]
     fn a_sleeping_child_uses_no_cpu() {

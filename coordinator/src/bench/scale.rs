@@ -25,7 +25,7 @@ use super::plot::{BLUE, Curve, GREEN, GREY, ScaleChart, VERMILLION};
 use super::run_options::bench_run_options;
 use super::scenario::{Kind, generate_kind};
 use crate::error::CliError;
-use crate::output::StartupPhases;
+use crate::output::{GroupTiming, StartupPhases};
 use crate::stats::Distribution;
 use crate::turns::run_scenario;
 
@@ -68,6 +68,8 @@ pub struct ScalePoint {
     pub steps_per_s: f64,
     /// Turn groups per step (agents granted together), mean.
     pub mean_groups_per_step: f64,
+    /// The groups' sizes and wall times, and how idle the machine was in the loop.
+    pub groups: GroupTiming,
     /// Turn latency (world published to move held), microseconds.
     pub turn_us: Distribution,
     /// The agents' own compute time per turn, microseconds.
@@ -164,6 +166,7 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
         loop_vs_simulate: super::ratio(loop_s, simulate_s),
         steps_per_s: timing.steps_per_s,
         mean_groups_per_step: summary.mean_groups_per_step,
+        groups: timing.groups.clone(),
         turn_us: timing.turn_latency_us,
         compute_us: timing.compute_us,
         agent_cpu_s: timing.agent_cpu_s,
@@ -253,7 +256,7 @@ pub fn table(r: &ScaleReport) -> String {
     );
     let _ = writeln!(
         t,
-        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>8} {:>9} {:>9}",
+        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
         "agents",
         "steps",
         "start s",
@@ -269,6 +272,8 @@ pub fn table(r: &ScaleReport) -> String {
         "steps/s",
         "turn p50",
         "groups",
+        "size max",
+        "idle",
         "cpu ms",
         "PSS KiB"
     );
@@ -276,7 +281,7 @@ pub fn table(r: &ScaleReport) -> String {
         let ph = &p.startup_phases_s;
         let _ = writeln!(
             t,
-            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.1} {:>8.2} {:>9.1} {:>9.0}",
+            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
             p.agents,
             p.steps,
             p.startup_s,
@@ -292,6 +297,8 @@ pub fn table(r: &ScaleReport) -> String {
             p.steps_per_s,
             p.turn_us.p50,
             p.mean_groups_per_step,
+            p.groups.size.max,
+            p.groups.loop_idle_share.unwrap_or(f64::NAN) * 1e2,
             p.agent_cpu_s.p50 * 1e3,
             p.agent_pss_kib.p50
         );

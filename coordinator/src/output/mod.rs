@@ -29,7 +29,7 @@ mod summary;
 mod tables;
 
 pub use out_dir::{OutDir, Staging};
-pub use summary::{FaultRecord, StartupPhases, SummaryFile, SummaryRead, Timing};
+pub use summary::{FaultRecord, GroupTiming, StartupPhases, SummaryFile, SummaryRead, Timing};
 pub use tables::{moves_csv, obstacles_csv, path_csv, plans_csv, trajectory_csv};
 
 /// Write `bytes` to `path` atomically: a temporary file beside it, then a rename.

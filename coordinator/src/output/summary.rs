@@ -37,6 +37,25 @@ pub struct Timing {
     /// CPU time of each agent process over its whole life (start-up, every turn, every
     /// wait), seconds.
     pub agent_cpu_s: Distribution,
+    /// The groups of turns (one agent each with sequential turns).
+    pub groups: GroupTiming,
+}
+
+/// How the groups of turns used the machine: a group's agents are granted at once and
+/// compute in parallel, so its wall time is at best its agents' compute spread over the
+/// cores.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct GroupTiming {
+    /// Agents granted a turn per group.
+    pub size: Distribution,
+    /// Wall time of a group, from its first grant to its last answer judged, microseconds.
+    pub wall_us: Distribution,
+    /// The cores of this machine.
+    pub cores: usize,
+    /// The share of the machine's CPU time that was idle during the step loop (from
+    /// `/proc/stat`: another program's work counts as busy); `None` when it could not be
+    /// read or the loop was shorter than a clock tick.
+    pub loop_idle_share: Option<f64>,
 }
 
 /// The phases of a run's start-up, in seconds; they add up to `startup_s`.

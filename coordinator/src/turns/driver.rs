@@ -243,6 +243,7 @@ impl Driver<'_, '_> {
         bar.set_position(step as u64);
 
         let stepping = Instant::now();
+        let ticks_at_start = procfs::machine_cpu_ticks();
         'steps: while let Some(centre) =
             course.advance(step + 1, self.recorder.bodies(), self.recorder.alive())
         {
@@ -309,6 +310,9 @@ impl Driver<'_, '_> {
         self.recorder.note_course(&course);
         self.progress.gave_up = course.gave_up();
         self.progress.steps_s = stepping.elapsed().as_secs_f64();
+        self.progress.loop_idle_share = ticks_at_start
+            .zip(procfs::machine_cpu_ticks())
+            .and_then(|(from, to)| procfs::idle_share(from, to));
         let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
         self.progress.rss_kib = pids.iter().filter_map(|&p| procfs::rss_kib(p)).collect();
         self.progress.pss_kib = pids.iter().filter_map(|&p| procfs::pss_kib(p)).collect();

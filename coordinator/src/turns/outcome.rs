@@ -6,7 +6,7 @@ use std::time::Instant;
 use shared::record::Run;
 
 use crate::ipc::TurnSplit;
-use crate::output::{StartupPhases, Timing};
+use crate::output::{GroupTiming, StartupPhases, Timing};
 use crate::procfs::IdleCpu;
 use crate::stats::Distribution;
 
@@ -73,6 +73,15 @@ pub(crate) struct TurnSample {
     pub polled: bool,
 }
 
+/// One group's turns, from its first grant to its last answer judged.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct GroupSample {
+    /// Agents granted a turn.
+    pub(super) size: usize,
+    /// Wall time, microseconds.
+    pub(super) wall_us: f64,
+}
+
 /// What the step loop has gathered so far; kept outside it so a failed run still
 /// reports its complete steps.
 #[derive(Default)]
@@ -87,6 +96,10 @@ pub(super) struct Progress {
     pub(super) steps_s: f64,
     pub(super) latency_us: Vec<f64>,
     pub(super) compute_us: Vec<f64>,
+    /// Each group's turns: how many agents were granted, and its wall time.
+    pub(super) groups: Vec<GroupSample>,
+    /// The share of the machine's CPU time that was idle during the step loop.
+    pub(super) loop_idle_share: Option<f64>,
     pub(super) turn_samples: Vec<TurnSample>,
     pub(super) idle_cpu: Option<IdleCpu>,
     pub(super) rss_kib: Vec<f64>,
@@ -96,6 +109,20 @@ pub(super) struct Progress {
     pub(super) completed: bool,
     /// The centre waited too long for a way through: the run ended short of the goal.
     pub(super) gave_up: bool,
+}
+
+impl GroupTiming {
+    /// The figures of `groups`, the machine idle for `loop_idle_share` of the loop.
+    fn of(groups: &[GroupSample], loop_idle_share: Option<f64>) -> Self {
+        let sizes: Vec<f64> = groups.iter().map(|g| g.size as f64).collect();
+        let walls: Vec<f64> = groups.iter().map(|g| g.wall_us).collect();
+        Self {
+            size: Distribution::of(&sizes),
+            wall_us: Distribution::of(&walls),
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            loop_idle_share,
+        }
+    }
 }
 
 /// The outcome of a run that recorded `run` and gathered `progress`.
@@ -125,6 +152,7 @@ pub(super) fn outcome(
             agent_rss_kib: Distribution::of(&progress.rss_kib),
             agent_pss_kib: Distribution::of(&progress.pss_kib),
             agent_cpu_s: Distribution::of(&progress.cpu_s),
+            groups: GroupTiming::of(&progress.groups, progress.loop_idle_share),
         },
         run,
         interrupted: progress.interrupted,

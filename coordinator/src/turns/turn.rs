@@ -16,7 +16,7 @@ use super::answer::{Answer, Turn};
 use super::driver::Driver;
 use super::judge::{judge_move, settle_group};
 use super::lateness::Lateness;
-use super::outcome::TurnSample;
+use super::outcome::{GroupSample, TurnSample};
 use crate::ipc::{TurnSplit, TurnWorld};
 use crate::monitor::SafetyMonitor;
 
@@ -38,13 +38,21 @@ impl Driver<'_, '_> {
             .senses
             .then(|| SensedAgents::new(self.recorder.bodies()));
         self.kill_before_turns(step, group);
+        let began = Instant::now();
         let turns = self.grant_group(step, group, centre, ahead, sensing.as_ref())?;
+        let size = turns.len();
         self.hand_over
             .tell_next(self.ipc, self.procs, self.recorder.alive(), group, next);
         let Some(mut moves) = self.collect_group(monitor, step, turns, centre)? else {
             self.progress.interrupted = true;
             return Ok(true);
         };
+        if size > 0 {
+            self.progress.groups.push(GroupSample {
+                size,
+                wall_us: began.elapsed().as_secs_f64() * 1e6,
+            });
+        }
         // A mate frozen after its move was judged does not move.
         moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
         settle_group(self.recorder, step, moves);
