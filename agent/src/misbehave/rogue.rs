@@ -8,6 +8,7 @@ use std::any::Any;
 
 use anyhow::Context;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
 use wire::{AgentServiceNames, AgentState, Role, StateKind, World};
 
 use wire::misbehave::Misbehave;
@@ -46,6 +47,23 @@ fn service_name(s: &str) -> anyhow::Result<ServiceName> {
     ServiceName::new(s).with_context(|| format!("service name {s}"))
 }
 
+/// Open the state service of agent `agent`'s first process from `node`; with its names.
+fn open_state(
+    node: &Node<ipc::Service>,
+    agent: usize,
+) -> anyhow::Result<(
+    AgentServiceNames,
+    PubSubFactory<ipc::Service, AgentState, ()>,
+)> {
+    let names = AgentServiceNames::new(agent, 0);
+    let state = node
+        .service_builder(&service_name(&names.state)?)
+        .publish_subscribe::<AgentState>()
+        .open()
+        .with_context(|| format!("opening {}", names.state))?;
+    Ok((names, state))
+}
+
 /// The process id of agent `victim` of run `prefix`, found the way any local process
 /// can: its command line.
 fn victim_pid(prefix: &str, victim: usize) -> Option<u32> {
@@ -63,12 +81,7 @@ fn victim_pid(prefix: &str, victim: usize) -> Option<u32> {
 /// in its name, claiming its process id.
 fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
     let node = rogue_node(prefix, held)?;
-    let names = AgentServiceNames::new(victim, 0);
-    let state = node
-        .service_builder(&service_name(&names.state)?)
-        .publish_subscribe::<AgentState>()
-        .open()
-        .with_context(|| format!("opening {}", names.state))?;
+    let (names, state) = open_state(&node, victim)?;
     let done = node
         .service_builder(&service_name(wire::DONE_SERVICE)?)
         .event()
@@ -109,12 +122,7 @@ fn impersonate(prefix: &str, victim: usize, held: &mut Vec<Box<dyn Any>>) -> any
 /// must not wait on the segment forever.
 fn killed_connecting(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
     let node = rogue_node(prefix, held)?;
-    let names = AgentServiceNames::new(me, 0);
-    let state = node
-        .service_builder(&service_name(&names.state)?)
-        .publish_subscribe::<AgentState>()
-        .open()
-        .with_context(|| format!("opening {}", names.state))?;
+    let (names, state) = open_state(&node, me)?;
     let publisher = state
         .publisher_builder()
         .create()
