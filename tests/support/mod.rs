@@ -194,7 +194,7 @@ pub fn assert_nothing_left(pid: u32) {
 /// How long [`run_to_end`] lets a run go before it kills it as hung: far beyond what any
 /// test run takes on a loaded machine, so that a hang fails its test instead of the
 /// whole suite.
-const HUNG_RUN: Duration = Duration::from_secs(600);
+pub const HUNG_RUN: Duration = Duration::from_secs(600);
 
 /// Run the coordinator with `args` (outputs into `out`) to its end; a run still going
 /// after [`HUNG_RUN`] is killed and the test fails.

@@ -22,7 +22,7 @@ use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use nix::fcntl::{FcntlArg, OFlag, fcntl};
 
@@ -220,15 +220,25 @@ impl Watched {
     }
 
     /// Wait for the coordinator process to exit (and reap it), without waiting for its
-    /// outputs to close.
+    /// outputs to close; a run still going after [`super::HUNG_RUN`] is killed and the
+    /// test fails.
     pub fn wait(&mut self) -> ExitStatus {
-        match self.status {
-            Some(status) => status,
-            None => {
-                let status = self.child.wait().expect("wait for the coordinator");
+        if let Some(status) = self.status {
+            return status;
+        }
+        let deadline = Instant::now() + super::HUNG_RUN;
+        loop {
+            if let Some(status) = self.child.try_wait().expect("wait for the coordinator") {
                 self.status = Some(status);
-                status
+                return status;
             }
+            // Dropping `self` kills and reaps the run.
+            assert!(
+                Instant::now() < deadline,
+                "the run was still going after {:?}: killed as hung",
+                super::HUNG_RUN
+            );
+            std::thread::sleep(Duration::from_millis(10));
         }
     }
 
