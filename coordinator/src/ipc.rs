@@ -190,19 +190,11 @@ const PROCESS_EXIT_WAIT: Duration = Duration::from_secs(1);
 /// `timeout`.
 fn wait_until_gone(pid: u32, timeout: Duration) {
     let deadline = Instant::now() + timeout;
-    let stat = format!("/proc/{pid}/stat");
     while Instant::now() < deadline {
-        let Ok(text) = std::fs::read_to_string(&stat) else {
-            return;
-        };
-        // The state follows the command name, which is in parentheses and may hold any byte.
-        let state = text
-            .rsplit_once(')')
-            .and_then(|(_, rest)| rest.trim_start().chars().next());
-        if matches!(state, Some('Z' | 'X') | None) {
-            return;
+        match crate::procfs::ProcStat::read(pid) {
+            Some(stat) if !stat.zombie() => std::thread::sleep(Duration::from_millis(1)),
+            _ => return,
         }
-        std::thread::sleep(Duration::from_millis(1));
     }
 }
 
