@@ -10,6 +10,7 @@
 mod args;
 pub mod forward;
 pub mod ipc;
+mod launch;
 pub mod link;
 #[cfg(feature = "misbehave")]
 pub mod misbehave;
@@ -80,44 +81,9 @@ fn serve_as<T: Transport>(
     serve(&mut transport, agent)
 }
 
-/// Started by a coordinator ([`wire::PARENT_ENV`] names its process): be killed with it,
-/// and leave at once if it is gone already (this process's parent is then another).
-fn die_with_the_coordinator() -> anyhow::Result<()> {
-    let Ok(text) = std::env::var(wire::PARENT_ENV) else {
-        return Ok(());
-    };
-    let coordinator: u32 = text
-        .parse()
-        .with_context(|| format!("{}: {text:?} is not a process id", wire::PARENT_ENV))?;
-    #[cfg(target_os = "linux")]
-    nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGKILL)
-        .context("asking to die with the coordinator")?;
-    let parent = std::os::unix::process::parent_id();
-    if parent != coordinator {
-        bail!("the coordinator (process {coordinator}) is gone: the parent is {parent}");
-    }
-    Ok(())
-}
-
-/// Wait until standard input ends: the coordinator closes the other end once the run's
-/// channels exist (or dies, which closes it too: then opening them fails).
-fn pass_the_gate() -> anyhow::Result<()> {
-    use std::io::Read as _;
-    let mut sink = [0u8; 64];
-    let mut stdin = std::io::stdin().lock();
-    loop {
-        match stdin.read(&mut sink) {
-            Ok(0) => return Ok(()),
-            Ok(_) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e).context("waiting for the run's channels (standard input)"),
-        }
-    }
-}
-
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    die_with_the_coordinator()?;
+    launch::die_with_the_coordinator()?;
     let mode = test_mode(args)?;
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.die_with_parent {
@@ -168,7 +134,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mission = ipc::Mission::read(prefix, args.mission_sha256)
         .with_context(|| format!("opening run {prefix}"))?;
     if args.gate_stdin {
-        pass_the_gate()?;
+        launch::pass_the_gate()?;
     }
     if let Some(uid) = args.sandbox_uid {
         return run_sandbox_relay(args, prefix, uid, liveness, &mission);
@@ -300,16 +266,16 @@ fn run_relay(
     })
 }
 
-/// Read the turn's bodies into `others` (every listed agent but `agent`, with its radius
-/// from `radii_m`) and return `agent`'s own position. A list that is not in increasing
-/// agent order, names an agent the mission does not have, or lacks `agent` is an error:
-/// the world comes from another process.
 /// The step of `turn` as an index (moving obstacles stand where this step puts them; a
 /// step beyond the platform's indices cannot come from a run, and saturates).
 fn turn_step(turn: &TurnInput) -> usize {
     usize::try_from(turn.step).unwrap_or(usize::MAX)
 }
 
+/// Read the turn's bodies into `others` (every listed agent but `agent`, with its radius
+/// from `radii_m`) and return `agent`'s own position. A list that is not in increasing
+/// agent order, names an agent the mission does not have, or lacks `agent` is an error:
+/// the world comes from another process.
 fn read_bodies(
     turn: &TurnInput,
     agent: usize,

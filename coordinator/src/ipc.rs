@@ -182,22 +182,6 @@ fn pid_of_id(id: u128) -> u32 {
     u32::try_from(UniqueSystemId::from(id).pid().value()).unwrap_or(0)
 }
 
-/// How long [`CoordinatorIpc::cleanup_dead_nodes`] waits for a dead node's process to
-/// finish exiting (it is killed already; an exiting process closes its files one by one).
-const PROCESS_EXIT_WAIT: Duration = Duration::from_secs(1);
-
-/// Wait until process `pid` has exited (gone, or a zombie: its files are closed), at most
-/// `timeout`.
-fn wait_until_gone(pid: u32, timeout: Duration) {
-    let deadline = Instant::now() + timeout;
-    while Instant::now() < deadline {
-        match crate::procfs::ProcStat::read(pid) {
-            Some(stat) if !stat.zombie() => std::thread::sleep(Duration::from_millis(1)),
-            _ => return,
-        }
-    }
-}
-
 /// A seed from the OS random source.
 fn os_seed() -> anyhow::Result<[u8; 32]> {
     let mut seed = [0u8; 32];
@@ -555,33 +539,9 @@ impl CoordinatorIpc {
     }
 
     /// Remove the resources of this run's dead nodes (killed agents); returns how many
-    /// nodes were cleaned.
-    ///
-    /// The files a dead process left empty are removed first
-    /// ([`wire::remove_abandoned_shm_files`]): iceoryx2's own cleanup would wait on such a
-    /// file forever. So the cleanup is done node by node, for the nodes found dead once
-    /// their processes are gone.
+    /// nodes were cleaned ([`crate::dead_nodes`]).
     pub fn cleanup_dead_nodes(&self) -> usize {
-        let mut dead = Vec::new();
-        let _ = Node::<ipc::Service>::list(self.node.config(), |state| {
-            if let NodeState::Dead(view) = state {
-                dead.push(view);
-            }
-            CallbackProgression::Continue
-        });
-        if dead.is_empty() {
-            return 0;
-        }
-        for view in &dead {
-            wait_until_gone(pid_of_id(view.id().value()), PROCESS_EXIT_WAIT);
-        }
-        let abandoned = wire::remove_abandoned_shm_files(&self.prefix);
-        if abandoned > 0 {
-            tracing::info!("removed {abandoned} segment(s) a killed process left unfinished");
-        }
-        dead.into_iter()
-            .filter(|view| view.clone().try_remove_stale_resources().is_ok())
-            .count()
+        crate::dead_nodes::cleanup_dead_nodes(&self.node, &self.prefix)
     }
 
     /// Drop every port and the node, then remove the run's last shared-memory file.

@@ -6,6 +6,7 @@ mod bench;
 mod bound;
 pub mod cli;
 mod compare;
+mod dead_nodes;
 mod error;
 mod ipc;
 pub mod logging;

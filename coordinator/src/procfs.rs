@@ -101,19 +101,28 @@ pub fn open_fds() -> Vec<i32> {
         .collect()
 }
 
-/// Process `pid`'s resident memory (`VmRSS`), KiB.
-pub fn rss_kib(pid: u32) -> Option<f64> {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
+/// A process's memory, KiB.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Memory {
+    /// Resident set size.
+    pub rss_kib: f64,
+    /// Proportional set size: each page it shares counted as its share; what one more
+    /// such process costs the machine.
+    pub pss_kib: f64,
 }
 
-/// Process `pid`'s proportional set size (`Pss` of `/proc/PID/smaps_rollup`: each page
-/// it shares counted as its share), KiB: what one more such process costs the machine.
-pub fn pss_kib(pid: u32) -> Option<f64> {
+/// Process `pid`'s memory, both figures from one read of `/proc/PID/smaps_rollup` (its
+/// `Rss` and `Pss` lines).
+pub fn memory(pid: u32) -> Option<Memory> {
     let rollup = std::fs::read_to_string(format!("/proc/{pid}/smaps_rollup")).ok()?;
-    let line = rollup.lines().find(|l| l.starts_with("Pss:"))?;
-    line.split_whitespace().nth(1)?.parse().ok()
+    let kib = |key: &str| -> Option<f64> {
+        let line = rollup.lines().find(|l| l.starts_with(key))?;
+        line.split_whitespace().nth(1)?.parse().ok()
+    };
+    Some(Memory {
+        rss_kib: kib("Rss:")?,
+        pss_kib: kib("Pss:")?,
+    })
 }
 
 /// The CPU time process `pid` has used so far, from the scheduler's nanosecond counter
@@ -251,6 +260,13 @@ impl IdleCpu {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn this_process_shares_no_more_than_it_holds() {
+        let m = memory(std::process::id()).expect("our own smaps_rollup");
+        assert!(m.pss_kib > 0.0 && m.pss_kib <= m.rss_kib, "{m:?}");
+        assert_eq!(memory(u32::MAX), None, "no such process");
+    }
 
     #[test]
     fn the_machine_is_idle_while_this_thread_sleeps_and_busy_while_it_spins() {

@@ -351,9 +351,7 @@ impl PingPongSession {
         self.procs.stop_all(Duration::from_secs(2));
         drop(self.ports.take());
         if let Some(node) = self.node.take() {
-            // The peer is reaped: an empty segment it left would hang the cleanup.
-            wire::remove_abandoned_shm_files(&self.prefix);
-            let _ = node.try_cleanup_dead_nodes();
+            crate::dead_nodes::cleanup_dead_nodes(&node, &self.prefix);
         }
         let _ = std::fs::remove_file(&self.socket_path);
         // SAFETY: the only other process of this prefix has exited and been reaped, and

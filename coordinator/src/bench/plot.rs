@@ -3,10 +3,10 @@
 //! turns and a few thousand round trips compare at a glance.
 
 use anyhow::Context;
-use plotters::coord::Shift;
+use plotters::coord::{CoordTranslate, Shift};
 use plotters::prelude::{
-    ChartBuilder, Circle, DrawingArea, IntoDrawingArea, IntoLogRange, LineSeries, PathElement,
-    SVGBackend, SeriesLabelPosition,
+    ChartBuilder, ChartContext, Circle, DrawingArea, IntoDrawingArea, IntoLogRange, LineSeries,
+    PathElement, SVGBackend, SeriesLabelPosition,
 };
 use plotters::style::{Color, IntoFont, RGBColor, WHITE};
 
@@ -135,19 +135,32 @@ where
             .draw_series(LineSeries::new(points, color.stroke_width(2)))
             .with_context(|| format!("drawing {}", s.label))?
             .label(&s.label)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+            .legend(legend_line(color));
     }
+    draw_legend(&mut chart, SeriesLabelPosition::UpperRight)
+}
+
+/// A legend entry: a short line in `color`.
+fn legend_line(color: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+}
+
+/// Draw `chart`'s legend at `position`, the same in every plot of the bench.
+fn draw_legend<'a, DB: plotters::prelude::DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> anyhow::Result<()>
+where
+    DB::ErrorType: 'static,
+{
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(position)
         .label_font((font::FAMILY, 13).into_font())
         .background_style(WHITE.mix(0.85))
         .border_style(GREY)
         .draw()
-        .context("drawing the legend")?;
-    Ok(())
+        .context("drawing the legend")
 }
 
 /// One curve of a plot against the number of agents.
@@ -233,9 +246,7 @@ where
             .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
             .with_context(|| format!("drawing {}", k.label))?
             .label(&k.label)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-            });
+            .legend(legend_line(color));
         chart
             .draw_series(
                 points
@@ -244,15 +255,7 @@ where
             )
             .with_context(|| format!("drawing the points of {}", k.label))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font((font::FAMILY, 13).into_font())
-        .background_style(WHITE.mix(0.85))
-        .border_style(GREY)
-        .draw()
-        .context("drawing the legend")?;
-    Ok(())
+    draw_legend(&mut chart, SeriesLabelPosition::UpperLeft)
 }
 
 /// The histogram of `values` over `edges` as a step outline: fraction of all values per

@@ -314,8 +314,9 @@ impl Driver<'_, '_> {
             .zip(procfs::machine_cpu_ticks())
             .and_then(|(from, to)| procfs::idle_share(from, to));
         let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
-        self.progress.rss_kib = pids.iter().filter_map(|&p| procfs::rss_kib(p)).collect();
-        self.progress.pss_kib = pids.iter().filter_map(|&p| procfs::pss_kib(p)).collect();
+        let memory: Vec<procfs::Memory> = pids.iter().filter_map(|&p| procfs::memory(p)).collect();
+        self.progress.rss_kib = memory.iter().map(|m| m.rss_kib).collect();
+        self.progress.pss_kib = memory.iter().map(|m| m.pss_kib).collect();
         self.progress.cpu_s = pids.iter().filter_map(|&p| procfs::cpu_s(p)).collect();
         self.progress.completed = !self.progress.interrupted;
         Ok(())
