@@ -128,11 +128,9 @@ pub fn mission_path(prefix: &str) -> Option<PathBuf> {
     run_root(prefix).map(|root| root.join(MISSION_FILE_NAME))
 }
 
-/// Write `scenario` as run `prefix`'s mission file (the coordinator, before any agent
-/// starts); returns its digest, for the processes that will read it.
-pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest, MissionFileError> {
-    use std::io::Write as _;
-    use std::os::unix::fs::OpenOptionsExt;
+/// The mission file of run `prefix`, in its checked private folder ([`check_run_root`]);
+/// an invalid prefix is refused by name, not taken for a missing folder.
+fn private_mission_path(prefix: &str) -> Result<PathBuf, MissionFileError> {
     if !is_valid_prefix(prefix) {
         return Err(PrefixError::Invalid(prefix.to_string()).into());
     }
@@ -140,6 +138,15 @@ pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest,
     if let Some(folder) = path.parent() {
         check_run_root(folder)?;
     }
+    Ok(path)
+}
+
+/// Write `scenario` as run `prefix`'s mission file (the coordinator, before any agent
+/// starts); returns its digest, for the processes that will read it.
+pub fn write_mission(prefix: &str, scenario: &Scenario) -> Result<MissionDigest, MissionFileError> {
+    use std::io::Write as _;
+    use std::os::unix::fs::OpenOptionsExt;
+    let path = private_mission_path(prefix)?;
     let text = scenario
         .to_mission_json()
         .map_err(|e| MissionFileError::NotRepresentable(e.to_string()))?;
@@ -206,13 +213,7 @@ pub fn read_mission_text(
     expected: Option<MissionDigest>,
 ) -> Result<MissionText, MissionFileError> {
     use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
-    if !is_valid_prefix(prefix) {
-        return Err(PrefixError::Invalid(prefix.to_string()).into());
-    }
-    let path = mission_path(prefix).ok_or_else(|| MissionFileError::NoRunFolder(prefix.into()))?;
-    if let Some(folder) = path.parent() {
-        check_run_root(folder)?;
-    }
+    let path = private_mission_path(prefix)?;
     let untrusted = |why: String| MissionFileError::Untrusted {
         path: path.clone(),
         why,
