@@ -22,7 +22,7 @@ use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use nix::fcntl::{FcntlArg, OFlag, fcntl};
 
@@ -226,20 +226,14 @@ impl Watched {
         if let Some(status) = self.status {
             return status;
         }
-        let deadline = Instant::now() + super::HUNG_RUN;
-        loop {
-            if let Some(status) = self.child.try_wait().expect("wait for the coordinator") {
-                self.status = Some(status);
-                return status;
-            }
-            // Dropping `self` kills and reaps the run.
-            assert!(
-                Instant::now() < deadline,
-                "the run was still going after {:?}: killed as hung",
-                super::HUNG_RUN
-            );
-            std::thread::sleep(Duration::from_millis(10));
-        }
+        // Dropping `self` after the panic kills and reaps the run.
+        let mut status = None;
+        super::wait_until(super::HUNG_RUN, "the run was killed as hung", || {
+            status = self.child.try_wait().expect("wait for the coordinator");
+            status.is_some()
+        });
+        self.status = status;
+        status.expect("the run ended")
     }
 
     /// Wait for the coordinator to exit and for its stdout and stderr to close (the
