@@ -57,13 +57,22 @@ impl SandboxedAgent {
 
 impl Drop for SandboxedAgent {
     fn drop(&mut self) {
+        // The agent first, and reaped (a killed child stays in its group until then);
+        // then whatever else is in its group. Every wait looks with growing pauses: at
+        // the end of a large run a thousand relays wait at once on two cores.
         let _ = self.child.kill();
+        let child = &mut self.child;
+        let reaped = wire::poll_until(ORPHANS_TIMEOUT, || {
+            matches!(child.try_wait(), Ok(Some(_)) | Err(_))
+        });
         if let Some(group) = &self.cgroup
             && let Err(e) = group.kill_all(ORPHANS_TIMEOUT)
         {
             tracing::warn!("sandboxed agent {}: {e}", self.child.id());
         }
-        let _ = self.child.wait();
+        if !reaped {
+            let _ = self.child.wait();
+        }
         // Without a control group nothing here killed the agent's other processes: the
         // dead ones are reaped, the live ones left to the coordinator's sweep.
         reap_adopted_orphans(match self.cgroup {
@@ -72,14 +81,10 @@ impl Drop for SandboxedAgent {
         });
         // Let the stderr relay drain what the agent wrote and report what it dropped
         // before this process goes; not for ever (a child it left may hold the pipe).
-        if let Some(relay) = self.stderr_relay.take() {
-            let until = std::time::Instant::now() + ORPHANS_TIMEOUT;
-            while !relay.is_finished() && std::time::Instant::now() < until {
-                std::thread::sleep(std::time::Duration::from_millis(5));
-            }
-            if relay.is_finished() {
-                let _ = relay.join();
-            }
+        if let Some(relay) = self.stderr_relay.take()
+            && wire::poll_until(ORPHANS_TIMEOUT, || relay.is_finished())
+        {
+            let _ = relay.join();
         }
     }
 }
@@ -102,19 +107,19 @@ pub fn adopt_orphans() {
 /// child of its own but the agent, so waiting for any child touches nothing else.
 fn reap_adopted_orphans(timeout: std::time::Duration) {
     use nix::sys::wait::{WaitPidFlag, WaitStatus, waitpid};
-    let deadline = std::time::Instant::now() + timeout;
-    loop {
-        match waitpid(None, Some(WaitPidFlag::WNOHANG)) {
-            Ok(WaitStatus::StillAlive) => {
-                if std::time::Instant::now() >= deadline {
-                    tracing::warn!("the sandboxed agent left processes that would not die");
-                    return;
-                }
-                std::thread::sleep(std::time::Duration::from_millis(2));
+    let all_reaped = wire::poll_until(timeout, || {
+        loop {
+            match waitpid(None, Some(WaitPidFlag::WNOHANG)) {
+                // One reaped: look for the next at once.
+                Ok(WaitStatus::StillAlive) => return false,
+                Ok(_) => {}
+                // No child left.
+                Err(_) => return true,
             }
-            Ok(_) => {}
-            Err(_) => return,
         }
+    });
+    if !all_reaped {
+        tracing::warn!("the sandboxed agent left processes that would not die");
     }
 }
 

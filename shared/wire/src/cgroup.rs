@@ -230,36 +230,45 @@ impl CgroupDirs {
     /// Kill every process in the group and below (SIGKILL), and wait until none is
     /// left, at most `timeout`.
     pub fn kill_all(&self, timeout: Duration) -> Result<(), CgroupError> {
-        let deadline = Instant::now() + timeout;
         let kill_file = self
             .unified
             .as_ref()
             .map(|d| d.join("cgroup.kill"))
             .filter(|f| f.is_file());
-        loop {
-            let left = self.processes();
-            if left.is_empty() {
-                return Ok(());
-            }
-            if Instant::now() >= deadline {
-                return Err(CgroupError::Survivors {
-                    left: left.len(),
-                    waited: timeout,
-                });
+        let mut left = 0;
+        let mut failed = None;
+        let emptied = crate::poll_until(timeout, || {
+            let pids = self.processes();
+            left = pids.len();
+            if pids.is_empty() {
+                return true;
             }
             match &kill_file {
                 // Every process below, at once: none can fork away meanwhile.
-                Some(file) => write_file(file, "1")?,
+                Some(file) => {
+                    if let Err(e) = write_file(file, "1") {
+                        failed = Some(e);
+                        return true;
+                    }
+                }
                 // One by one, round after round: a forking process is bounded by its
                 // `pids.max`, so the rounds end.
                 None => {
-                    for &pid in &left {
+                    for &pid in &pids {
                         // SAFETY: kill(2) with a pid read from the group's own list.
                         unsafe { libc::kill(pid as libc::pid_t, libc::SIGKILL) };
                     }
                 }
             }
-            std::thread::sleep(Duration::from_millis(2));
+            false
+        });
+        match failed {
+            Some(e) => Err(e),
+            None if emptied => Ok(()),
+            None => Err(CgroupError::Survivors {
+                left,
+                waited: timeout,
+            }),
         }
     }
 
@@ -278,13 +287,20 @@ impl CgroupDirs {
             }
             // Deepest first.
             for dir in dirs.iter().rev() {
-                loop {
-                    match std::fs::remove_dir(dir) {
-                        Ok(()) => break,
-                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => break,
-                        Err(e) if Instant::now() >= deadline => return Err(io(dir)(e)),
-                        Err(_) => std::thread::sleep(Duration::from_millis(5)),
-                    }
+                let mut last = None;
+                let removed =
+                    crate::poll_until(deadline.saturating_duration_since(Instant::now()), || {
+                        match std::fs::remove_dir(dir) {
+                            Ok(()) => true,
+                            Err(e) if e.kind() == std::io::ErrorKind::NotFound => true,
+                            Err(e) => {
+                                last = Some(e);
+                                false
+                            }
+                        }
+                    });
+                if !removed && let Some(e) = last {
+                    return Err(io(dir)(e));
                 }
             }
         }

@@ -28,6 +28,8 @@
 //! - `run_folder`: the run's private folder and files ([`RunRoot`]);
 //! - `loan`: the one in-place initialisation of a loaned sample ([`loan_default`]);
 //! - `clock`: the machine's monotonic clock ([`monotonic_ns`]);
+//! - `poll`: waiting for a state no descriptor signals, with growing pauses
+//!   ([`poll_until`]);
 //! - `bench`: the latency floor's services and sample ([`BenchPing`]);
 //! - [`cgroup`]: the run's control groups, one per sandboxed agent;
 //! - [`logging`]: the stderr log, other crates' lines within a budget;
@@ -44,6 +46,7 @@ pub mod logging;
 mod message;
 pub mod misbehave;
 mod mission_file;
+mod poll;
 mod prefix;
 mod run_folder;
 mod services;
@@ -64,6 +67,7 @@ pub use mission_file::{
     BadMissionDigest, MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionDigest, MissionFileError,
     MissionText, mission_path, read_mission, read_mission_text, write_mission,
 };
+pub use poll::poll_until;
 pub use prefix::{MAX_PREFIX_LEN, PARENT_ENV, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{
     RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private,
