@@ -345,3 +345,38 @@ fn same_inputs_give_bit_identical_outputs() {
         (y.x.to_bits(), y.y.to_bits())
     );
 }
+
+/// `[cbf] substeps` reaches the agents (one piece and three give other runs, both safe),
+/// and a count out of range is refused by the field's name.
+#[test]
+fn the_cbf_table_sets_the_pieces_of_a_turn() {
+    let file = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/paper.toml"
+    ));
+    let text = format!(
+        "controller = \"cbf\"\n{}",
+        std::fs::read_to_string(&file).expect("paper.toml")
+    );
+    let with = |substeps: u32| format!("{text}\n[cbf]\nsubsteps = {substeps}\n");
+    let load = |t: &str| shared::scenario::Scenario::parse(t, "paper-cbf.toml");
+    let default = load(&text).expect("loads");
+    assert_eq!(
+        default.controller.cbf.substeps,
+        shared::vocabulary::DEFAULT_CBF_SUBSTEPS
+    );
+    let one = load(&with(1)).expect("loads");
+    let three = load(&with(3)).expect("loads");
+    assert_eq!(one.controller.cbf.substeps, 1);
+    let (a, b) = (
+        shared::simulate::simulate(&one).expect("runs"),
+        shared::simulate::simulate(&three).expect("runs"),
+    );
+    assert_eq!(a.summary().collisions, 0);
+    assert_eq!(b.summary().collisions, 0);
+    assert_ne!(a.steps, b.steps, "the pieces changed nothing");
+    for bad in [0, shared::vocabulary::MAX_CBF_SUBSTEPS + 1] {
+        let e = load(&with(bad)).expect_err("out of range").to_string();
+        assert!(e.contains("cbf.substeps"), "{e}");
+    }
+}

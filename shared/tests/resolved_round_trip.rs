@@ -50,7 +50,7 @@ fn round_trip(s: &Scenario, what: &str) -> String {
         "{what}"
     );
     assert!(
-        doc["cbf"].as_table().is_some_and(|c| c.len() == 6),
+        doc["cbf"].as_table().is_some_and(|c| c.len() == 7),
         "{what}"
     );
     assert!(text.starts_with("# Resolved form"), "{what}");

@@ -68,7 +68,19 @@ impl CbfController {
         radius_m: f64,
         others: &[Body],
     ) -> Vec<HalfPlane> {
-        let gamma = self.settings.gamma_per_s;
+        let bodies = sensed(&self.obstacles, others, me, self.settings.sensing_radius_m);
+        self.rows_at(me, radius_m, &bodies, self.settings.gamma_per_s)
+    }
+
+    /// The barrier rows of a disk of `radius_m` at `me` with class-K gain `gamma`: the
+    /// four field edges, then one per body of `bodies` (centre, radius).
+    fn rows_at(
+        &self,
+        me: &Point,
+        radius_m: f64,
+        bodies: &[(Point, f64)],
+        gamma: f64,
+    ) -> Vec<HalfPlane> {
         let inset_m = radius_m + CBF_MARGIN_M;
         let mut rows = vec![
             HalfPlane::new(Vector::new(-1.0, 0.0), gamma * (me.x - inset_m)),
@@ -85,9 +97,7 @@ impl CbfController {
         // The whole responsibility for every body, mates included: they stand still
         // during this turn (or, in a parallel group, cannot reach this agent within the
         // step).
-        for (centre, body_radius_m) in
-            sensed(&self.obstacles, others, me, self.settings.sensing_radius_m)
-        {
+        for &(centre, body_radius_m) in bodies {
             let away = me - centre;
             let reach_m = radius_m + body_radius_m + CBF_MARGIN_M;
             let distance_m = away.norm();
@@ -106,12 +116,44 @@ impl CbfController {
         Ok(self.settings.capped(u))
     }
 
-    /// Plan this agent's move while every `other` body stands still: one step of `dt`
-    /// at the CBF-QP velocity; stays put ([`MoveStatus::Stayed`]) when the QP is
-    /// infeasible (only possible from an unsafe or non-finite state).
+    /// Plan this agent's move while every `other` body stands still: `substeps` straight
+    /// pieces of `dt / substeps`, each at the CBF-QP velocity from where the last one
+    /// ended (gains per piece, see [`CbfSettings::substeps`]), against the bodies sensed
+    /// where the turn began (a body farther off cannot be reached within the turn). The
+    /// turn ends early where a QP is infeasible (only from an unsafe or non-finite state)
+    /// or gives no motion; with no motion at all the agent stays put
+    /// ([`MoveStatus::Stayed`]).
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         let slot = self.slot_position(centre);
-        let u = self.velocity(&slot, me, others).ok();
-        step_move(slot, me, u, self.settings.dt_s)
+        let pieces = f64::from(self.settings.substeps);
+        let piece = CbfSettings {
+            gamma_per_s: self.settings.gamma_per_s * pieces,
+            gain_per_s: self.settings.gain_per_s * pieces,
+            dt_s: self.settings.dt_s / pieces,
+            ..self.settings
+        };
+        let bodies = sensed(&self.obstacles, others, me, self.settings.sensing_radius_m);
+        let mut waypoints = vec![*me];
+        let mut at = *me;
+        for _ in 0..self.settings.substeps {
+            let u_nom = piece.nominal(&slot, &at);
+            let rows = self.rows_at(&at, self.radius_m, &bodies, piece.gamma_per_s);
+            let u = match solve_qp_2d(&u_nom, &rows) {
+                Ok(u) => piece.capped(u),
+                Err(_) => break,
+            };
+            if u == Vector::zeros() {
+                break;
+            }
+            at += piece.dt_s * u;
+            waypoints.push(at);
+        }
+        Move {
+            end_heading_rad: None,
+            slot,
+            best: at,
+            status: step_status(&slot, me, &at),
+            waypoints,
+        }
     }
 }

@@ -193,3 +193,72 @@ mod unicycle {
         assert!((ahead - post.centre).norm() >= post.radius_m + 0.11 - 1e-6);
     }
 }
+
+mod substeps {
+    use super::*;
+    use crate::formation::Slot;
+    use crate::geometry::{Field, Pose};
+    use crate::vocabulary::AgentSpec;
+
+    /// An agent at the origin of a 20 x 20 m field (shifted to its middle) whose slot is
+    /// 1.5 m ahead, a mate standing just off the straight line to it.
+    fn controller(substeps: u32) -> CbfController {
+        let spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.3);
+        let settings = CbfSettings {
+            substeps,
+            ..CbfSettings::default()
+        };
+        CbfController::new(Field::new(20.0, 20.0), &[], &spec, settings).expect("settings")
+    }
+
+    fn me() -> Point {
+        Point::new(10.0, 10.0)
+    }
+
+    /// The centre pose that puts the slot at (11.5, 10).
+    fn centre() -> Pose {
+        Pose::new(11.5, 10.0, 0.0)
+    }
+
+    fn mate() -> Body {
+        Body {
+            position: Point::new(10.9, 10.15),
+            radius_m: 0.3,
+        }
+    }
+
+    #[test]
+    fn one_piece_is_the_one_straight_step_of_the_qp_velocity() {
+        let c = controller(1);
+        let others = [mate()];
+        let mv = c.plan_move(&centre(), &me(), &others);
+        let u = c
+            .velocity(&Point::new(11.5, 10.0), &me(), &others)
+            .expect("safe start");
+        assert_eq!(mv.best, me() + c.settings().dt_s * u);
+        assert_eq!(mv.waypoints, vec![me(), mv.best]);
+    }
+
+    #[test]
+    fn more_pieces_slide_round_a_mate_and_end_nearer_the_slot() {
+        let others = [mate()];
+        let slot = Point::new(11.5, 10.0);
+        let one = controller(1).plan_move(&centre(), &me(), &others);
+        let three = controller(3).plan_move(&centre(), &me(), &others);
+        assert_eq!(three.waypoints.len(), 4);
+        assert_eq!(three.waypoints[0], me());
+        // Each piece clear of the mate, and no longer than a third of the step.
+        for piece in three.waypoints.windows(2) {
+            assert!((piece[1] - piece[0]).norm() <= 1.0 / 3.0 + 1e-12);
+            let d =
+                crate::geometry::distance_point_segment(&others[0].position, &piece[0], &piece[1]);
+            assert!(d >= 0.6, "a piece within {d} m of the mate");
+        }
+        assert!(
+            (three.best - slot).norm() < (one.best - slot).norm(),
+            "three pieces end {} m from the slot, one {} m",
+            (three.best - slot).norm(),
+            (one.best - slot).norm()
+        );
+    }
+}

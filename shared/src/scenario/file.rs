@@ -72,6 +72,8 @@ pub(super) struct CbfFile {
     pub(super) sensing_radius_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) lse_sharpness_per_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) substeps: Option<u32>,
 }
 
 /// `[map]`: an occupancy map whose blocked cells are obstacles: a map_server YAML file

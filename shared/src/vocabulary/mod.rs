@@ -32,7 +32,10 @@ mod turn_mode;
 pub use agent::AgentSpec;
 pub use body::Body;
 pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
-pub use cbf_settings::{CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_LSE_SHARPNESS_PER_M};
+pub use cbf_settings::{
+    CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_CBF_SUBSTEPS, DEFAULT_LSE_SHARPNESS_PER_M,
+    MAX_CBF_SUBSTEPS,
+};
 pub use controller::{ControllerKind, ControllerSpec, OrcaSettings};
 pub use kinematics::Kinematics;
 pub use moves::{Move, MoveStatus};

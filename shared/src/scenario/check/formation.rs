@@ -7,7 +7,9 @@ use crate::geometry::{Field, Pose};
 use crate::scenario::ScenarioError;
 use crate::scenario::file::{CbfFile, FormationFile, OrcaFile};
 use crate::tracking::{DEFAULT_HORIZON_STEPS, MAX_HORIZON_STEPS};
-use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, Kinematics, MAX_AGENTS};
+use crate::vocabulary::{
+    AgentSpec, ControllerKind, ControllerSpec, Kinematics, MAX_AGENTS, MAX_CBF_SUBSTEPS,
+};
 
 impl Checker<'_> {
     pub(super) fn controller(
@@ -47,6 +49,15 @@ impl Checker<'_> {
                 c.lse_sharpness_per_m,
                 &mut spec.lse_sharpness_per_m,
             )?;
+            if let Some(n) = c.substeps {
+                if !(1..=MAX_CBF_SUBSTEPS).contains(&n) {
+                    return Err(self.invalid(
+                        "cbf.substeps",
+                        format!("must be 1 to {MAX_CBF_SUBSTEPS}, got {n}"),
+                    ));
+                }
+                spec.cbf.substeps = n;
+            }
         }
         spec.check(agents)
             .map_err(|e| self.invalid("cbf", e.to_string()))?;
