@@ -325,3 +325,38 @@ fn the_orca_table_sets_rvo2s_parameters_of_its_own_model() {
     assert_eq!(b.summary().collisions, 0);
     assert_ne!(a.steps, b.steps, "the horizon changed nothing");
 }
+
+/// In ORCA's own model every agent moves at once, at a constant speed along its move:
+/// at every instant of every step of dense-orca, every two agents stand at least their
+/// radii apart (the recorder refuses moves that would meet at the same time).
+#[test]
+fn in_its_own_model_no_two_agents_meet_at_any_instant() {
+    let file = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/data/dense-orca.toml"
+    ));
+    let scenario = shared::scenario::Scenario::load(&file).expect("dense-orca.toml");
+    assert_eq!(scenario.turns, shared::vocabulary::TurnMode::Simultaneous);
+    let run = shared::simulate::simulate(&scenario).expect("runs");
+    let mut crossings = 0;
+    for step in &run.steps[1..] {
+        for (i, a) in step.agents.iter().enumerate() {
+            for (j, b) in step.agents.iter().enumerate().take(i) {
+                let reach_m = scenario.agents[i].radius_m + scenario.agents[j].radius_m;
+                let d = shared::geometry::distance_at_the_same_time_m(&a.waypoints, &b.waypoints);
+                assert!(
+                    d >= reach_m - shared::safety::SAFETY_TOLERANCE_M,
+                    "step {}: agents {i} and {j} come within {d} m at once",
+                    step.step
+                );
+                if shared::geometry::distance_polyline_polyline(&a.waypoints, &b.waypoints)
+                    < reach_m
+                {
+                    crossings += 1;
+                }
+            }
+        }
+    }
+    // The check is the one of the model, not the stricter one of parallel groups.
+    assert!(crossings > 0, "no two moves of the run crossed paths");
+}

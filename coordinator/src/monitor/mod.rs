@@ -61,7 +61,8 @@ pub enum Refusal {
     GroupMate {
         /// The other agent.
         agent: usize,
-        /// Smallest distance between the two moves' polylines.
+        /// Smallest distance between the two moves' polylines (in `simultaneous` turns,
+        /// between the two agents at the same time).
         distance_m: f64,
         /// The two agents' radii summed: the least distance allowed.
         reach_m: f64,
@@ -391,6 +392,22 @@ pub fn distance_between_moves_m(a: &[Point], b: &[Point]) -> f64 {
     best
 }
 
+/// The smallest distance between two agents moving at once along the polylines `a` and
+/// `b`, each at a constant speed over the same time (ORCA's own model, `simultaneous`
+/// turns): the least distance from the origin to a piece of their relative motion
+/// ([`shared::geometry::relative_motion`]), computed with parry's segment-point query.
+pub fn distance_between_simultaneous_moves_m(a: &[Point], b: &[Point]) -> f64 {
+    let identity = Isometry2::identity();
+    let origin = Ball::new(0.0);
+    shared::geometry::relative_motion(a, b)
+        .into_iter()
+        .map(|(from, to)| {
+            let piece = Segment::new(Point::from(from), Point::from(to));
+            query::distance(&identity, &piece, &identity, &origin).unwrap_or(0.0)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -421,6 +438,37 @@ mod tests {
         assert_eq!(distance_between_moves_m(&path, &across), 0.0);
         let beside = [Point::new(10.0, 4.0)];
         assert!((distance_between_moves_m(&path, &beside) - 7.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn moves_made_at_once_meet_only_where_both_agents_are_at_the_same_time() {
+        // Both cross (1.5, 2): one halfway through the step, the other at its end.
+        let first = [Point::new(0.0, 0.0), Point::new(3.0, 4.0)];
+        let second = [Point::new(1.5, -2.0), Point::new(1.5, 2.0)];
+        assert_eq!(distance_between_moves_m(&first, &second), 0.0);
+        let apart = distance_between_simultaneous_moves_m(&first, &second);
+        assert!(apart > 0.9, "{apart}");
+        // Against shared's own arithmetic, on polylines of one to three points.
+        let moves: [&[Point]; 4] = [
+            &first,
+            &second,
+            &[Point::new(2.0, 1.0)],
+            &[
+                Point::new(4.0, 0.0),
+                Point::new(1.0, 1.0),
+                Point::new(0.0, 3.0),
+            ],
+        ];
+        for a in moves {
+            for b in moves {
+                let parry = distance_between_simultaneous_moves_m(a, b);
+                let own = shared::geometry::distance_at_the_same_time_m(a, b);
+                assert!(
+                    (parry - own).abs() < 1e-9,
+                    "{a:?} {b:?}: {parry} against {own}"
+                );
+            }
+        }
     }
 
     #[test]

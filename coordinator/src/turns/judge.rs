@@ -4,7 +4,7 @@
 use shared::geometry::Point;
 use shared::groups::{GroupMove, group_meetings};
 use shared::record::{FaultKind, Recorder};
-use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
+use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
 use wire::StateMsg;
 
 use crate::monitor::{self, Refusal, SafetyMonitor};
@@ -67,8 +67,9 @@ pub(super) fn judge_move(
 }
 
 /// Take the moves of one group that passed [`judge_move`]: the monitor checks every pair
-/// against each other's whole move (both refused if they meet), then the recorder checks
-/// and takes what is left.
+/// against each other's whole move (both refused if they meet; in `simultaneous` turns,
+/// where every agent moves at once at a constant speed, if they meet at the same time),
+/// then the recorder checks and takes what is left.
 pub(super) fn settle_group(recorder: &mut Recorder, step: usize, moves: Vec<(usize, Move)>) {
     let group: Vec<GroupMove<'_>> = moves
         .iter()
@@ -78,7 +79,13 @@ pub(super) fn settle_group(recorder: &mut Recorder, step: usize, moves: Vec<(usi
             refused: false,
         })
         .collect();
-    let meetings = group_meetings(&group, monitor::distance_between_moves_m);
+    // Moves made at once at constant speeds (ORCA's own model) meet only if the agents
+    // are close at the same time; a parallel group's timing is not known: anywhere.
+    let meetings = if recorder.scenario().turns == TurnMode::Simultaneous {
+        group_meetings(&group, monitor::distance_between_simultaneous_moves_m)
+    } else {
+        group_meetings(&group, monitor::distance_between_moves_m)
+    };
     let mates: Vec<usize> = moves.iter().map(|(agent, _)| *agent).collect();
     let mut kept = Vec::with_capacity(moves.len());
     for ((agent, mv), meeting) in moves.into_iter().zip(meetings) {

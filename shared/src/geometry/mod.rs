@@ -36,7 +36,8 @@ pub use intersections::{
 pub use polygon::{Polygon, PolygonError};
 pub use polygon_layer::PolygonLayer;
 pub use polyline::{
-    distance_polyline_polyline, distance_segment_segment, polyline_length_m, polyline_prefix,
+    distance_at_the_same_time_m, distance_polyline_polyline, distance_segment_segment,
+    polyline_length_m, polyline_prefix, relative_motion,
 };
 pub use pose::{Pose, wrap_angle_rad};
 pub use region_grid::RegionGrid;

@@ -4,13 +4,14 @@
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
 use crate::geometry::{
-    DiskGrid, Point, Pose, Vector, distance_polyline_polyline, polyline_length_m, wrap_angle_rad,
+    DiskGrid, Point, Pose, Vector, distance_at_the_same_time_m, distance_polyline_polyline,
+    polyline_length_m, wrap_angle_rad,
 };
 use crate::groups::{GroupMove, group_meetings};
 use crate::kinematics::{CarLimits, UnicycleLimits, check_car_move, unicycle_step_share};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
-use crate::vocabulary::{Body, Kinematics, MAX_WAYPOINTS, Move, MoveStatus};
+use crate::vocabulary::{Body, Kinematics, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
 
 /// How far beyond one step a unicycle's move may go, as a share of the step (rounding).
 const UNICYCLE_SHARE_TOLERANCE: f64 = 1e-9;
@@ -257,7 +258,8 @@ impl<'a> Recorder<'a> {
     /// length against the agent's top speed, and its end against its best point (it may
     /// stop short only [`MoveStatus::UnderWay`]); then every pair of the moves that passed
     /// is checked against each other's whole move: two that come within their radii sum
-    /// are both rejected.
+    /// are both rejected (in [`TurnMode::Simultaneous`], where every agent moves at once
+    /// at a constant speed along its move, two that do so at the same time).
     pub fn submit_group(
         &mut self,
         step: usize,
@@ -276,7 +278,13 @@ impl<'a> Recorder<'a> {
                 refused: verdict.is_err(),
             })
             .collect();
-        let meetings = group_meetings(&group, distance_polyline_polyline);
+        // At once at constant speeds (ORCA's own model): close at the same time; a
+        // parallel group's timing is not known: anywhere.
+        let meetings = if self.scenario.turns == TurnMode::Simultaneous {
+            group_meetings(&group, distance_at_the_same_time_m)
+        } else {
+            group_meetings(&group, distance_polyline_polyline)
+        };
         for (verdict, meeting) in verdicts.iter_mut().zip(meetings) {
             if let Some(m) = meeting {
                 *verdict = Err(Violation::MeetsGroupMate {
