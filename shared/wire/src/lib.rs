@@ -67,7 +67,7 @@ pub use mission_file::{
     BadMissionDigest, MAX_MISSION_BYTES, MISSION_FILE_NAME, MissionDigest, MissionFileError,
     MissionText, mission_path, read_mission, read_mission_text, write_mission,
 };
-pub use poll::poll_until;
+pub use poll::{FIRST_PAUSE, LONGEST_PAUSE, poll_until};
 pub use prefix::{MAX_PREFIX_LEN, PARENT_ENV, PrefixError, RUN_ENV, RunPrefix};
 pub use run_folder::{
     RunFilesError, RunRoot, check_run_root, effective_uid, make_run_files_private,
