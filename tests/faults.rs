@@ -390,6 +390,59 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
     }
 }
 
+/// A coordinator that cannot get to stop (held at a step of its run, its stderr a full
+/// pipe, so every log line blocks it) ends at the second SIGINT at once: exit code 130,
+/// no process of the run left, no file of it in shared memory.
+#[test]
+fn a_second_ctrl_c_ends_a_stuck_coordinator_at_once_and_leaves_nothing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let scenario = large_scenario_in(dir.path());
+    let step = progress::latest_hold_step(progress::centre_path_steps(&scenario)) / 2 + 1;
+    let mut run = Watched::spawn(
+        coordinator(
+            &[scenario.to_str().expect("utf-8 path")],
+            &dir.path().join("out"),
+        ),
+        &[step],
+    );
+    let pid = run.id();
+    support::wait_for_agents(pid, 64);
+    // Held: the coordinator runs on until its stderr pipe is full, then blocks.
+    let held = run.hold();
+    // Two signals sent before the first is taken are one: the second goes once the
+    // kernel has handed the first to the coordinator (no SIGINT pending any more).
+    kill(Pid::from_raw(pid as i32), Signal::SIGINT).expect("interrupt the coordinator");
+    support::wait_until(
+        Duration::from_secs(60),
+        "the first SIGINT still pending after 60 s",
+        || !sigint_pending(pid),
+    );
+    kill(Pid::from_raw(pid as i32), Signal::SIGINT).expect("interrupt the coordinator again");
+    let status = run.wait();
+    drop(held);
+    assert_eq!(status.code(), Some(130), "{status:?}");
+    let output = run.wait_with_output();
+    assert!(
+        !dir.path().join("out").join("summary.json").exists(),
+        "a forced exit wrote a summary"
+    );
+    drop(output);
+    assert_nothing_left(pid);
+}
+
+/// Whether a SIGINT sent to process `pid` is pending (not yet taken by any of its
+/// threads), from the `ShdPnd` mask of /proc/PID/status; false once the process is gone.
+fn sigint_pending(pid: u32) -> bool {
+    let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else {
+        return false;
+    };
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("ShdPnd:"))
+        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+        .is_some_and(|mask| mask & (1 << (Signal::SIGINT as u64 - 1)) != 0)
+}
+
 #[test]
 fn two_coordinators_at_once_do_not_interfere() {
     let dir = tempfile::tempdir().expect("tempdir");

@@ -260,8 +260,10 @@ impl CoordinatorIpc {
         // private before any other process of the run starts (see the function).
         wire::make_run_files_private(prefix)?;
         // Install iceoryx2's signal handlers now: Ctrl-C and SIGTERM then interrupt waits
-        // and are polled with `termination_requested`, so outputs are flushed.
+        // and are polled with `termination_requested`, so outputs are flushed. Then count
+        // them too: the second ends a coordinator stuck where no loop looks.
         let _ = node.wait(Duration::ZERO);
+        crate::force_quit::install();
         let done_service = node
             .service_builder(&service_name(wire::DONE_SERVICE)?)
             .event()

@@ -8,6 +8,7 @@ pub mod cli;
 mod compare;
 mod dead_nodes;
 mod error;
+mod force_quit;
 mod ipc;
 pub mod logging;
 mod monitor;

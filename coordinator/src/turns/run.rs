@@ -124,6 +124,8 @@ pub fn run_scenario_with(
             return Err(fail(e, &recorder, progress));
         }
     };
+    // Until this run is cleaned up, a second interrupt removes what it holds and leaves.
+    let _forced_exit_cleans = crate::force_quit::RunGuard::new(&prefix, run_cgroup.clone());
     let router = match options
         .network
         .as_ref()
