@@ -110,8 +110,9 @@ fn reap_adopted_orphans(timeout: std::time::Duration) {
     let all_reaped = wire::poll_until(timeout, || {
         loop {
             match waitpid(None, Some(WaitPidFlag::WNOHANG)) {
-                // One reaped: look for the next at once.
+                // Children left, none dead yet: look again after a pause.
                 Ok(WaitStatus::StillAlive) => return false,
+                // One reaped: look for the next at once.
                 Ok(_) => {}
                 // No child left.
                 Err(_) => return true,
