@@ -268,21 +268,25 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
     }
 }
 
-#[test]
-fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_cleans_up() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let scenario = large_scenario_in(dir.path());
-    // Mid-run: halfway to the latest step a kill surely lands before the run's end.
+/// A run of the large scenario (written into `dir`, its outputs into `out`) watched to
+/// be held mid-run, halfway to the latest step at which whatever the test does surely
+/// lands before the run's end; returned with its process id once its 64 agents are up.
+fn large_run_held_mid_way(dir: &std::path::Path, out: &std::path::Path) -> (Watched, u32) {
+    let scenario = large_scenario_in(dir);
     let step = progress::latest_hold_step(progress::centre_path_steps(&scenario)) / 2 + 1;
-    let mut run = Watched::spawn(
-        coordinator(
-            &[scenario.to_str().expect("utf-8 path")],
-            &dir.path().join("a"),
-        ),
+    let run = Watched::spawn(
+        coordinator(&[scenario.to_str().expect("utf-8 path")], out),
         &[step],
     );
     let pid = run.id();
     support::wait_for_agents(pid, 64);
+    (run, pid)
+}
+
+#[test]
+fn agents_leave_within_a_second_when_the_coordinator_is_killed_and_the_next_run_cleans_up() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (mut run, pid) = large_run_held_mid_way(dir.path(), &dir.path().join("a"));
     let held = run.hold();
     kill(Pid::from_raw(pid as i32), Signal::SIGKILL).expect("kill coordinator");
     let killed = Instant::now();
@@ -396,19 +400,15 @@ fn sigterm_and_ctrl_c_stop_the_run_cleanly_with_complete_outputs() {
 #[test]
 fn a_second_ctrl_c_ends_a_stuck_coordinator_at_once_and_leaves_nothing() {
     let dir = tempfile::tempdir().expect("tempdir");
-    let scenario = large_scenario_in(dir.path());
-    let step = progress::latest_hold_step(progress::centre_path_steps(&scenario)) / 2 + 1;
-    let mut run = Watched::spawn(
-        coordinator(
-            &[scenario.to_str().expect("utf-8 path")],
-            &dir.path().join("out"),
-        ),
-        &[step],
-    );
-    let pid = run.id();
-    support::wait_for_agents(pid, 64);
-    // Held: the coordinator runs on until its stderr pipe is full, then blocks.
+    let (mut run, pid) = large_run_held_mid_way(dir.path(), &dir.path().join("out"));
+    // Held: the coordinator runs on until its stderr pipe is full, then blocks there; it
+    // cannot stop cleanly any more (nor print its last line) before the hold ends.
     let held = run.hold();
+    support::wait_until(
+        Duration::from_secs(60),
+        "the held coordinator never blocked writing to its stderr",
+        || blocked_writing_to_stderr(pid),
+    );
     // Two signals sent before the first is taken are one: the second goes once the
     // kernel has handed the first to the coordinator (no SIGINT pending any more).
     kill(Pid::from_raw(pid as i32), Signal::SIGINT).expect("interrupt the coordinator");
@@ -428,6 +428,20 @@ fn a_second_ctrl_c_ends_a_stuck_coordinator_at_once_and_leaves_nothing() {
     );
     drop(output);
     assert_nothing_left(pid);
+}
+
+/// Whether a thread of process `pid` is in write(2) on its stderr (the system call each
+/// is in, from /proc/PID/task/TID/syscall: number 1, first argument 2). Held by the
+/// test's reader, that means the pipe is full: the process cannot end by itself until
+/// the reader goes on, not even with its last line.
+fn blocked_writing_to_stderr(pid: u32) -> bool {
+    let Ok(threads) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return false;
+    };
+    threads.flatten().any(|t| {
+        std::fs::read_to_string(t.path().join("syscall"))
+            .is_ok_and(|call| call.split_whitespace().take(2).eq(["1", "0x2"]))
+    })
 }
 
 /// Whether a SIGINT sent to process `pid` is pending (not yet taken by any of its
