@@ -10,7 +10,7 @@ mod support;
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use coordinator::turns::{BetweenSteps, RunOptions, run_scenario, run_scenario_with};
 use shared::geometry::Pose;
@@ -176,23 +176,23 @@ fn what_a_rogue_agent_starts_dies_with_the_run_from_the_command_line() {
         .expect("start coordinator");
     // The run's prefix, from the strays' names, while it goes.
     let stem = stray_marker(&wire::RunPrefix::head(child.id()));
-    let deadline = Instant::now() + Duration::from_secs(60);
-    let started = loop {
-        let found: Vec<(String, Proc)> = all_pids()
-            .filter_map(|pid| {
-                let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).ok()?;
-                let argv0 = cmdline.split(|&b| b == 0).next()?;
-                let argv0 = String::from_utf8_lossy(argv0).to_string();
-                argv0.starts_with(&stem).then_some(())?;
-                Some((argv0, stat(pid)?.1))
-            })
-            .collect();
-        if found.len() == 2 {
-            break found;
-        }
-        assert!(Instant::now() < deadline, "the rogue's strays never showed");
-        std::thread::sleep(Duration::from_millis(5));
-    };
+    let mut started: Vec<(String, Proc)> = Vec::new();
+    support::wait_until(
+        Duration::from_secs(60),
+        "the rogue's strays never showed",
+        || {
+            started = all_pids()
+                .filter_map(|pid| {
+                    let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).ok()?;
+                    let argv0 = cmdline.split(|&b| b == 0).next()?;
+                    let argv0 = String::from_utf8_lossy(argv0).to_string();
+                    argv0.starts_with(&stem).then_some(())?;
+                    Some((argv0, stat(pid)?.1))
+                })
+                .collect();
+            started.len() == 2
+        },
+    );
     let prefix = started[0].0["formation-stray-".len()..].to_string();
     let started: Vec<Proc> = started.into_iter().map(|(_, p)| p).collect();
     let output = child.wait_with_output().expect("coordinator");

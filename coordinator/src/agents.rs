@@ -40,7 +40,7 @@ use nix::sys::signal::{Signal, kill, killpg};
 use nix::sys::wait::{Id, WaitPidFlag, WaitStatus, waitid, waitpid};
 use nix::unistd::Pid;
 
-use crate::procfs::{self, ProcStat, all_processes, environment_has};
+use crate::procfs::{self, ProcStat, all_processes};
 
 /// Find the `agent` executable: `explicit` if given, else `FORMATION_AGENT_BIN`, else
 /// the `agent` file beside the running coordinator.
@@ -397,16 +397,7 @@ impl AgentProcesses {
 
     /// Wait until every process has exited or `timeout` passes; true if all exited.
     pub fn wait_all(&mut self, timeout: Duration) -> bool {
-        let deadline = Instant::now() + timeout;
-        loop {
-            if self.running().is_empty() {
-                return true;
-            }
-            if Instant::now() >= deadline {
-                return false;
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
+        wire::poll_until(timeout, || self.running().is_empty())
     }
 
     /// Stop every process: the caller has already asked them to quit; wait `grace`, then
@@ -438,19 +429,14 @@ impl AgentProcesses {
     /// are reaped: an orphan is handed to this process only once its parent is gone.
     fn sweep(&mut self) {
         let me = std::process::id();
-        let marker = format!("{}={}", wire::RUN_ENV, self.prefix).into_bytes();
         let deadline = Instant::now() + SWEEP_TIMEOUT;
         loop {
             let agents: Vec<u32> = (0..self.children.len())
                 .filter_map(|i| self.pid(i))
                 .collect();
             let mut found = 0;
-            for p in all_processes() {
-                if p.pid != me
-                    && !p.zombie()
-                    && !agents.contains(&p.pid)
-                    && environment_has(p.pid, &marker)
-                {
+            for p in procfs::live_processes_of_run(&self.prefix) {
+                if !agents.contains(&p.pid) {
                     tracing::warn!(
                         "process {} of run {} outlived its agent: killing it",
                         p.pid,

@@ -18,7 +18,7 @@ use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use wire::cgroup::CgroupDirs;
 
-use crate::procfs::{ProcStat, all_processes, environment_has};
+use crate::procfs::{ProcStat, live_processes_of_run};
 
 /// The exit code of a coordinator ended by a second interrupt (128 + SIGINT, as a shell
 /// reports a process killed by Ctrl-C).
@@ -178,12 +178,7 @@ fn force_exit() -> ! {
 /// relays and what they started), remove its control group, wait for them to die, and
 /// remove its files in /dev/shm.
 fn remove_run(run: &Run) {
-    let me = std::process::id();
-    let marker = format!("{}={}", wire::RUN_ENV, run.prefix).into_bytes();
-    let killed: Vec<ProcStat> = all_processes()
-        .into_iter()
-        .filter(|p| p.pid != me && !p.zombie() && environment_has(p.pid, &marker))
-        .collect();
+    let killed = live_processes_of_run(&run.prefix);
     for p in &killed {
         let _ = kill(Pid::from_raw(p.pid as i32), Signal::SIGKILL);
     }

@@ -82,6 +82,17 @@ pub fn environment_has(pid: u32, entry: &[u8]) -> bool {
         .is_ok_and(|env| env.split(|&b| b == 0).any(|e| e == entry))
 }
 
+/// Every live process of run `prefix` but this one: not a zombie, with
+/// [`wire::RUN_ENV`]`=prefix` in its environment (agents, relays and what they started).
+pub fn live_processes_of_run(prefix: &str) -> Vec<ProcStat> {
+    let me = std::process::id();
+    let marker = format!("{}={prefix}", wire::RUN_ENV).into_bytes();
+    all_processes()
+        .into_iter()
+        .filter(|p| p.pid != me && !p.zombie() && environment_has(p.pid, &marker))
+        .collect()
+}
+
 /// Whether some process's command line (`/proc/PID/cmdline`: arguments ended by NUL)
 /// holds `needle`.
 pub fn any_command_line_holds(needle: &[u8]) -> bool {
