@@ -4,9 +4,11 @@
 //! Agents `i` and `j` may share a group only if
 //! `||p_i - p_j|| > max_step_i + max_step_j + r_i + r_j`: each moves at most its top
 //! speed, so every point of `i`'s move stays more than `r_i + r_j` from every point of
-//! `j`'s. The split is a greedy colouring in agent order (each agent joins the first group
+//! `j`'s. The split is a greedy colouring in turn order (each agent joins the first group
 //! holding no agent it could meet), so it depends on the positions alone and the
-//! reference simulation and the coordinator find the same groups.
+//! reference simulation and the coordinator find the same groups. The turn order is agent
+//! order, or front to back along the centre's heading ([`TurnOrder`],
+//! [`turn_groups_ordered`]).
 //!
 //! A group's moves are still checked against each other before any is taken
 //! ([`group_meetings`]): the check is written once here and given the distance between
@@ -17,7 +19,7 @@ use std::collections::BTreeMap;
 
 use crate::geometry::{Point, polyline_length_m};
 use crate::safety::SAFETY_TOLERANCE_M;
-use crate::vocabulary::{AgentSpec, Body, TurnMode};
+use crate::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
 
 /// The groups of one step, in turn order, each listing its agents in agent order. Dead
 /// agents take no turn and are in no group.
@@ -48,12 +50,52 @@ pub fn turn_groups(
     bodies: &[Body],
     alive: &[bool],
 ) -> Vec<Vec<usize>> {
-    let live = (0..bodies.len()).filter(|&i| alive.get(i).copied().unwrap_or(false));
+    turn_groups_ordered(mode, TurnOrder::Agent, 0.0, specs, bodies, alive)
+}
+
+/// [`turn_groups`] with the live agents taken in `order`: for
+/// [`TurnOrder::FrontFirst`], from front to back along `centre_heading_rad`, the heading of
+/// the formation centre this step (agents level with each other in agent order). The
+/// groups follow the order of their first agents; a group still lists its agents in
+/// agent order.
+///
+/// ```
+/// use shared::formation::Slot;
+/// use shared::geometry::Point;
+/// use shared::groups::turn_groups_ordered;
+/// use shared::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
+/// let specs = [AgentSpec::new(Slot::new(0.0, 0.0), 0.5); 3];
+/// let at = |x: f64| Body { position: Point::new(x, 0.0), radius_m: 0.5 };
+/// // A column heading east, numbered from the back: the front one moves first.
+/// let bodies = [at(0.0), at(1.0), at(2.0)];
+/// let (mode, alive) = (TurnMode::Sequential, [true; 3]);
+/// let east = turn_groups_ordered(mode, TurnOrder::FrontFirst, 0.0, &specs, &bodies, &alive);
+/// assert_eq!(east, vec![vec![2], vec![1], vec![0]]);
+/// let west = std::f64::consts::PI;
+/// let back = turn_groups_ordered(mode, TurnOrder::FrontFirst, west, &specs, &bodies, &alive);
+/// assert_eq!(back, vec![vec![0], vec![1], vec![2]]);
+/// ```
+pub fn turn_groups_ordered(
+    mode: TurnMode,
+    order: TurnOrder,
+    centre_heading_rad: f64,
+    specs: &[AgentSpec],
+    bodies: &[Body],
+    alive: &[bool],
+) -> Vec<Vec<usize>> {
+    let live = turn_order(order, centre_heading_rad, bodies, alive);
     match mode {
-        TurnMode::Sequential => live.map(|i| vec![i]).collect(),
-        TurnMode::Parallel => parallel_groups(specs, bodies, live),
+        TurnMode::Sequential => live.into_iter().map(|i| vec![i]).collect(),
+        TurnMode::Parallel => {
+            let mut groups = parallel_groups(specs, bodies, live.into_iter());
+            for group in &mut groups {
+                group.sort_unstable();
+            }
+            groups
+        }
         TurnMode::Simultaneous => {
-            let all: Vec<usize> = live.collect();
+            let mut all = live;
+            all.sort_unstable();
             if all.is_empty() {
                 Vec::new()
             } else {
@@ -61,6 +103,29 @@ pub fn turn_groups(
             }
         }
     }
+}
+
+/// The live agents of `bodies` in turn `order` (see [`turn_groups_ordered`]).
+fn turn_order(
+    order: TurnOrder,
+    centre_heading_rad: f64,
+    bodies: &[Body],
+    alive: &[bool],
+) -> Vec<usize> {
+    let mut live: Vec<usize> = (0..bodies.len())
+        .filter(|&i| alive.get(i).copied().unwrap_or(false))
+        .collect();
+    if order == TurnOrder::FrontFirst {
+        let (sin, cos) = centre_heading_rad.sin_cos();
+        let ahead_m = |i: usize| {
+            let p = bodies[i].position;
+            // `+ 0.0` makes -0.0 level with 0.0 for `total_cmp`.
+            p.x * cos + p.y * sin + 0.0
+        };
+        // A stable sort: agents level with each other keep agent order.
+        live.sort_by(|&a, &b| ahead_m(b).total_cmp(&ahead_m(a)));
+    }
+    live
 }
 
 /// How far agent `i` reaches within a step: its top speed plus its radius (`None`
@@ -230,9 +295,19 @@ mod tests {
             })
             .collect();
         let alive: Vec<bool> = (0..n).map(|i| i % 17 != 3).collect();
-        let groups = turn_groups(TurnMode::Parallel, &specs, &bodies, &alive);
+        for order in TurnOrder::ALL {
+            let groups =
+                turn_groups_ordered(TurnMode::Parallel, order, 0.7, &specs, &bodies, &alive);
+            check_groups(&groups, &bodies, &alive);
+        }
+    }
+
+    /// Every live agent in one group, none of two that could meet (top speed 0.4 m,
+    /// radius 0.3 m) in the same, agent order within each, and fewer groups than agents.
+    fn check_groups(groups: &[Vec<usize>], bodies: &[Body], alive: &[bool]) {
+        let n = bodies.len();
         let mut seen = vec![0; n];
-        for g in &groups {
+        for g in groups {
             assert!(g.windows(2).all(|w| w[0] < w[1]), "agent order in {g:?}");
             for (k, &i) in g.iter().enumerate() {
                 seen[i] += 1;
@@ -252,6 +327,61 @@ mod tests {
             groups.len() < alive.iter().filter(|a| **a).count(),
             "some parallelism"
         );
+    }
+
+    #[test]
+    fn front_first_turns_go_from_front_to_back_and_level_agents_in_agent_order() {
+        let mut spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.3);
+        spec.max_step_m = Some(0.4);
+        let specs = vec![spec; 6];
+        let at = |x: f64, y: f64| Body {
+            position: Point::new(x, y),
+            radius_m: 0.3,
+        };
+        // Heading east: agent 4 is furthest ahead, then 1 and 3 level (at -0.0 and 0.0 m
+        // along the heading), then 0; agent 2 is dead and 5 is last.
+        let bodies = [
+            at(-1.0, 0.0),
+            at(-0.0, -1.0),
+            at(9.0, 9.0),
+            at(0.0, 1.0),
+            at(2.0, 0.0),
+            at(-3.0, 0.5),
+        ];
+        let alive = [true, true, false, true, true, true];
+        let heading_rad = 0.0;
+        let order = |mode| {
+            turn_groups_ordered(
+                mode,
+                TurnOrder::FrontFirst,
+                heading_rad,
+                &specs,
+                &bodies,
+                &alive,
+            )
+        };
+        let one_by_one: Vec<usize> = order(TurnMode::Sequential).concat();
+        assert_eq!(one_by_one, vec![4, 1, 3, 0, 5]);
+        // All at once: one group, in agent order.
+        assert_eq!(order(TurnMode::Simultaneous), vec![vec![0, 1, 3, 4, 5]]);
+        // In parallel the front agent opens the first group.
+        let parallel = order(TurnMode::Parallel);
+        assert!(parallel[0].contains(&4), "{parallel:?}");
+        check_groups(&parallel, &bodies, &alive);
+        // Agent order is the default and is unchanged by the heading.
+        let agent_order = turn_groups_ordered(
+            TurnMode::Sequential,
+            TurnOrder::Agent,
+            heading_rad,
+            &specs,
+            &bodies,
+            &alive,
+        );
+        assert_eq!(
+            agent_order,
+            turn_groups(TurnMode::Sequential, &specs, &bodies, &alive)
+        );
+        assert_eq!(agent_order.concat(), vec![0, 1, 3, 4, 5]);
     }
 
     #[test]

@@ -3,13 +3,13 @@
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
 //! plans its move while the others stand still ([`TurnController::plan_move`]), and the
 //! move is checked against the safety invariant before it is taken. With parallel turns
-//! the agents of one group ([`turn_groups`]) plan against the same snapshot and their
+//! the agents of one group ([`turn_groups_ordered`]) plan against the same snapshot and their
 //! moves are taken together. The multi-process
 //! run must reproduce this trajectory to the bit.
 
 use crate::course::Course;
 use crate::geometry::Pose;
-use crate::groups::turn_groups;
+use crate::groups::turn_groups_ordered;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
@@ -128,8 +128,10 @@ pub fn simulate_along_with_deaths(
         let centre = &centre;
         let ahead = course.ahead(MAX_HORIZON_STEPS);
         recorder.begin_step(step, *centre);
-        let groups = turn_groups(
+        let groups = turn_groups_ordered(
             scenario.turns,
+            scenario.turn_order,
+            centre.heading_rad,
             &scenario.agents,
             recorder.bodies(),
             recorder.alive(),

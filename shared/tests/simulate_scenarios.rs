@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use shared::geometry::{DiskGrid, distance_polyline_polyline, polyline_length_m};
-use shared::groups::turn_groups;
+use shared::groups::turn_groups_ordered;
 use shared::record::Run;
 use shared::safety::{self, SAFETY_TOLERANCE_M};
 use shared::scenario::Scenario;
@@ -29,9 +29,9 @@ fn scenario_files() -> Vec<PathBuf> {
 
 /// Re-check every accepted move of the run from the record alone, with the turn
 /// semantics of the scenario: the groups of each step are found again from the positions
-/// at its start ([`turn_groups`]); each move is checked against the true obstacles and
-/// every other agent as they stood when its group moved, against the agent's top speed,
-/// and against the whole moves of its group mates.
+/// at its start, in the scenario's turn order ([`turn_groups_ordered`]); each move is
+/// checked against the true obstacles and every other agent as they stood when its group
+/// moved, against the agent's top speed, and against the whole moves of its group mates.
 fn recheck_every_move(scenario: &Scenario, run: &Run) {
     let obstacles = DiskGrid::new(scenario.obstacles.clone());
     for w in run.steps.windows(2) {
@@ -46,7 +46,14 @@ fn recheck_every_move(scenario: &Scenario, run: &Run) {
             })
             .collect();
         let alive: Vec<bool> = before.agents.iter().map(|a| a.alive).collect();
-        let groups = turn_groups(scenario.turns, &scenario.agents, &bodies, &alive);
+        let groups = turn_groups_ordered(
+            scenario.turns,
+            scenario.turn_order,
+            after.centre.heading_rad,
+            &scenario.agents,
+            &bodies,
+            &alive,
+        );
         assert_eq!(
             groups.len(),
             after.groups,

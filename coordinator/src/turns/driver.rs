@@ -9,7 +9,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::course::Course;
 use shared::geometry::{Point, Pose};
-use shared::groups::turn_groups;
+use shared::groups::turn_groups_ordered;
 use shared::record::{Recorder, replay_course};
 use shared::scenario::Scenario;
 use shared::tracking::MAX_HORIZON_STEPS;
@@ -266,8 +266,10 @@ impl Driver<'_, '_> {
                     self.on_death(step, agent, checked.elapsed(), "exited between turns")?;
                 }
             }
-            let groups = turn_groups(
+            let groups = turn_groups_ordered(
                 self.scenario.turns,
+                self.scenario.turn_order,
+                centre.heading_rad,
                 &self.scenario.agents,
                 self.recorder.bodies(),
                 self.recorder.alive(),

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::ScenarioError;
 use crate::geometry::Pose;
 use crate::moving_obstacle::Route;
-use crate::vocabulary::{ControllerKind, TurnMode};
+use crate::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 
 // ---------------------------------------------------------------------------------------
 // The file format (serde side). Units are in the names; unknown fields are errors. A key
@@ -55,6 +55,8 @@ pub(super) struct OrcaFile {
 pub(super) struct TurnsFile {
     #[serde(default)]
     pub(super) mode: TurnMode,
+    #[serde(default)]
+    pub(super) order: TurnOrder,
 }
 
 #[derive(Deserialize, Serialize)]

@@ -4,7 +4,7 @@ use crate::geometry::{Disk, Field, Polygon, Pose};
 use crate::moving_obstacle::MovingObstacle;
 
 use super::ScenarioMap;
-use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode};
+use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode, TurnOrder};
 
 /// A validated scenario: every number finite and in range, every body placed legally.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,6 +37,8 @@ pub struct Scenario {
     pub controller: ControllerSpec,
     /// One mover at a time, or parallel groups.
     pub turns: TurnMode,
+    /// In which order the agents of a step take their turns.
+    pub turn_order: TurnOrder,
 }
 
 /// Settings of the formation centre's path.

@@ -127,7 +127,10 @@ impl Scenario {
                 time_horizon_steps: Some(self.controller.orca.time_horizon_steps),
                 max_neighbours: Some(self.controller.orca.max_neighbours),
             }),
-            turns: TurnsFile { mode: self.turns },
+            turns: TurnsFile {
+                mode: self.turns,
+                order: self.turn_order,
+            },
         })
     }
 

@@ -13,6 +13,7 @@
 //! - [`Named`]: the values files and the command line spell by name, read and written
 //!   through one helper;
 //! - [`TurnMode`]: one mover at a time, or parallel groups;
+//! - [`TurnOrder`]: in which order the agents of a step take their turns;
 //! - [`ControllerKind`] and [`ControllerSpec`]: which controller moves the agents, with which
 //!   settings;
 //! - [`CbfSettings`]: the barrier-function controllers' settings and their validation;
@@ -28,6 +29,7 @@ mod kinematics;
 mod moves;
 pub mod named;
 mod turn_mode;
+mod turn_order;
 
 pub use agent::AgentSpec;
 pub use body::Body;
@@ -41,3 +43,4 @@ pub use kinematics::Kinematics;
 pub use moves::{Move, MoveStatus};
 pub use named::Named;
 pub use turn_mode::TurnMode;
+pub use turn_order::TurnOrder;

@@ -291,6 +291,7 @@ impl Checker<'_> {
             path,
             controller,
             turns,
+            turn_order: raw.turns.order,
         })
     }
 
