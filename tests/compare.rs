@@ -59,8 +59,8 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
     };
     assert!(final_dev("best-point") < 0.05);
     // The new columns come after the old ones: the paper's own (sequential) turns, a
-    // move length and a speed for every run.
-    assert_eq!(headers.len(), 17);
+    // move length, a speed and the paper's turn order (agent order) for every run.
+    assert_eq!(headers.len(), 18);
     assert_eq!(
         headers.iter().skip(12).collect::<Vec<_>>(),
         [
@@ -68,11 +68,13 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
             "max_move_m",
             "steps_per_s",
             "worst_agent",
-            "worst_step"
+            "worst_step",
+            "turn_order"
         ]
     );
     for r in &rows {
         assert_eq!(&r[col("turns")], "sequential");
+        assert_eq!(&r[col("turn_order")], "agent");
         assert!(r[col("max_move_m")].parse::<f64>().expect("max move") > 0.0);
         assert!(r[col("steps_per_s")].parse::<f64>().expect("steps/s") > 0.0);
         // The worst agent and step name a deviation of the run: that agent's record at
@@ -167,6 +169,54 @@ fn compare_runs_every_controller_in_every_turn_mode_asked_for() {
     }
     assert!(
         stderr.contains("with best-point, parallel turns: completed"),
+        "{stderr}"
+    );
+}
+
+/// `--turn-order agent,front-first`: one run in each order, in a folder naming it, its
+/// resolved scenario in that order; both safe and within the top speed.
+#[test]
+fn compare_runs_each_turn_order_asked_for() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("cmp");
+    let scenario = support::repo_root()
+        .join("scenarios")
+        .join("paper-top-speed.toml");
+    let output = Command::new(support::coordinator_bin())
+        .arg("compare")
+        .arg(&scenario)
+        .args([
+            "--controllers",
+            "best-point",
+            "--turn-order",
+            "agent,front-first,agent",
+            "--out",
+        ])
+        .arg(&out)
+        .env("FORMATION_AGENT_BIN", support::agent_bin())
+        .output()
+        .expect("coordinator compare");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
+    let headers = reader.headers().expect("headers").clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
+    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
+    let orders: Vec<&str> = rows.iter().map(|r| &r[col("turn_order")]).collect();
+    assert_eq!(orders, ["agent", "front-first"]);
+    for r in &rows {
+        assert_eq!(&r[col("collisions")], "0", "{r:?}");
+        assert_eq!(&r[col("turns")], "sequential", "{r:?}");
+        let max_move: f64 = r[col("max_move_m")].parse().expect("max move");
+        assert!(max_move <= 0.5 + 1e-6, "the top speed holds: {max_move}");
+    }
+    for order in ["agent", "front-first"] {
+        let run = out.join(format!("paper-top-speed-best-point-{order}"));
+        let text = std::fs::read_to_string(run.join("scenario.toml")).expect("scenario.toml");
+        assert!(text.contains(&format!("order = \"{order}\"")), "{order}");
+    }
+    assert!(
+        stderr.contains("with best-point, front-first order: completed"),
         "{stderr}"
     );
 }

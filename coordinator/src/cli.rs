@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use shared::vocabulary::{ControllerKind, TurnMode};
+use shared::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 use wire::cgroup::Limits;
 use wire::misbehave::Misbehave;
 
@@ -306,6 +306,10 @@ pub struct CompareArgs {
     /// simultaneous need a top speed.
     #[arg(long, value_name = "MODE", value_delimiter = ',', value_parser = parse_turn_mode)]
     pub turns: Vec<TurnMode>,
+    /// Turn orders to run every controller in, for each turn mode (comma-separated:
+    /// agent, front-first; default: each scenario's own `[turns] order`).
+    #[arg(long, value_name = "ORDER", value_delimiter = ',', value_parser = parse_turn_order)]
+    pub turn_order: Vec<TurnOrder>,
     /// Output folder for `compare.csv`, `compare.md` and one folder per run (default
     /// `runs/compare-<UTC time>`). One that exists and is not empty is refused unless
     /// `--force`.
@@ -334,6 +338,11 @@ fn parse_controller(s: &str) -> Result<ControllerKind, String> {
 fn parse_turn_mode(s: &str) -> Result<TurnMode, String> {
     TurnMode::from_name(s)
         .ok_or_else(|| format!("{s:?}: one of sequential, parallel, simultaneous"))
+}
+
+/// A turn order name.
+fn parse_turn_order(s: &str) -> Result<TurnOrder, String> {
+    TurnOrder::from_name(s).ok_or_else(|| format!("{s:?}: one of agent, front-first"))
 }
 
 /// `AGENT@STEP`.

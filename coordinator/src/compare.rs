@@ -8,7 +8,7 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::record::{FaultKind, Run};
 use shared::scenario::{Scenario, ScenarioError};
-use shared::vocabulary::{ControllerKind, TurnMode};
+use shared::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;
@@ -53,6 +53,8 @@ pub struct Row {
     pub worst_agent: usize,
     /// The step of that largest deviation.
     pub worst_step: usize,
+    /// The turn order run (`agent` or `front-first`).
+    pub turn_order: String,
 }
 
 /// Agent-steps where a live agent off its slot did not move.
@@ -79,6 +81,24 @@ pub fn worst_agent_step(run: &Run) -> (usize, usize) {
     (worst.0, worst.1)
 }
 
+/// The turn mode and turn order a run was asked for on the command line (`None`: the
+/// scenario's own).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Asked {
+    mode: Option<TurnMode>,
+    order: Option<TurnOrder>,
+}
+
+impl Asked {
+    /// The names of what was asked for, mode first.
+    fn names(&self) -> impl Iterator<Item = &'static str> {
+        self.mode
+            .map(|m| m.name())
+            .into_iter()
+            .chain(self.order.map(|o| o.name()))
+    }
+}
+
 /// `scenario` with its turns taken in `mode`; parallel turns need a top speed for every
 /// agent, as in a scenario file (refused as `source: turns.mode: ...`, exit code 2).
 pub(crate) fn with_turn_mode(
@@ -103,7 +123,7 @@ pub(crate) fn with_turn_mode(
     Ok(s)
 }
 
-fn row(run: &Run, controller: ControllerKind, turns: TurnMode, timing: &output::Timing) -> Row {
+fn row(run: &Run, controller: ControllerKind, scenario: &Scenario, timing: &output::Timing) -> Row {
     let s = run.summary();
     let compute = &timing.compute_us;
     let (worst_agent, worst_step) = worst_agent_step(run);
@@ -124,22 +144,23 @@ fn row(run: &Run, controller: ControllerKind, turns: TurnMode, timing: &output::
         deadlocked_steps: deadlocked_steps(run),
         compute_p50_us: compute.p50,
         compute_p99_us: compute.p99,
-        turns: turns.name().to_string(),
+        turns: scenario.turns.name().to_string(),
         max_move_m: s.max_move_m,
         steps_per_s: timing.steps_per_s,
         worst_agent,
         worst_step,
+        turn_order: scenario.turn_order.name().to_string(),
     }
 }
 
 /// The table as Markdown.
 pub fn markdown(rows: &[Row]) -> String {
     let mut md = String::from(
-        "| scenario | controller | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | stuck agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s | worst agent @ step |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scenario | controller | completed | collisions | unsafe moves refused | min clearance (m) | mean dev. (m) | max dev. (m) | final dev. (m) | stuck agent-steps | compute p50 (us) | compute p99 (us) | turns | max move (m) | steps/s | worst agent @ step | turn order |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} | {} | {:.4} | {:.1} | {} @ {} |\n",
+            "| {} | {} | {} | {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {:.1} | {:.1} | {} | {:.4} | {:.1} | {} @ {} | {} |\n",
             r.scenario,
             r.controller,
             r.completed,
@@ -156,7 +177,8 @@ pub fn markdown(rows: &[Row]) -> String {
             r.max_move_m,
             r.steps_per_s,
             r.worst_agent,
-            r.worst_step
+            r.worst_step,
+            r.turn_order
         ));
     }
     md
@@ -170,21 +192,22 @@ fn csv_bytes(rows: &[Row]) -> anyhow::Result<Vec<u8>> {
     Ok(w.into_inner()?)
 }
 
-/// The folder name of one run of the comparison: `<scenario>-<controller>`, and
-/// `<scenario>-<controller>-<turns>` when the turn modes were asked for (`turns`), made of
-/// letters, digits, `-` and `_` only, with `-2`, `-3`, ... when two scenarios share a
-/// name.
+/// The folder name of one run of the comparison: `<scenario>-<controller>`, followed by
+/// the turn mode and the turn order where they were asked for (`asked`: `-parallel`,
+/// `-front-first`), made of letters, digits, `-` and `_` only, with `-2`, `-3`, ... when
+/// two scenarios share a name.
 fn run_folder_name(
     scenario: &str,
     controller: ControllerKind,
-    turns: Option<TurnMode>,
+    asked: &Asked,
     taken: &mut Vec<String>,
 ) -> String {
     let clean = output::file_name_part(scenario);
-    let base = match turns {
-        None => format!("{clean}-{}", controller.name()),
-        Some(mode) => format!("{clean}-{}-{}", controller.name(), mode.name()),
-    };
+    let mut base = format!("{clean}-{}", controller.name());
+    for name in asked.names() {
+        base.push('-');
+        base.push_str(name);
+    }
     let name = (1..)
         .map(|k| {
             if k == 1 {
@@ -218,24 +241,26 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
             .map(|f| load_and_plan(Some(f)))
             .collect::<Result<Vec<_>, _>>()?
     };
-    // Each mode once, in the order given.
-    let mut modes: Vec<TurnMode> = Vec::new();
-    for &m in &args.turns {
-        if !modes.contains(&m) {
-            modes.push(m);
-        }
-    }
+    // Each mode and each order once, in the order given (none: the scenario's own).
+    let modes = each_once(&args.turns);
+    let orders = each_once(&args.turn_order);
     let runs = loaded
         .iter()
         .map(|l| {
-            let scenarios = if modes.is_empty() {
-                vec![(l.scenario.clone(), None)]
-            } else {
-                modes
-                    .iter()
-                    .map(|&m| Ok((with_turn_mode(&l.scenario, &l.source, m)?, Some(m))))
-                    .collect::<Result<Vec<_>, ScenarioError>>()?
-            };
+            let mut scenarios = Vec::new();
+            for &mode in &modes {
+                let in_mode = match mode {
+                    None => l.scenario.clone(),
+                    Some(m) => with_turn_mode(&l.scenario, &l.source, m)?,
+                };
+                for &order in &orders {
+                    let mut s = in_mode.clone();
+                    if let Some(o) = order {
+                        s.turn_order = o;
+                    }
+                    scenarios.push((s, Asked { mode, order }));
+                }
+            }
             Ok((l, scenarios))
         })
         .collect::<Result<Vec<_>, ScenarioError>>()?;
@@ -279,23 +304,21 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
                 let mut scenario = in_mode.with_controller(controller);
                 // Without a mode asked for, ORCA runs in its own model (every agent at
                 // once) wherever every agent has a top speed.
-                if asked.is_none()
+                if asked.mode.is_none()
                     && controller == ControllerKind::Orca
                     && scenario.agents.iter().all(|a| a.max_step_m.is_some())
                 {
                     scenario.turns = TurnMode::Simultaneous;
                 }
-                let folder = run_folder_name(&scenario.name, controller, *asked, &mut taken);
-                // The turn mode is named wherever it was asked for.
-                let label = match asked {
-                    None => format!("{} with {}", scenario.name, controller.name()),
-                    Some(m) => format!(
-                        "{} with {}, {} turns",
-                        scenario.name,
-                        controller.name(),
-                        m.name()
-                    ),
-                };
+                let folder = run_folder_name(&scenario.name, controller, asked, &mut taken);
+                // The turn mode and order are named wherever they were asked for.
+                let mut label = format!("{} with {}", scenario.name, controller.name());
+                if let Some(m) = asked.mode {
+                    label.push_str(&format!(", {} turns", m.name()));
+                }
+                if let Some(o) = asked.order {
+                    label.push_str(&format!(", {} order", o.name()));
+                }
                 let outcome = run_scenario(&scenario, &l.centre_path, &options)
                     .map_err(|failure| CliError::Other(failure.error))?;
                 if outcome.interrupted {
@@ -311,7 +334,7 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
                     &l.centre_path,
                     &outcome.timing,
                 )?;
-                let r = row(&outcome.run, controller, scenario.turns, &outcome.timing);
+                let r = row(&outcome.run, controller, &scenario, &outcome.timing);
                 // One line per run, when it is done.
                 eprintln!(
                     "{label}: {}, {} collisions, {} unsafe moves refused, {} faults, {:.1} steps/s -> {folder}/",
@@ -336,6 +359,20 @@ pub fn execute(args: &CompareArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// Each value of `asked` once, in the order given, as `Some`; `[None]` when none was.
+fn each_once<T: Copy + PartialEq>(asked: &[T]) -> Vec<Option<T>> {
+    let mut once: Vec<Option<T>> = Vec::new();
+    for &v in asked {
+        if !once.contains(&Some(v)) {
+            once.push(Some(v));
+        }
+    }
+    if once.is_empty() {
+        once.push(None);
+    }
+    once
+}
+
 fn write(dir: &Path, rows: &[Row]) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     output::write_atomically(&dir.join("compare.csv"), &csv_bytes(rows)?)?;
@@ -350,24 +387,26 @@ mod tests {
     #[test]
     fn run_folders_are_plain_names_and_never_shared() {
         let mut taken = Vec::new();
-        let a = run_folder_name("paper example/1", ControllerKind::Cbf, None, &mut taken);
-        let b = run_folder_name("paper example/1", ControllerKind::Cbf, None, &mut taken);
-        let c = run_folder_name(
-            "paper example/1",
-            ControllerKind::BestPoint,
-            None,
-            &mut taken,
-        );
-        let d = run_folder_name(
-            "paper example/1",
-            ControllerKind::Orca,
-            Some(TurnMode::Parallel),
-            &mut taken,
-        );
+        let own = Asked::default();
+        let name = "paper example/1";
+        let a = run_folder_name(name, ControllerKind::Cbf, &own, &mut taken);
+        let b = run_folder_name(name, ControllerKind::Cbf, &own, &mut taken);
+        let c = run_folder_name(name, ControllerKind::BestPoint, &own, &mut taken);
+        let parallel = Asked {
+            mode: Some(TurnMode::Parallel),
+            order: None,
+        };
+        let d = run_folder_name(name, ControllerKind::Orca, &parallel, &mut taken);
+        let front = Asked {
+            mode: Some(TurnMode::Parallel),
+            order: Some(TurnOrder::FrontFirst),
+        };
+        let e = run_folder_name(name, ControllerKind::Orca, &front, &mut taken);
         assert_eq!(a, "paper_example_1-cbf");
         assert_eq!(b, "paper_example_1-cbf-2");
         assert_eq!(c, "paper_example_1-best-point");
         assert_eq!(d, "paper_example_1-orca-parallel");
+        assert_eq!(e, "paper_example_1-orca-parallel-front-first");
     }
 
     #[test]
