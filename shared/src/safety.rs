@@ -244,6 +244,19 @@ fn check_move_skipping(
             if Some(j) == skip {
                 continue;
             }
+            // A body whose centre lies farther than the radii sum outside the segment's
+            // box is farther than that from the segment: it cannot overlap, and is
+            // skipped without the distance (the first violation found is the same).
+            // (Rounding moves the box's edges by an ulp, far below the tolerance.)
+            let out_m = o.radius_m + radius_m;
+            let c = &o.position;
+            if c.x < a.x.min(b.x) - out_m
+                || c.x > a.x.max(b.x) + out_m
+                || c.y < a.y.min(b.y) - out_m
+                || c.y > a.y.max(b.y) + out_m
+            {
+                continue;
+            }
             let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.position, a, b);
             if overlap_m > SAFETY_TOLERANCE_M {
                 // Numbered as in the list of the others (`bodies` without `skip`).
@@ -298,13 +311,22 @@ fn clearances_skipping_m(
             to_obstacle.min((body.position - o.centre).norm() - o.radius_m - body.radius_m);
         ControlFlow::<()>::Continue(())
     });
-    let to_other = bodies
-        .iter()
-        .enumerate()
-        .filter(|(j, _)| Some(*j) != skip)
-        .map(|(_, o)| o)
-        .map(|o| (body.position - o.position).norm() - o.radius_m - body.radius_m)
-        .fold(f64::INFINITY, f64::min);
+    let mut to_other = f64::INFINITY;
+    for (j, o) in bodies.iter().enumerate() {
+        if Some(j) == skip {
+            continue;
+        }
+        let d = body.position - o.position;
+        let radii_m = o.radius_m + body.radius_m;
+        // The distance is at least the larger of the two offsets: a body that far along
+        // one axis is no nearer than the nearest so far, and is skipped without the
+        // square root (with a nanometre to spare for rounding, so the minimum is the
+        // same to the bit).
+        if d.x.abs().max(d.y.abs()) - radii_m > to_other + 1e-9 {
+            continue;
+        }
+        to_other = to_other.min(d.norm() - o.radius_m - body.radius_m);
+    }
     (to_obstacle, to_other)
 }
 
