@@ -101,8 +101,34 @@ fn the_comparison_table_shows_the_papers_failure_and_the_fix() {
     assert!(md.contains("| turns | max move (m) | steps/s |"));
 }
 
-#[test]
-fn compare_runs_every_controller_in_every_turn_mode_asked_for() {
+/// What `coordinator compare scenarios/paper-top-speed.toml ARGS --out DIR` wrote and
+/// printed; it must succeed.
+struct Compared {
+    /// Holds the output folder while the test looks at it.
+    _dir: tempfile::TempDir,
+    out: std::path::PathBuf,
+    headers: csv::StringRecord,
+    rows: Vec<csv::StringRecord>,
+    stderr: String,
+}
+
+impl Compared {
+    /// The index of column `name` of compare.csv.
+    fn col(&self, name: &str) -> usize {
+        self.headers.iter().position(|h| h == name).expect(name)
+    }
+
+    /// Every run within the top speed of 0.5 m and without a collision.
+    fn assert_safe_within_the_top_speed(&self) {
+        for r in &self.rows {
+            assert_eq!(&r[self.col("collisions")], "0", "{r:?}");
+            let max_move: f64 = r[self.col("max_move_m")].parse().expect("max move");
+            assert!(max_move <= 0.5 + 1e-6, "the top speed holds: {max_move}");
+        }
+    }
+}
+
+fn compare_paper_top_speed(args: &[&str]) -> Compared {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("cmp");
     let scenario = support::repo_root()
@@ -111,50 +137,50 @@ fn compare_runs_every_controller_in_every_turn_mode_asked_for() {
     let output = Command::new(support::coordinator_bin())
         .arg("compare")
         .arg(&scenario)
-        .args([
-            "--controllers",
-            "best-point,cbf",
-            "--turns",
-            "sequential,parallel",
-            "--out",
-        ])
+        .args(args)
+        .arg("--out")
         .arg(&out)
         .env("FORMATION_AGENT_BIN", support::agent_bin())
         .output()
         .expect("coordinator compare");
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(output.status.success(), "{stderr}");
     let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
     let headers = reader.headers().expect("headers").clone();
-    let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
-    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
-    let got: Vec<(String, String)> = rows
+    let rows = reader.records().map(|r| r.expect("row")).collect();
+    Compared {
+        _dir: dir,
+        out,
+        headers,
+        rows,
+        stderr,
+    }
+}
+
+#[test]
+fn compare_runs_every_controller_in_every_turn_mode_asked_for() {
+    let c = compare_paper_top_speed(&[
+        "--controllers",
+        "best-point,cbf",
+        "--turns",
+        "sequential,parallel",
+    ]);
+    let got: Vec<(&str, &str)> = c
+        .rows
         .iter()
-        .map(|r| {
-            (
-                r[col("turns")].to_string(),
-                r[col("controller")].to_string(),
-            )
-        })
+        .map(|r| (&r[c.col("turns")], &r[c.col("controller")]))
         .collect();
-    let want: Vec<(String, String)> = [
+    let want = [
         ("sequential", "best-point"),
         ("sequential", "cbf"),
         ("parallel", "best-point"),
         ("parallel", "cbf"),
-    ]
-    .iter()
-    .map(|(m, p)| (m.to_string(), p.to_string()))
-    .collect();
+    ];
     assert_eq!(got, want);
-    for r in &rows {
-        assert_eq!(&r[col("collisions")], "0", "{r:?}");
-        let max_move: f64 = r[col("max_move_m")].parse().expect("max move");
-        assert!(max_move <= 0.5 + 1e-6, "the top speed holds: {max_move}");
-    }
+    c.assert_safe_within_the_top_speed();
     // Each run in a folder naming its mode, its resolved scenario in that mode.
     for (mode, controller) in [("sequential", "cbf"), ("parallel", "best-point")] {
-        let run = out.join(format!("paper-top-speed-{controller}-{mode}"));
+        let run = c.out.join(format!("paper-top-speed-{controller}-{mode}"));
         let text = std::fs::read_to_string(run.join("scenario.toml")).expect("scenario.toml");
         assert!(text.contains(&format!("mode = \"{mode}\"")), "{mode}");
         let summary: serde_json::Value =
@@ -168,56 +194,38 @@ fn compare_runs_every_controller_in_every_turn_mode_asked_for() {
         }
     }
     assert!(
-        stderr.contains("with best-point, parallel turns: completed"),
-        "{stderr}"
+        c.stderr
+            .contains("with best-point, parallel turns: completed"),
+        "{}",
+        c.stderr
     );
 }
 
-/// `--turn-order agent,front-first`: one run in each order, in a folder naming it, its
-/// resolved scenario in that order; both safe and within the top speed.
+/// `--turn-order agent,front-first`: one run in each order (a repeated one runs once),
+/// in a folder naming it, its resolved scenario in that order; both safe and within the
+/// top speed.
 #[test]
 fn compare_runs_each_turn_order_asked_for() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let out = dir.path().join("cmp");
-    let scenario = support::repo_root()
-        .join("scenarios")
-        .join("paper-top-speed.toml");
-    let output = Command::new(support::coordinator_bin())
-        .arg("compare")
-        .arg(&scenario)
-        .args([
-            "--controllers",
-            "best-point",
-            "--turn-order",
-            "agent,front-first,agent",
-            "--out",
-        ])
-        .arg(&out)
-        .env("FORMATION_AGENT_BIN", support::agent_bin())
-        .output()
-        .expect("coordinator compare");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "{stderr}");
-    let mut reader = csv::Reader::from_path(out.join("compare.csv")).expect("compare.csv");
-    let headers = reader.headers().expect("headers").clone();
-    let col = |name: &str| headers.iter().position(|h| h == name).expect(name);
-    let rows: Vec<csv::StringRecord> = reader.records().map(|r| r.expect("row")).collect();
-    let orders: Vec<&str> = rows.iter().map(|r| &r[col("turn_order")]).collect();
+    let c = compare_paper_top_speed(&[
+        "--controllers",
+        "best-point",
+        "--turn-order",
+        "agent,front-first,agent",
+    ]);
+    let orders: Vec<&str> = c.rows.iter().map(|r| &r[c.col("turn_order")]).collect();
     assert_eq!(orders, ["agent", "front-first"]);
-    for r in &rows {
-        assert_eq!(&r[col("collisions")], "0", "{r:?}");
-        assert_eq!(&r[col("turns")], "sequential", "{r:?}");
-        let max_move: f64 = r[col("max_move_m")].parse().expect("max move");
-        assert!(max_move <= 0.5 + 1e-6, "the top speed holds: {max_move}");
-    }
+    assert!(c.rows.iter().all(|r| &r[c.col("turns")] == "sequential"));
+    c.assert_safe_within_the_top_speed();
     for order in ["agent", "front-first"] {
-        let run = out.join(format!("paper-top-speed-best-point-{order}"));
+        let run = c.out.join(format!("paper-top-speed-best-point-{order}"));
         let text = std::fs::read_to_string(run.join("scenario.toml")).expect("scenario.toml");
         assert!(text.contains(&format!("order = \"{order}\"")), "{order}");
     }
     assert!(
-        stderr.contains("with best-point, front-first order: completed"),
-        "{stderr}"
+        c.stderr
+            .contains("with best-point, front-first order: completed"),
+        "{}",
+        c.stderr
     );
 }
 
