@@ -1,6 +1,7 @@
 //! `coordinator compare SCENARIO...`: every controller on every scenario (and, with
-//! `--turns`, in every turn mode), through the same processes, protocol and safety
-//! monitor, tabulated side by side; each run's own files in a folder of their own.
+//! `--turns` and `--turn-order`, in every turn mode and turn order), through the same
+//! processes, protocol and safety monitor, tabulated side by side; each run's own files
+//! in a folder of their own.
 
 use std::path::Path;
 
