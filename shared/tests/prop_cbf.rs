@@ -359,7 +359,14 @@ proptest! {
                     MAX_WAYPOINTS).is_ok(),
                 "step {step}: the safety check rejects {me} -> {}", mv.best
             );
-            prop_assert!(length_m <= w.settings.max_step_m() * (1.0 + 1e-12));
+            // Each piece ends at a position rounded to the field's coordinates (a few
+            // 1e-15 m), so a tiny top speed may be passed by as much, never more.
+            prop_assert!(
+                length_m <= w.settings.max_step_m() * (1.0 + 1e-12) + 1e-12,
+                "step {step}: a move of {length_m} m, top speed {} m, {} pieces",
+                w.settings.max_step_m(),
+                mv.waypoints.len() - 1
+            );
             me = mv.best;
         }
     }
