@@ -83,6 +83,11 @@ pub fn turn_groups_ordered(
     bodies: &[Body],
     alive: &[bool],
 ) -> Vec<Vec<usize>> {
+    // Moving all at once, the agents take no turns: agent order, nothing to sort.
+    let order = match mode {
+        TurnMode::Simultaneous => TurnOrder::Agent,
+        _ => order,
+    };
     let live = turn_order(order, centre_heading_rad, bodies, alive);
     match mode {
         TurnMode::Sequential => live.into_iter().map(|i| vec![i]).collect(),
@@ -94,12 +99,10 @@ pub fn turn_groups_ordered(
             groups
         }
         TurnMode::Simultaneous => {
-            let mut all = live;
-            all.sort_unstable();
-            if all.is_empty() {
+            if live.is_empty() {
                 Vec::new()
             } else {
-                vec![all]
+                vec![live]
             }
         }
     }
