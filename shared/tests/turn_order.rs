@@ -8,6 +8,12 @@ use shared::vocabulary::TurnOrder;
 /// Three agents in a column driving east, 0.7 m apart with radii of 0.3 m, numbered from
 /// the back; each step the centre moves 0.25 m, within the top speed.
 fn column(order: &str) -> Scenario {
+    column_with(&format!("[turns]\norder = \"{order}\"\n"), "")
+}
+
+/// The column of [`column`] with `turns` as its `[turns]` table (or none) and `formation`
+/// added to its `[formation]` table.
+fn column_with(turns: &str, formation: &str) -> Scenario {
     let text = format!(
         r#"
 name = "column"
@@ -17,6 +23,7 @@ height_m = 10.0
 [formation]
 agent_radius_m = 0.3
 max_step_m = 0.5
+{formation}
 slots = [
   {{ r_m = 1.4, theta_deg = 180.0 }},
   {{ r_m = 0.7, theta_deg = 180.0 }},
@@ -28,8 +35,7 @@ goal = {{ x_m = 27.0, y_m = 5.0, heading_deg = 0.0 }}
 turning_radius_m = 2.0
 step_m = 0.25
 centre_clearance_m = 0.5
-[turns]
-order = "{order}"
+{turns}
 "#
     );
     Scenario::parse(&text, "column.toml").unwrap_or_else(|e| panic!("{e}"))
@@ -57,10 +63,35 @@ fn a_column_taking_its_turns_front_to_back_keeps_every_slot() {
     assert!(s.max_deviation_m >= 0.15 - 1e-9, "{}", s.max_deviation_m);
 }
 
-/// `order` is optional (agent order, the paper's) and refuses a name it does not know,
-/// naming the key.
+/// Omitted, the order is front to back when every agent has a top speed and looks ahead
+/// (the column then keeps every slot, as with the order written out), and agent order
+/// with `horizon_steps = 0` (chasing the slot as before the look-ahead; without a top
+/// speed likewise, in the next test). The resolved file writes the order out, so it
+/// loads back the same.
 #[test]
-fn the_turn_order_defaults_to_agent_order_and_refuses_an_unknown_name() {
+fn omitted_the_order_is_front_first_with_a_top_speed_and_a_look_ahead() {
+    let capped = column_with("", "");
+    assert_eq!(capped.turn_order, TurnOrder::FrontFirst);
+    let s = simulate(&capped).expect("simulate").summary();
+    assert_eq!(s.collisions, 0);
+    assert!(s.max_deviation_m < 1e-9, "{}", s.max_deviation_m);
+    let text = capped.to_resolved_toml("column.toml").expect("resolved");
+    let again = Scenario::parse(&text, "resolved.toml").expect("resolved loads");
+    assert_eq!(again.turn_order, TurnOrder::FrontFirst);
+
+    let chasing = column_with("", "horizon_steps = 0");
+    assert_eq!(chasing.turn_order, TurnOrder::Agent);
+    let s = simulate(&chasing).expect("simulate").summary();
+    assert!(s.max_deviation_m >= 0.15 - 1e-9, "{}", s.max_deviation_m);
+    let text = chasing.to_resolved_toml("column.toml").expect("resolved");
+    let again = Scenario::parse(&text, "resolved.toml").expect("resolved loads");
+    assert_eq!(again.turn_order, TurnOrder::Agent);
+}
+
+/// Without a top speed the order defaults to agent order (the paper's); `order` refuses
+/// a name it does not know, naming the key.
+#[test]
+fn without_a_top_speed_the_order_is_the_agents_and_an_unknown_name_is_refused() {
     let text = shared::scenario::PAPER_SCENARIO_TOML;
     let paper = Scenario::parse(text, "paper.toml").expect("paper");
     assert_eq!(paper.turn_order, TurnOrder::Agent);

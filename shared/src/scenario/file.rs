@@ -55,8 +55,9 @@ pub(super) struct OrcaFile {
 pub(super) struct TurnsFile {
     #[serde(default)]
     pub(super) mode: TurnMode,
-    #[serde(default)]
-    pub(super) order: TurnOrder,
+    /// `None`: [`TurnOrder::default_for`] the agents.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) order: Option<TurnOrder>,
 }
 
 #[derive(Deserialize, Serialize)]

@@ -129,7 +129,7 @@ impl Scenario {
             }),
             turns: TurnsFile {
                 mode: self.turns,
-                order: self.turn_order,
+                order: Some(self.turn_order),
             },
         })
     }

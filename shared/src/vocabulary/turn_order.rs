@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::Named;
+use super::{AgentSpec, Named};
 
 /// In which order the agents of a step take their turns (`[turns] order` in a scenario).
 ///
@@ -12,7 +12,8 @@ use super::Named;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TurnOrder {
-    /// In agent order, the order of the formation's slots (the paper's turns).
+    /// In agent order, the order of the formation's slots (the paper's turns; the
+    /// default without a top speed, see [`TurnOrder::default_for`]).
     #[default]
     Agent,
     /// The agent furthest ahead first: by where each stands along the formation centre's
@@ -25,6 +26,33 @@ pub enum TurnOrder {
 impl TurnOrder {
     /// Every order.
     pub const ALL: [TurnOrder; 2] = [Self::Agent, Self::FrontFirst];
+
+    /// The order a scenario's agents take their turns in when the file names none:
+    /// [`TurnOrder::FrontFirst`] when every agent has a top speed and looks ahead along
+    /// the centre's plan (`horizon_steps > 0`, the default with a top speed), else
+    /// [`TurnOrder::Agent`], the paper's order. An agent that cannot keep up with its slot
+    /// then finds the way ahead cleared by the mates in front; without a top speed every
+    /// agent reaches its best point each step, and with `horizon_steps = 0` an agent
+    /// chases its slot as it did before the look-ahead, in the order it did.
+    ///
+    /// ```
+    /// use shared::formation::Slot;
+    /// use shared::vocabulary::{AgentSpec, TurnOrder};
+    /// let paper = AgentSpec::new(Slot::new(1.0, 0.0), 0.25);
+    /// let capped = AgentSpec { max_step_m: Some(0.5), horizon_steps: 10, ..paper };
+    /// let chasing = AgentSpec { horizon_steps: 0, ..capped };
+    /// assert_eq!(TurnOrder::default_for(&[capped, capped]), TurnOrder::FrontFirst);
+    /// assert_eq!(TurnOrder::default_for(&[capped, chasing]), TurnOrder::Agent);
+    /// assert_eq!(TurnOrder::default_for(&[capped, paper]), TurnOrder::Agent);
+    /// ```
+    pub fn default_for(agents: &[AgentSpec]) -> Self {
+        let look_ahead = |a: &AgentSpec| a.max_step_m.is_some() && a.horizon_steps > 0;
+        if !agents.is_empty() && agents.iter().all(look_ahead) {
+            Self::FrontFirst
+        } else {
+            Self::Agent
+        }
+    }
 
     /// The name used in files and on the command line.
     pub fn name(&self) -> &'static str {

@@ -9,7 +9,7 @@
 use super::file::{DiskFile, PoseFile, ScenarioFile};
 use super::{PathSpec, Scenario, ScenarioError};
 use crate::geometry::{Disk, Field, Point, Pose};
-use crate::vocabulary::{ControllerKind, TurnMode};
+use crate::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 
 mod feasibility;
 mod formation;
@@ -278,6 +278,10 @@ impl Checker<'_> {
             ));
         }
 
+        let turn_order = raw
+            .turns
+            .order
+            .unwrap_or_else(|| TurnOrder::default_for(&agents));
         Ok(Scenario {
             name: raw.name,
             seed: raw.seed,
@@ -291,7 +295,7 @@ impl Checker<'_> {
             path,
             controller,
             turns,
-            turn_order: raw.turns.order,
+            turn_order,
         })
     }
 
