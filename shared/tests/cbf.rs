@@ -68,12 +68,22 @@ fn move_clearance_m(
         .fold(f64::INFINITY, f64::min)
 }
 
+/// The settings of the plain filter: the defaults without the deadlock escape.
+fn plain() -> CbfSettings {
+    CbfSettings {
+        deadlock_escape: false,
+        ..CbfSettings::default()
+    }
+}
+
+/// The plain filter deadlocks head-on; with the deadlock escape (the default) the same
+/// agent goes round the obstacle to its slot, as safely.
 #[test]
 fn head_on_the_cbf_agent_stops_in_front_of_the_obstacle_and_deadlocks() {
     let field = Field::new(30.0, 20.0);
     let obstacles = [Disk::new(15.0, 10.0, 1.0)];
     let radius_m = 0.3;
-    let controller = CbfController::new(field, &obstacles, &spec(radius_m), CbfSettings::default())
+    let controller = CbfController::new(field, &obstacles, &spec(radius_m), plain())
         .expect("default settings are valid");
     let slot = Point::new(25.0, 10.0);
     let mut me = Point::new(5.0, 10.0);
@@ -108,6 +118,20 @@ fn head_on_the_cbf_agent_stops_in_front_of_the_obstacle_and_deadlocks() {
     let last = controller.plan_move(&at(slot), &me, &[]);
     assert!(is_deadlocked(&last, &me));
     assert_ne!(last.status, MoveStatus::AtSlot);
+
+    let escaping =
+        CbfController::new(field, &obstacles, &spec(radius_m), CbfSettings::default()).unwrap();
+    let mut me = Point::new(5.0, 10.0);
+    let reached = (0..60).any(|_| {
+        let mv = escaping.plan_move(&at(slot), &me, &[]);
+        assert!(move_clearance_m(&field, &obstacles, &[], radius_m, &mv) >= 0.0);
+        me = mv.best;
+        mv.status == MoveStatus::AtSlot
+    });
+    assert!(
+        reached,
+        "with the escape it reaches its slot, not stuck at {me}"
+    );
 }
 
 #[test]
@@ -156,7 +180,8 @@ fn the_logsumexp_barrier_overshoots_into_an_obstacle_where_the_cbf_does_not() {
         DEFAULT_LSE_SHARPNESS_PER_M,
     )
     .unwrap();
-    let cbf = CbfController::new(field, &obstacles, &spec(radius_m), settings).unwrap();
+    // The plain filter, like for like with the LogSumExp barrier (which has no escape).
+    let cbf = CbfController::new(field, &obstacles, &spec(radius_m), plain()).unwrap();
 
     let run = |plan: &dyn Fn(&Point) -> Move| -> (f64, Point) {
         let mut me = start;
@@ -379,4 +404,37 @@ fn the_cbf_table_sets_the_pieces_of_a_turn() {
         let e = load(&with(bad)).expect_err("out of range").to_string();
         assert!(e.contains("cbf.substeps"), "{e}");
     }
+}
+
+/// `[cbf] deadlock_escape` (on by default) reaches the agents: on the capped dense field
+/// the plain filter leaves agents stopped at barriers for good, the escape takes them
+/// round (a lower mean deviation), both without a collision.
+#[test]
+fn the_cbf_table_turns_the_deadlock_escape_off_and_on() {
+    let file = std::path::PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenarios/dense.toml"
+    ));
+    let text = std::fs::read_to_string(&file)
+        .expect("dense.toml")
+        .replacen("[formation]", "[formation]\nmax_step_m = 0.5", 1);
+    let text = format!("controller = \"cbf\"\n{text}");
+    let load = |t: &str| shared::scenario::Scenario::parse(t, "dense-cbf.toml").expect("loads");
+    let escaping = load(&text);
+    assert!(escaping.controller.cbf.deadlock_escape);
+    let plain = load(&format!("{text}\n[cbf]\ndeadlock_escape = false\n"));
+    assert!(!plain.controller.cbf.deadlock_escape);
+    let (a, b) = (
+        shared::simulate::simulate(&plain).expect("runs").summary(),
+        shared::simulate::simulate(&escaping)
+            .expect("runs")
+            .summary(),
+    );
+    assert_eq!((a.collisions, b.collisions), (0, 0));
+    assert!(
+        b.mean_deviation_m < 0.5 * a.mean_deviation_m,
+        "mean deviation {} m with the escape, {} m without",
+        b.mean_deviation_m,
+        a.mean_deviation_m
+    );
 }

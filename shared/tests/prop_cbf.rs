@@ -209,6 +209,7 @@ fn world(seed: u64) -> World {
         max_speed_m_per_s,
         sensing_radius_m: radius_m + max_speed_m_per_s * dt_s + 1e-5 + rng.random_range(0.0..4.0),
         substeps: rng.random_range(1..=6),
+        deadlock_escape: rng.random_bool(0.5),
     };
     let mut w = World {
         field,

@@ -49,8 +49,14 @@ fn round_trip(s: &Scenario, what: &str) -> String {
         Some(s.turns.name()),
         "{what}"
     );
+    // The order is written out: left out, it would be chosen again from the agents.
+    assert_eq!(
+        doc["turns"]["order"].as_str(),
+        Some(s.turn_order.name()),
+        "{what}"
+    );
     assert!(
-        doc["cbf"].as_table().is_some_and(|c| c.len() == 7),
+        doc["cbf"].as_table().is_some_and(|c| c.len() == 8),
         "{what}"
     );
     assert!(text.starts_with("# Resolved form"), "{what}");

@@ -2,7 +2,9 @@
 
 use crate::formation::Slot;
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
-use crate::vocabulary::{AgentSpec, Body, CBF_MARGIN_M, CbfSettings, CbfSettingsError, Move};
+use crate::vocabulary::{
+    AgentSpec, Body, CBF_MARGIN_M, CBF_STALL_SHARE, CbfSettings, CbfSettingsError, Move,
+};
 
 use super::*;
 
@@ -142,6 +144,11 @@ impl CbfController {
                 Ok(u) => piece.capped(u),
                 Err(_) => break,
             };
+            let u = if piece.deadlock_escape {
+                escape_stall(&piece, &u_nom, u, &rows)
+            } else {
+                u
+            };
             if u == Vector::zeros() {
                 break;
             }
@@ -155,5 +162,20 @@ impl CbfController {
             status: step_status(&slot, me, &at),
             waypoints,
         }
+    }
+}
+
+/// The velocity `u` filtered from `u_nom` under `rows`, or, when it is stalled (under
+/// [`CBF_STALL_SHARE`] of the nominal speed), the filtered quarter turn clockwise of the
+/// nominal if that is faster ([`CbfSettings::deadlock_escape`]): the same constraints, so
+/// as safe.
+fn escape_stall(settings: &CbfSettings, u_nom: &Vector, u: Vector, rows: &[HalfPlane]) -> Vector {
+    if u.norm() >= CBF_STALL_SHARE * u_nom.norm() {
+        return u;
+    }
+    let clockwise = Vector::new(u_nom.y, -u_nom.x);
+    match solve_qp_2d(&clockwise, rows) {
+        Ok(v) if settings.capped(v).norm() > u.norm() => settings.capped(v),
+        _ => u,
     }
 }

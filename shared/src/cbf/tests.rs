@@ -262,3 +262,58 @@ mod substeps {
         );
     }
 }
+
+mod deadlock_escape {
+    use super::*;
+    use crate::formation::Slot;
+    use crate::geometry::{Disk, Field, Pose};
+    use crate::vocabulary::AgentSpec;
+
+    /// An agent of radius 0.3 m at (10, 10) whose slot, (14, 10), lies straight behind an
+    /// obstacle of radius 0.5 m at (12, 10): the nominal velocity points at the
+    /// obstacle's centre, so the barrier alone cancels it.
+    fn controller(deadlock_escape: bool) -> CbfController {
+        let spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.3);
+        let settings = CbfSettings {
+            deadlock_escape,
+            ..CbfSettings::default()
+        };
+        let obstacle = [Disk::new(12.0, 10.0, 0.5)];
+        CbfController::new(Field::new(20.0, 20.0), &obstacle, &spec, settings).expect("settings")
+    }
+
+    /// Twenty turns from (10, 10) towards the fixed slot: where the agent ends, every
+    /// piece checked clear of the obstacle (radii sum 0.8 m).
+    fn drive(c: &CbfController) -> Point {
+        let centre = Pose::new(14.0, 10.0, 0.0);
+        let mut me = Point::new(10.0, 10.0);
+        for _ in 0..20 {
+            let mv = c.plan_move(&centre, &me, &[]);
+            for piece in mv.waypoints.windows(2) {
+                let d = crate::geometry::distance_point_segment(
+                    &Point::new(12.0, 10.0),
+                    &piece[0],
+                    &piece[1],
+                );
+                assert!(d >= 0.8, "a piece within {d} m of the obstacle's centre");
+            }
+            me = mv.best;
+        }
+        me
+    }
+
+    #[test]
+    fn a_stalled_agent_goes_round_the_body_in_its_way_and_reaches_its_slot() {
+        let slot = Point::new(14.0, 10.0);
+        let stuck = drive(&controller(false));
+        assert!(
+            stuck.x < 12.0 && (stuck - slot).norm() > 2.0,
+            "without the escape the barrier holds it in front of the obstacle: {stuck}"
+        );
+        let round = drive(&controller(true));
+        assert!(
+            (round - slot).norm() < 0.05,
+            "with it the agent goes round and reaches its slot: {round}"
+        );
+    }
+}

@@ -77,6 +77,8 @@ pub(super) struct CbfFile {
     pub(super) lse_sharpness_per_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) substeps: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) deadlock_escape: Option<bool>,
 }
 
 /// `[map]`: an occupancy map whose blocked cells are obstacles: a map_server YAML file

@@ -122,6 +122,7 @@ impl Scenario {
                 sensing_radius_m: Some(c.sensing_radius_m),
                 lse_sharpness_per_m: Some(self.controller.lse_sharpness_per_m),
                 substeps: Some(c.substeps),
+                deadlock_escape: Some(c.deadlock_escape),
             }),
             orca: Some(OrcaFile {
                 time_horizon_steps: Some(self.controller.orca.time_horizon_steps),
@@ -399,6 +400,7 @@ max_speed_m_per_s = 0.1
 sensing_radius_m = 1.2345678901234567
 lse_sharpness_per_m = 987.125
 substeps = 7
+deadlock_escape = false
 [field]
 width_m = 20.000000000000004
 height_m = 10.0

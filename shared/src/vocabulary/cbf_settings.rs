@@ -81,7 +81,19 @@ pub struct CbfSettings {
     /// what they mean per turn with one. 1 is one straight step a turn. Holonomic agents
     /// only: a unicycle's barrier turn is one arc.
     pub substeps: u32,
+    /// Whether a `cbf` agent stalled at a barrier tries the way round it: when the
+    /// filtered velocity of a piece is under [`CBF_STALL_SHARE`] of the nominal one, the
+    /// QP is solved again for the nominal turned a quarter turn clockwise (the right-hand
+    /// rule of multi-robot deadlock resolution), and that velocity is taken if it is
+    /// faster. Both solve the same constraints, so safety is unchanged; without it an
+    /// agent whose slot lies straight behind a body stops there for good. Holonomic agents
+    /// only, as `substeps`.
+    pub deadlock_escape: bool,
 }
+
+/// Below this share of its nominal speed a `cbf` piece counts as stalled
+/// ([`CbfSettings::deadlock_escape`]).
+pub const CBF_STALL_SHARE: f64 = 0.2;
 
 impl Default for CbfSettings {
     /// `gamma = 1 /s`, `dt = 1 s` (`gamma * dt = 1`, the largest safe value: the barrier
@@ -90,7 +102,7 @@ impl Default for CbfSettings {
     /// reached in one turn), maximum speed 1 m/s (one metre per turn, four times the
     /// example scenario's centre step of 0.25 m, so agents catch up after a detour), and a
     /// sensing radius of 5 m (safe for agent radii up to 4 m), and
-    /// [`DEFAULT_CBF_SUBSTEPS`] pieces a turn.
+    /// [`DEFAULT_CBF_SUBSTEPS`] pieces a turn, with the deadlock escape.
     fn default() -> Self {
         Self {
             gamma_per_s: 1.0,
@@ -99,6 +111,7 @@ impl Default for CbfSettings {
             max_speed_m_per_s: 1.0,
             sensing_radius_m: 5.0,
             substeps: DEFAULT_CBF_SUBSTEPS,
+            deadlock_escape: true,
         }
     }
 }

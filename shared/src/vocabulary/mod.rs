@@ -35,8 +35,8 @@ pub use agent::AgentSpec;
 pub use body::Body;
 pub use capacity::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
 pub use cbf_settings::{
-    CBF_MARGIN_M, CbfSettings, CbfSettingsError, DEFAULT_CBF_SUBSTEPS, DEFAULT_LSE_SHARPNESS_PER_M,
-    MAX_CBF_SUBSTEPS,
+    CBF_MARGIN_M, CBF_STALL_SHARE, CbfSettings, CbfSettingsError, DEFAULT_CBF_SUBSTEPS,
+    DEFAULT_LSE_SHARPNESS_PER_M, MAX_CBF_SUBSTEPS,
 };
 pub use controller::{ControllerKind, ControllerSpec, OrcaSettings};
 pub use kinematics::Kinematics;

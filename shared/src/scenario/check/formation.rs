@@ -58,6 +58,9 @@ impl Checker<'_> {
                 }
                 spec.cbf.substeps = n;
             }
+            if let Some(escape) = c.deadlock_escape {
+                spec.cbf.deadlock_escape = escape;
+            }
         }
         spec.check(agents)
             .map_err(|e| self.invalid("cbf", e.to_string()))?;
