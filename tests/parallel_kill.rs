@@ -8,7 +8,7 @@
 mod support;
 
 use coordinator::turns::{RunOptions, run_scenario};
-use shared::groups::turn_groups;
+use shared::groups::turn_groups_ordered;
 use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
@@ -80,8 +80,8 @@ fn run_and_compare(scenario: &Scenario, deaths: &[(usize, usize)]) -> Run {
     run
 }
 
-/// The groups of `step` in `reference` (formed from where the agents stood at the end of
-/// the step before).
+/// The groups of `step` in `reference`, in the order they take their turns (formed from
+/// where the agents stood at the end of the step before, in the scenario's turn order).
 fn groups_at(scenario: &Scenario, reference: &Run, step: usize) -> Vec<Vec<usize>> {
     let before = &reference.steps[step - 1];
     let bodies: Vec<Body> = before
@@ -94,7 +94,14 @@ fn groups_at(scenario: &Scenario, reference: &Run, step: usize) -> Vec<Vec<usize
         })
         .collect();
     let alive: Vec<bool> = before.agents.iter().map(|a| a.alive).collect();
-    turn_groups(scenario.turns, &scenario.agents, &bodies, &alive)
+    turn_groups_ordered(
+        scenario.turns,
+        scenario.turn_order,
+        reference.steps[step].centre.heading_rad,
+        &scenario.agents,
+        &bodies,
+        &alive,
+    )
 }
 
 #[test]
@@ -183,8 +190,16 @@ fn two_agents_killed_at_one_step_in_sequential_mode_match_the_reference_to_the_b
         .filter(|f| f.kind == FaultKind::Dead)
         .map(|f| (f.agent, f.step))
         .collect();
-    // Detected in turn order.
-    assert_eq!(dead, [(3, 25), (9, 25), (12, 60)]);
+    // Detected in turn order (the scenario's, found again from the positions).
+    let order = groups_at(&scenario, &run, 25).concat();
+    let mut at_25: Vec<(usize, usize)> = order
+        .iter()
+        .filter(|a| [3, 9].contains(*a))
+        .map(|&a| (a, 25))
+        .collect();
+    assert_eq!(at_25.len(), 2, "both victims take a turn at step 25");
+    at_25.push((12, 60));
+    assert_eq!(dead, at_25);
 }
 
 /// The same in a changing world: the patrol scenario (moving obstacles crossing the

@@ -18,7 +18,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
 use shared::geometry::Point;
-use shared::groups::turn_groups;
+use shared::groups::turn_groups_ordered;
 use shared::scenario::Scenario;
 use shared::vocabulary::{Body, TurnMode};
 use support::progress::{self, Watched};
@@ -132,9 +132,11 @@ fn positions(out: &Path) -> Vec<Vec<Point>> {
     steps
 }
 
-/// The agents in `agent`'s group at `step` (formed from where every agent stood at the
-/// end of the step before), when every agent is alive.
+/// The agents in `agent`'s group at step 1 (formed from where every agent stood at step 0,
+/// in the scenario's turn order along the centre's heading at step 1), when every agent
+/// is alive.
 fn group_mates(scenario: &Scenario, before: &[Point], agent: usize) -> Vec<usize> {
+    let path = shared::simulate::plan_centre_path(scenario).expect("centre path");
     let bodies: Vec<Body> = before
         .iter()
         .zip(&scenario.agents)
@@ -143,7 +145,14 @@ fn group_mates(scenario: &Scenario, before: &[Point], agent: usize) -> Vec<usize
             radius_m: spec.radius_m,
         })
         .collect();
-    let groups = turn_groups(scenario.turns, &scenario.agents, &bodies, &[true; AGENTS]);
+    let groups = turn_groups_ordered(
+        scenario.turns,
+        scenario.turn_order,
+        path[1].heading_rad,
+        &scenario.agents,
+        &bodies,
+        &[true; AGENTS],
+    );
     groups
         .into_iter()
         .find(|g| g.contains(&agent))

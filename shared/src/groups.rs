@@ -371,7 +371,7 @@ mod tests {
         let parallel = order(TurnMode::Parallel);
         assert!(parallel[0].contains(&4), "{parallel:?}");
         check_groups(&parallel, &bodies, &alive);
-        // Agent order is the default and is unchanged by the heading.
+        // Agent order is unchanged by the heading.
         let agent_order = turn_groups_ordered(
             TurnMode::Sequential,
             TurnOrder::Agent,

@@ -8,16 +8,20 @@ use shared::geometry::polyline_length_m;
 use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
+use shared::vocabulary::TurnOrder;
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data")).join(name)
 }
 
+/// The scenario of `file` with every agent looking `horizon_steps` ahead, in the turn
+/// order a file saying so would get ([`TurnOrder::default_for`]; the file names none).
 fn with_horizon(file: &str, horizon_steps: usize) -> Scenario {
     let mut s = Scenario::load(&data(file)).expect("scenario");
     for a in &mut s.agents {
         a.horizon_steps = horizon_steps;
     }
+    s.turn_order = TurnOrder::default_for(&s.agents);
     s
 }
 

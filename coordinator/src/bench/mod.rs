@@ -349,7 +349,7 @@ impl Floors {
         Ok(())
     }
 
-    /// `rounds` echo rounds: every live agent in turn order, one empty turn each.
+    /// `rounds` echo rounds: every live agent in agent order, one empty turn each.
     fn echo_rounds(&mut self, ctx: &BetweenSteps<'_>, rounds: usize) -> anyhow::Result<()> {
         for _ in 0..rounds {
             for agent in (0..ctx.alive.len()).filter(|&a| ctx.alive[a]) {

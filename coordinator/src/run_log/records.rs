@@ -390,8 +390,10 @@ pub struct EndMessage {
 }
 
 /// The version of the log's format this program writes and resumes: a log of another
-/// version is read for `render` as far as it can be, never resumed.
-pub const LOG_FORMAT_VERSION: u32 = 1;
+/// version is read for `render` as far as it can be, never resumed. 2: a scenario's
+/// `[cbf] deadlock_escape` (a log of version 1 ran without it, which its scenario, read
+/// now, would switch on).
+pub const LOG_FORMAT_VERSION: u32 = 2;
 
 /// `/formation/scenario`: the scenario as run, the format's version, and the run's
 /// options that change what happens (so that `run --resume` goes on as the run would).

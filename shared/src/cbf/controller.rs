@@ -9,8 +9,8 @@ use crate::vocabulary::{
 use super::*;
 
 /// The CBF-QP controller of one agent: one barrier constraint per sensed neighbour and per
-/// field edge, an exact QP, one straight step of `dt` (see the module documentation for
-/// the safety argument). Same turn interface as [`crate::turn::BestPointController`].
+/// field edge, an exact QP, straight pieces over `dt` (see the module documentation for
+/// the safety argument and the deadlock escape). Same turn interface as [`crate::turn::BestPointController`].
 #[derive(Clone, Debug)]
 pub struct CbfController {
     pub(super) field: Field,
@@ -110,8 +110,9 @@ impl CbfController {
         rows
     }
 
-    /// The velocity chosen at `me` towards `slot`: the QP's solution, capped at the
-    /// maximum speed.
+    /// The plain filter's velocity at `me` towards `slot`: the QP's solution, capped at the
+    /// maximum speed (a turn of one piece moves by it unless the piece stalls and the
+    /// deadlock escape finds a faster way round).
     pub fn velocity(&self, slot: &Point, me: &Point, others: &[Body]) -> Result<Vector, QpError> {
         let u_nom = self.settings.nominal(slot, me);
         let u = solve_qp_2d(&u_nom, &self.constraints(me, others))?;
@@ -135,6 +136,7 @@ impl CbfController {
             ..self.settings
         };
         let bodies = sensed(&self.obstacles, others, me, self.settings.sensing_radius_m);
+
         let mut waypoints = vec![*me];
         let mut at = *me;
         for _ in 0..self.settings.substeps {

@@ -11,16 +11,20 @@
 //!
 //! ```text
 //! h_ij(x) = ||x - s_j||^2 - (r_i + r_j + m)^2          (m = CBF_MARGIN_M)
-//! -2 (x_i - s_j) . u <= gamma * w_j * h_ij(x_i)        (w_j = 1 obstacles, 1/2 agents)
+//! -2 (x_i - s_j) . u <= gamma * h_ij(x_i)
 //! ```
 //!
+//! (the whole responsibility for every body, mates included: they stand still during the
+//! turn, or cannot reach the agent within the step in a parallel group).
+//!
 //! and one per field edge (`h = x - r_i - m >= 0` gives `-u_x <= gamma * h`, and so on).
-//! The quadratic programme is solved exactly by [`solve_qp_2d`], and the agent moves for
-//! one time step along the straight segment `x_i -> x_i + dt * u`.
+//! The quadratic programme is solved exactly by [`solve_qp_2d`], and the agent moves along
+//! the straight segment `x_i -> x_i + dt * u` (a turn is [`CbfSettings::substeps`] such
+//! pieces, each solved again where the last ended).
 //!
 //! **Why the whole segment is safe, not only its end.** Along the segment,
-//! `h(x + t u) = h + 2 t (x - s).u + t^2 |u|^2 >= h + 2 t (x - s).u >= h - t gamma w h`,
-//! so `h(x + t u) >= h (1 - gamma w t) >= 0` for every `t` in `[0, dt]` as soon as
+//! `h(x + t u) = h + 2 t (x - s).u + t^2 |u|^2 >= h + 2 t (x - s).u >= h - t gamma h`,
+//! so `h(x + t u) >= h (1 - gamma t) >= 0` for every `t` in `[0, dt]` as soon as
 //! `h >= 0` and `gamma * dt <= 1` (which [`CbfSettings::validate`] enforces). For the
 //! edges, `h` is linear and the same bound holds with equality. If the agent starts in the
 //! thin band `-m < clearance < 0` of the inflated barrier (`h < 0`, true bodies still
@@ -37,9 +41,17 @@
 //! then feasible; an infeasible QP (only from an unsafe or non-finite state) makes the
 //! agent stay put with [`MoveStatus::Stayed`].
 //!
-//! Like every CBF with a nominal controller, this one can *deadlock*: an agent whose slot
-//! lies straight behind an obstacle slows down in front of it and stops (see
-//! [`is_deadlocked`]); off the axis it slides around the obstacle.
+//! Like every CBF with a nominal controller, the plain filter can *deadlock*: an agent whose
+//! slot lies straight behind an obstacle slows down in front of it and stops (see
+//! [`is_deadlocked`]); off the axis it slides around the obstacle. The deadlock escape
+//! ([`CbfSettings::deadlock_escape`], on by default) takes it round: a piece stalled
+//! under [`CBF_STALL_SHARE`](crate::vocabulary::CBF_STALL_SHARE) of the nominal speed solves the same QP again for the nominal
+//! turned a quarter turn clockwise and moves that way if it is faster. Any solution of
+//! these rows keeps the guarantee above, so the escape is as safe. An agent whose slot lies
+//! inside an obstacle keeps sliding round the obstacle's edge instead of resting in front
+//! of it (the deviation is the same; a guard against it, no escape where the slot cannot
+//! be stood on, took the benefit away too: capped dense 0.137 -> 7.50 m mean deviation,
+//! as the formation's slots pass through obstacles and come out the other side).
 //!
 //! # Differential-drive agents (`projection.rs`)
 //!

@@ -317,3 +317,45 @@ mod deadlock_escape {
         );
     }
 }
+
+mod deadlock_escape_unreachable {
+    use super::*;
+    use crate::formation::Slot;
+    use crate::geometry::{Disk, Field, Pose};
+    use crate::vocabulary::AgentSpec;
+
+    /// A slot at an obstacle's centre can never be reached: with the escape the agent
+    /// keeps sliding round the obstacle at its edge (it is never stalled for good), never
+    /// nearer than the radii sum and, once there, never farther beyond it than one piece
+    /// of its turn (a third of its 1 m step) takes it.
+    #[test]
+    fn an_agent_whose_slot_lies_inside_an_obstacle_keeps_to_its_edge_safely() {
+        let spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.3);
+        let centre_m = Point::new(12.0, 10.0);
+        let obstacle = [Disk::new(centre_m.x, centre_m.y, 0.5)];
+        let c = CbfController::new(
+            Field::new(20.0, 20.0),
+            &obstacle,
+            &spec,
+            CbfSettings::default(),
+        )
+        .expect("settings");
+        let centre = Pose::new(centre_m.x, centre_m.y, 0.0);
+        let mut me = Point::new(10.0, 10.0);
+        for turn in 0..60 {
+            let mv = c.plan_move(&centre, &me, &[]);
+            for piece in mv.waypoints.windows(2) {
+                let d = crate::geometry::distance_point_segment(&centre_m, &piece[0], &piece[1]);
+                assert!(d >= 0.8, "turn {turn}: a piece within {d} m of the centre");
+            }
+            me = mv.best;
+            if turn >= 10 {
+                let off_m = (me - centre_m).norm() - 0.8;
+                assert!(
+                    off_m < 0.35,
+                    "turn {turn}: {off_m} m off the obstacle's edge"
+                );
+            }
+        }
+    }
+}

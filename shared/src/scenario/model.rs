@@ -29,7 +29,7 @@ pub struct Scenario {
     pub polygons: Vec<Polygon>,
     /// The occupancy map of `[map]`, if any (its pieces are in `polygons`).
     pub map: Option<ScenarioMap>,
-    /// The agents, in turn order.
+    /// The agents, in slot order (agent 0 first).
     pub agents: Vec<AgentSpec>,
     /// Formation centre path settings.
     pub path: PathSpec,

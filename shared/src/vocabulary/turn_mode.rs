@@ -9,8 +9,8 @@ use super::Named;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum TurnMode {
-    /// One agent moves at a time, in agent order, while every other stands still (the
-    /// paper's Assumption 6).
+    /// One agent moves at a time, in the turn order ([`super::TurnOrder`]), while every
+    /// other stands still (the paper's Assumption 6).
     #[default]
     Sequential,
     /// Agents that cannot meet within the step move at once: each step the live agents

@@ -28,8 +28,8 @@ impl TurnOrder {
     pub const ALL: [TurnOrder; 2] = [Self::Agent, Self::FrontFirst];
 
     /// The order a scenario's agents take their turns in when the file names none:
-    /// [`TurnOrder::FrontFirst`] when every agent has a top speed and looks ahead along
-    /// the centre's plan (`horizon_steps > 0`, the default with a top speed), else
+    /// [`TurnOrder::FrontFirst`] when every agent has a top speed and `horizon_steps > 0`
+    /// (the default; the setting counts, whatever the controller and kinematics), else
     /// [`TurnOrder::Agent`], the paper's order. An agent that cannot keep up with its slot
     /// then finds the way ahead cleared by the mates in front; without a top speed every
     /// agent reaches its best point each step, and with `horizon_steps = 0` an agent
