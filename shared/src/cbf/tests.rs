@@ -316,13 +316,6 @@ mod deadlock_escape {
             "with it the agent goes round and reaches its slot: {round}"
         );
     }
-}
-
-mod deadlock_escape_unreachable {
-    use super::*;
-    use crate::formation::Slot;
-    use crate::geometry::{Disk, Field, Pose};
-    use crate::vocabulary::AgentSpec;
 
     /// A slot at an obstacle's centre can never be reached: with the escape the agent
     /// keeps sliding round the obstacle at its edge (it is never stalled for good), never
