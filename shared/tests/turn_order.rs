@@ -66,8 +66,8 @@ fn a_column_taking_its_turns_front_to_back_keeps_every_slot() {
 /// Omitted, the order is front to back when every agent has a top speed and looks ahead
 /// (the column then keeps every slot, as with the order written out), and agent order
 /// with `horizon_steps = 0` (chasing the slot as before the look-ahead; without a top
-/// speed likewise, in the next test). The resolved file writes the order out, so it
-/// loads back the same.
+/// speed likewise, in the next test) and for cars. The resolved file writes the order
+/// out, so it loads back the same.
 #[test]
 fn omitted_the_order_is_front_first_with_a_top_speed_and_a_look_ahead() {
     let capped = column_with("", "");
@@ -86,6 +86,18 @@ fn omitted_the_order_is_front_first_with_a_top_speed_and_a_look_ahead() {
     let text = chasing.to_resolved_toml("column.toml").expect("resolved");
     let again = Scenario::parse(&text, "resolved.toml").expect("resolved loads");
     assert_eq!(again.turn_order, TurnOrder::Agent);
+
+    // Cars keep agent order: the shipped car scenario names no order.
+    let cars = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/paper-car.toml");
+    let text = std::fs::read_to_string(&cars).expect("paper-car.toml");
+    assert!(!text.contains("order ="), "the file names no order");
+    let cars = Scenario::parse(&text, "paper-car.toml").expect("paper-car");
+    assert!(
+        cars.agents
+            .iter()
+            .all(|a| a.max_step_m.is_some() && a.horizon_steps > 0)
+    );
+    assert_eq!(cars.turn_order, TurnOrder::Agent);
 }
 
 /// Without a top speed the order defaults to agent order (the paper's); `order` refuses

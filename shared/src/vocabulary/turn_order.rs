@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{AgentSpec, Named};
+use super::{AgentSpec, Kinematics, Named};
 
 /// In which order the agents of a step take their turns (`[turns] order` in a scenario).
 ///
@@ -29,25 +29,37 @@ impl TurnOrder {
 
     /// The order a scenario's agents take their turns in when the file names none:
     /// [`TurnOrder::FrontFirst`] when every agent has a top speed and `horizon_steps > 0`
-    /// (the default; the setting counts, whatever the controller and kinematics), else
+    /// (the default; the setting counts, whatever the controller) and none is a car, else
     /// [`TurnOrder::Agent`], the paper's order. An agent that cannot keep up with its slot
     /// then finds the way ahead cleared by the mates in front; without a top speed every
     /// agent reaches its best point each step, and with `horizon_steps = 0` an agent
-    /// chases its slot as it did before the look-ahead, in the order it did.
+    /// chases its slot as it did before the look-ahead, in the order it did. Cars keep
+    /// agent order: front to back, a car boxed in by its mates searches long for a way
+    /// out, and over real processes an honest car was then killed as `slow` on 2 of 8
+    /// fields (none in agent order; `docs/measurements.md`).
     ///
     /// ```
     /// use shared::formation::Slot;
-    /// use shared::vocabulary::{AgentSpec, TurnOrder};
+    /// use shared::vocabulary::{AgentSpec, Kinematics, TurnOrder};
     /// let paper = AgentSpec::new(Slot::new(1.0, 0.0), 0.25);
     /// let capped = AgentSpec { max_step_m: Some(0.5), horizon_steps: 10, ..paper };
     /// let chasing = AgentSpec { horizon_steps: 0, ..capped };
+    /// let car = AgentSpec {
+    ///     kinematics: Kinematics::Car { turning_radius_m: 0.5, reverse: true },
+    ///     ..capped
+    /// };
     /// assert_eq!(TurnOrder::default_for(&[capped, capped]), TurnOrder::FrontFirst);
     /// assert_eq!(TurnOrder::default_for(&[capped, chasing]), TurnOrder::Agent);
     /// assert_eq!(TurnOrder::default_for(&[capped, paper]), TurnOrder::Agent);
+    /// assert_eq!(TurnOrder::default_for(&[capped, car]), TurnOrder::Agent);
     /// ```
     pub fn default_for(agents: &[AgentSpec]) -> Self {
-        let look_ahead = |a: &AgentSpec| a.max_step_m.is_some() && a.horizon_steps > 0;
-        if !agents.is_empty() && agents.iter().all(look_ahead) {
+        let front_first = |a: &AgentSpec| {
+            a.max_step_m.is_some()
+                && a.horizon_steps > 0
+                && !matches!(a.kinematics, Kinematics::Car { .. })
+        };
+        if !agents.is_empty() && agents.iter().all(front_first) {
             Self::FrontFirst
         } else {
             Self::Agent
