@@ -10,7 +10,8 @@ use super::*;
 
 /// The CBF-QP controller of one agent: one barrier constraint per sensed neighbour and per
 /// field edge, an exact QP, straight pieces over `dt` (see the module documentation for
-/// the safety argument and the deadlock escape). Same turn interface as [`crate::turn::BestPointController`].
+/// the safety argument and the deadlock escape). Same turn interface as
+/// [`crate::turn::BestPointController`].
 #[derive(Clone, Debug)]
 pub struct CbfController {
     pub(super) field: Field,

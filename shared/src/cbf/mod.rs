@@ -45,13 +45,14 @@
 //! slot lies straight behind an obstacle slows down in front of it and stops (see
 //! [`is_deadlocked`]); off the axis it slides around the obstacle. The deadlock escape
 //! ([`CbfSettings::deadlock_escape`], on by default) takes it round: a piece stalled
-//! under [`CBF_STALL_SHARE`](crate::vocabulary::CBF_STALL_SHARE) of the nominal speed solves the same QP again for the nominal
-//! turned a quarter turn clockwise and moves that way if it is faster. Any solution of
-//! these rows keeps the guarantee above, so the escape is as safe. An agent whose slot lies
-//! inside an obstacle keeps sliding round the obstacle's edge instead of resting in front
-//! of it (the deviation is the same; a guard against it, no escape where the slot cannot
-//! be stood on, took the benefit away too: capped dense 0.137 -> 7.50 m mean deviation,
-//! as the formation's slots pass through obstacles and come out the other side).
+//! under [`CBF_STALL_SHARE`](crate::vocabulary::CBF_STALL_SHARE) of the nominal speed
+//! solves the same QP again for the nominal turned a quarter turn clockwise and moves that
+//! way if it is faster. Any solution of these rows keeps the guarantee above, so the
+//! escape is as safe. An agent whose slot lies inside an obstacle keeps sliding round the
+//! obstacle's edge instead of resting in front of it (the deviation is the same; a guard
+//! against it, no escape where the slot cannot be stood on, took the benefit away too:
+//! capped dense 0.137 -> 7.50 m mean deviation, as the formation's slots pass through
+//! obstacles and come out the other side).
 //!
 //! # Differential-drive agents (`projection.rs`)
 //!
