@@ -177,8 +177,8 @@ fn escape_stall(settings: &CbfSettings, u_nom: &Vector, u: Vector, rows: &[HalfP
         return u;
     }
     let clockwise = Vector::new(u_nom.y, -u_nom.x);
-    match solve_qp_2d(&clockwise, rows) {
-        Ok(v) if settings.capped(v).norm() > u.norm() => settings.capped(v),
+    match solve_qp_2d(&clockwise, rows).map(|v| settings.capped(v)) {
+        Ok(v) if v.norm() > u.norm() => v,
         _ => u,
     }
 }
