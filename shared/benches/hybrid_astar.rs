@@ -3,13 +3,19 @@
 //! takes the agents whose plans took longest in a survey of every agent (the hardest
 //! searches, not straight shots), plus one forward-only (Dubins) case on a 100 m map.
 //!
+//! Also the cost of one Reeds-Shepp length (`reeds_shepp/shortest_length_m`), which the
+//! search computes for every pose it reaches (its heuristic), on poses spread over a
+//! 20 m square round the goal with every heading.
+//!
 //! Target: under 50 ms median on the 100 m maps. The data is read from
 //! `FORMATION_CLCBS_DIR` or, by default, the copy in `shared/tests/data/clcbs`.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use shared::geometry::Pose;
 use shared::hybrid_astar::{HybridAStarSettings, plan};
+use shared::reeds_shepp;
 use testkit::clcbs::{ClcbsInstance, default_clcbs_dir};
 
 const TURNING_RADIUS_M: f64 = 2.5;
@@ -95,5 +101,35 @@ fn bench_hybrid_astar(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_hybrid_astar);
+/// Poses on a 21 x 21 grid of 1 m over a square round the origin, headings in 16ths of a
+/// turn (a quasi-random mix, so no branch is learnt).
+fn spread_poses() -> Vec<Pose> {
+    let mut poses = Vec::new();
+    for k in 0..21 * 21 * 16 {
+        let (x, y, h) = (k % 21, (k / 21) % 21, (k * 7) % 16);
+        poses.push(Pose::new(
+            x as f64 - 10.0,
+            y as f64 - 10.0,
+            h as f64 * std::f64::consts::TAU / 16.0,
+        ));
+    }
+    poses
+}
+
+fn bench_reeds_shepp_length(c: &mut Criterion) {
+    let poses = spread_poses();
+    let goal = Pose::new(0.0, 0.0, 0.3);
+    let mut group = c.benchmark_group("reeds_shepp");
+    let mut i = 0;
+    group.bench_function("shortest_length_m", |b| {
+        b.iter(|| {
+            let from = &poses[i % poses.len()];
+            i += 1;
+            reeds_shepp::shortest_length_m(black_box(from), black_box(&goal), 0.5)
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_hybrid_astar, bench_reeds_shepp_length);
 criterion_main!(benches);

@@ -8,7 +8,7 @@
 use std::f64::consts::PI;
 
 use super::formulas::{
-    Formula, lp_rm_l, lp_rm_s_lm_rp, lp_rm_sm_lm, lp_rm_sm_rm, lp_rum_lum_rp, lp_rup_lum_rm,
+    Formula, Goal, lp_rm_l, lp_rm_s_lm_rp, lp_rm_sm_lm, lp_rm_sm_rm, lp_rum_lum_rp, lp_rup_lum_rm,
     lp_sp_lp, lp_sp_rp,
 };
 use crate::curve::{Segment, Steer, scaled_segment};
@@ -87,56 +87,58 @@ fn solve_normalized(x: f64, y: f64, phi: f64) -> Word {
     use Steer::{Left as L, Right as R, Straight as S};
     const HALF_PI: f64 = 0.5 * PI;
     let mut best = Word::NONE;
-    // The goal as seen from the end of a word read backwards (for CC|C and C S C|C).
     let (sin_phi, cos_phi) = phi.sin_cos();
-    let xb = x * cos_phi + y * sin_phi;
-    let yb = x * sin_phi - y * cos_phi;
+    let goal = Goal {
+        x,
+        y,
+        phi,
+        sin_phi,
+        cos_phi,
+    };
+    // The goal as seen from the end of a word read backwards (for CC|C and C S C|C).
+    let back = Goal {
+        x: x * cos_phi + y * sin_phi,
+        y: x * sin_phi - y * cos_phi,
+        ..goal
+    };
 
     // CSC: L+S+L+ and L+S+R+.
     let mut search = Search::new(&mut best, 0.0);
-    search.all_symmetries((x, y, phi), lp_sp_lp, |t, u, v| {
-        Word::new([L, S, L], [t, u, v])
-    });
-    search.all_symmetries((x, y, phi), lp_sp_rp, |t, u, v| {
-        Word::new([L, S, R], [t, u, v])
-    });
+    search.all_symmetries(&goal, lp_sp_lp, |t, u, v| Word::new([L, S, L], [t, u, v]));
+    search.all_symmetries(&goal, lp_sp_rp, |t, u, v| Word::new([L, S, R], [t, u, v]));
 
     // CCC: L+R-L(+/-), and the same read backwards.
     let mut search = Search::new(&mut best, 0.0);
-    search.all_symmetries((x, y, phi), lp_rm_l, |t, u, v| {
-        Word::new([L, R, L], [t, u, v])
-    });
-    search.all_symmetries((xb, yb, phi), lp_rm_l, |t, u, v| {
-        Word::new([L, R, L], [v, u, t])
-    });
+    search.all_symmetries(&goal, lp_rm_l, |t, u, v| Word::new([L, R, L], [t, u, v]));
+    search.all_symmetries(&back, lp_rm_l, |t, u, v| Word::new([L, R, L], [v, u, t]));
 
     // CCCC: L+R+u L-u R- and L+R-u L-u R+ (the cost counts the middle length u twice).
     let mut search = Search::new(&mut best, 0.0).with_double_middle();
-    search.all_symmetries((x, y, phi), lp_rup_lum_rm, |t, u, v| {
+    search.all_symmetries(&goal, lp_rup_lum_rm, |t, u, v| {
         Word::new([L, R, L, R], [t, u, -u, v])
     });
-    search.all_symmetries((x, y, phi), lp_rum_lum_rp, |t, u, v| {
+    search.all_symmetries(&goal, lp_rum_lum_rp, |t, u, v| {
         Word::new([L, R, L, R], [t, u, u, v])
     });
 
     // CCSC: L+R-(pi/2) S- L- and L+R-(pi/2) S- R-, and both read backwards.
     let mut search = Search::new(&mut best, HALF_PI);
-    search.all_symmetries((x, y, phi), lp_rm_sm_lm, |t, u, v| {
+    search.all_symmetries(&goal, lp_rm_sm_lm, |t, u, v| {
         Word::new([L, R, S, L], [t, -HALF_PI, u, v])
     });
-    search.all_symmetries((x, y, phi), lp_rm_sm_rm, |t, u, v| {
+    search.all_symmetries(&goal, lp_rm_sm_rm, |t, u, v| {
         Word::new([L, R, S, R], [t, -HALF_PI, u, v])
     });
-    search.all_symmetries((xb, yb, phi), lp_rm_sm_lm, |t, u, v| {
+    search.all_symmetries(&back, lp_rm_sm_lm, |t, u, v| {
         Word::new([L, S, R, L], [v, u, -HALF_PI, t])
     });
-    search.all_symmetries((xb, yb, phi), lp_rm_sm_rm, |t, u, v| {
+    search.all_symmetries(&back, lp_rm_sm_rm, |t, u, v| {
         Word::new([R, S, R, L], [v, u, -HALF_PI, t])
     });
 
     // CCSCC: L+R-(pi/2) S- L-(pi/2) R+.
     let mut search = Search::new(&mut best, PI);
-    search.all_symmetries((x, y, phi), lp_rm_s_lm_rp, |t, u, v| {
+    search.all_symmetries(&goal, lp_rm_s_lm_rp, |t, u, v| {
         Word::new([L, R, S, L, R], [t, -HALF_PI, u, -HALF_PI, v])
     });
 
@@ -169,17 +171,17 @@ impl<'a> Search<'a> {
 
     /// Tries `formula` on the goal and on its time-flipped, reflected, and time-flipped and
     /// reflected images; `build` turns a base solution into its word.
-    fn all_symmetries(
-        &mut self,
-        (x, y, phi): (f64, f64, f64),
-        formula: Formula,
-        build: fn(f64, f64, f64) -> Word,
-    ) {
+    fn all_symmetries(&mut self, goal: &Goal, formula: Formula, build: fn(f64, f64, f64) -> Word) {
         for (time_flip, reflect) in [(false, false), (true, false), (false, true), (true, true)] {
-            let xs = if time_flip { -x } else { x };
-            let ys = if reflect { -y } else { y };
-            let phis = if time_flip != reflect { -phi } else { phi };
-            let Some((t, u, v)) = formula(xs, ys, phis) else {
+            let turn_flip = if time_flip != reflect { -1.0 } else { 1.0 };
+            let image = Goal {
+                x: if time_flip { -goal.x } else { goal.x },
+                y: if reflect { -goal.y } else { goal.y },
+                phi: turn_flip * goal.phi,
+                sin_phi: turn_flip * goal.sin_phi,
+                cos_phi: goal.cos_phi,
+            };
+            let Some((t, u, v)) = formula(&image, self.bound) else {
                 continue;
             };
             let middle_weight = if self.double_middle { 2.0 } else { 1.0 };
@@ -196,5 +198,82 @@ impl<'a> Search<'a> {
                 self.bound = cost;
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every formula under every symmetry (and read backwards where the search reads it
+    /// so), without a bound: the least total of all the words they give.
+    fn least_total_unpruned(x: f64, y: f64, phi: f64) -> f64 {
+        let (sin_phi, cos_phi) = phi.sin_cos();
+        let goal = Goal {
+            x,
+            y,
+            phi,
+            sin_phi,
+            cos_phi,
+        };
+        let back = Goal {
+            x: x * cos_phi + y * sin_phi,
+            y: x * sin_phi - y * cos_phi,
+            ..goal
+        };
+        // (formula, its fixed arcs, the weight of its middle length, read backwards too)
+        let formulas: [(Formula, f64, f64, bool); 8] = [
+            (lp_sp_lp, 0.0, 1.0, false),
+            (lp_sp_rp, 0.0, 1.0, false),
+            (lp_rm_l, 0.0, 1.0, true),
+            (lp_rup_lum_rm, 0.0, 2.0, false),
+            (lp_rum_lum_rp, 0.0, 2.0, false),
+            (lp_rm_sm_lm, 0.5 * PI, 1.0, true),
+            (lp_rm_sm_rm, 0.5 * PI, 1.0, true),
+            (lp_rm_s_lm_rp, PI, 1.0, false),
+        ];
+        let mut least = f64::INFINITY;
+        for (formula, fixed, middle, backwards) in formulas {
+            let goals: &[&Goal] = if backwards { &[&goal, &back] } else { &[&goal] };
+            for g in goals {
+                for (flip_x, flip_y) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+                    let turn = flip_x * flip_y;
+                    let image = Goal {
+                        x: flip_x * g.x,
+                        y: flip_y * g.y,
+                        phi: turn * g.phi,
+                        sin_phi: turn * g.sin_phi,
+                        cos_phi: g.cos_phi,
+                    };
+                    if let Some((t, u, v)) = formula(&image, f64::INFINITY) {
+                        least = least.min(t.abs() + middle * u.abs() + v.abs() + fixed);
+                    }
+                }
+            }
+        }
+        least
+    }
+
+    #[test]
+    fn the_bound_never_drops_the_shortest_word() {
+        // Goals on a grid round the start with every heading, near ones included (where
+        // the cusped words are shortest).
+        let mut checked = 0;
+        for i in -12..=12 {
+            for j in -12..=12 {
+                for k in 0..24 {
+                    let (x, y) = (0.37 * i as f64, 0.41 * j as f64);
+                    let phi = k as f64 * std::f64::consts::TAU / 24.0 - PI + 0.01;
+                    let pruned = solve_normalized(x, y, phi).total;
+                    let least = least_total_unpruned(x, y, phi);
+                    assert!(
+                        (pruned - least).abs() <= 1e-12,
+                        "({x}, {y}, {phi}): pruned {pruned}, unpruned {least}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 25 * 25 * 24);
     }
 }
