@@ -65,11 +65,19 @@ struct Node {
 /// An entry of the open list: lowest `f` first, then highest `g` (deeper), then oldest.
 /// `BinaryHeap` pops the greatest, so `f` and the node index are reversed; the fields
 /// compare in this order.
+///
+/// A child enters with a provisional `f` from the obstacle-aware bound alone, a lower
+/// bound of its full heuristic (which adds the Reeds-Shepp or Dubins length, the costly
+/// part); the full one is computed only if the entry comes up, and the node is expanded
+/// only from an entry with its full `f` that still comes first. Every expansion is
+/// therefore the one an eager search would make: the same node, in the same order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 struct Entry {
     f_m: Reverse<TotalF64>,
     g_m: TotalF64,
     node: Reverse<u32>,
+    /// Whether `f_m` is provisional (the obstacle-aware bound only).
+    provisional: bool,
 }
 
 impl Entry {
@@ -78,6 +86,14 @@ impl Entry {
             f_m: Reverse(TotalF64(f_m)),
             g_m: TotalF64(g_m),
             node: Reverse(node),
+            provisional: false,
+        }
+    }
+
+    fn provisional(f_m: f64, g_m: f64, node: u32) -> Self {
+        Self {
+            provisional: true,
+            ..Self::new(f_m, g_m, node)
         }
     }
 }
@@ -172,17 +188,24 @@ impl<'a> Search<'a> {
         let mut expansions = 0usize;
         let mut analytic_attempts = 1usize;
 
-        while let Some(Entry {
-            f_m: Reverse(TotalF64(entry_f_m)),
-            g_m: TotalF64(entry_g_m),
-            node: Reverse(index),
-        }) = self.open.pop()
-        {
-            let index = index as usize;
+        while let Some(mut entry) = self.open.pop() {
+            let index = entry.node.0 as usize;
             let node = self.nodes[index];
-            if node.closed || node.g_m != entry_g_m {
+            if node.closed || node.g_m != entry.g_m.0 {
                 continue; // stale entry
             }
+            if entry.provisional {
+                entry = Entry::new(
+                    node.g_m + self.heuristic_m(&node.pose),
+                    node.g_m,
+                    entry.node.0,
+                );
+                if self.open.peek().is_some_and(|next| *next > entry) {
+                    self.open.push(entry); // another comes first now
+                    continue;
+                }
+            }
+            let (entry_f_m, entry_g_m) = (entry.f_m.0.0, entry.g_m.0);
             if expansions >= self.settings.max_expansions {
                 return Err(PlanError::ExpansionLimit { expansions });
             }
@@ -241,8 +264,8 @@ impl<'a> Search<'a> {
                 if !self.checker.piece_free(&piece) {
                     continue;
                 }
-                let h_m = self.heuristic_m(&child);
-                if h_m.is_infinite() {
+                let holonomic_m = self.holonomic.lower_bound_m(&child.position());
+                if holonomic_m.is_infinite() {
                     continue;
                 }
                 let new_node = Node {
@@ -265,7 +288,8 @@ impl<'a> Search<'a> {
                         slot
                     }
                 };
-                self.open.push(Entry::new(g_m + h_m, g_m, slot));
+                self.open
+                    .push(Entry::provisional(g_m + holonomic_m, g_m, slot));
             }
         }
         Err(PlanError::NoPath)
