@@ -67,9 +67,9 @@ pub struct RunArgs {
     /// on and, if dead, frozen as an obstacle.
     #[arg(long, default_value_t = 250)]
     pub turn_deadline_ms: u64,
-    /// The slow bound in milliseconds (default: a fifth of the turn deadline): an agent
-    /// that answers 3 of its last 10 turns later than this is recorded `slow`, killed
-    /// and frozen, as one that misses 3 of its last 10 is `hung`.
+    /// The slow bound in milliseconds (default: a fifth of the turn deadline, half for a
+    /// car agent): an agent that answers 3 of its last 10 turns later than this is
+    /// recorded `slow`, killed and frozen, as one that misses 3 of its last 10 is `hung`.
     #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..))]
     pub slow_turn_ms: Option<u64>,
     /// The controller, overriding the scenario's `controller` (best-point, cbf,

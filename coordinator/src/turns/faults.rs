@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use shared::geometry::Point;
 use shared::record::FaultKind;
+use shared::vocabulary::Kinematics;
 
 use super::driver::Driver;
 use super::lateness::{Lateness, Verdict};
@@ -152,7 +153,10 @@ impl Driver<'_, '_> {
         slot: Point,
         latency: Duration,
     ) -> anyhow::Result<bool> {
-        let bound = self.options.slow_bound();
+        let bound = match self.scenario.agents.get(agent) {
+            Some(spec) => self.options.slow_bound_for(&spec.kinematics),
+            None => self.options.slow_bound_for(&Kinematics::Holonomic),
+        };
         let turn = if latency > bound {
             Lateness::Slow
         } else {

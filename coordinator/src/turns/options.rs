@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use shared::vocabulary::Kinematics;
 use wire::misbehave::Misbehave;
 
 use crate::network::NetworkOptions;
@@ -60,8 +61,8 @@ pub struct RunOptions {
     pub max_missed_turns: u32,
     /// The window of the hung and slow rules, in the agent's turns.
     pub late_window_turns: u32,
-    /// The slow bound: an answer later than this after its grant is late (default: a
-    /// fifth of the turn deadline).
+    /// The slow bound: an answer later than this after its grant is late (default:
+    /// [`RunOptions::slow_bound_for`]).
     pub slow_turn: Option<Duration>,
     /// Start a replacement process for every agent that dies.
     pub respawn: bool,
@@ -126,9 +127,31 @@ impl RunOptions {
         }
     }
 
-    /// The slow bound in force: [`Self::slow_turn`], or a fifth of the turn deadline.
-    pub fn slow_bound(&self) -> Duration {
-        self.slow_turn.unwrap_or(self.turn_deadline / 5)
+    /// The slow bound in force for an agent that moves as `kinematics`:
+    /// [`Self::slow_turn`], or by default a fifth of the turn deadline, and half of it for
+    /// a car. A boxed-in car's turn runs a Hybrid A* search to its end
+    /// ([`shared::turn::SEARCH_EXPANSIONS`]), about 65 ms in one process on the project's
+    /// 2-core machine and up to 100 ms among agent processes: honest, and over a fifth of
+    /// the default deadline.
+    ///
+    /// ```
+    /// use std::time::Duration;
+    ///
+    /// use coordinator::turns::RunOptions;
+    /// use shared::vocabulary::Kinematics;
+    ///
+    /// let options = RunOptions::default();
+    /// let car = Kinematics::Car { turning_radius_m: 0.5, reverse: true };
+    /// assert_eq!(options.slow_bound_for(&Kinematics::Holonomic), options.turn_deadline / 5);
+    /// assert_eq!(options.slow_bound_for(&car), options.turn_deadline / 2);
+    /// let set = RunOptions { slow_turn: Some(Duration::from_millis(30)), ..options };
+    /// assert_eq!(set.slow_bound_for(&car), Duration::from_millis(30));
+    /// ```
+    pub fn slow_bound_for(&self, kinematics: &Kinematics) -> Duration {
+        self.slow_turn.unwrap_or(match kinematics {
+            Kinematics::Car { .. } => self.turn_deadline / 2,
+            Kinematics::Holonomic | Kinematics::Unicycle { .. } => self.turn_deadline / 5,
+        })
     }
 }
 

@@ -32,7 +32,7 @@ mod escape;
 mod look_ahead;
 
 pub use best_point_controller::{Aim, BestPointController};
-pub use car::GOAL_HEADINGS;
+pub use car::{GOAL_HEADINGS, SEARCH_EXPANSIONS};
 pub use look_ahead::{
     LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_TURNS, LOOKAHEAD_TRIGGER_TURNS, LOOKAHEAD_TURNS,
     SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
