@@ -9,7 +9,7 @@
 //! (checked exactly along each arc); with `align_heading`, the centre's heading only.
 //! When none is clear, the project's Hybrid A* searches a way among the obstacles and
 //! the other agents, and the car takes the shortest clear path to the search's pose
-//! four, two or one steps ahead. That path, cut at the top speed, is the move; without
+//! four, two or one steps ahead, or else to the farthest nearer one it clears. That path, cut at the top speed, is the move; without
 //! one the car stands. Unlike the holonomic guarantee, a car is not promised to reach
 //! its best point (a heuristic: `docs/method.md`, reachability by kinematic model).
 
@@ -89,7 +89,9 @@ pub(super) fn plan_car_drive(
         return Some(drive);
     }
     // None is clear: follow the search's way, by the shortest path to one of its poses
-    // four, two or one steps ahead (the farthest that is clear).
+    // four, two or one steps ahead, or else to a nearer one, the farthest that is clear.
+    // (Near a body the shortest path to a pose past the search's first cusp may cut
+    // into it; a pose on the search's first piece is reached by that piece itself.)
     let (poses, reach_m) = searched_path(start, goal, goal_headings, limits, world)?;
     let world = CarWorld { reach_m, ..*world };
     let mut along_m = vec![0.0];
@@ -97,17 +99,23 @@ pub(super) fn plan_car_drive(
         let last = along_m.last().copied().unwrap_or(0.0);
         along_m.push(last + (w[1].position() - w[0].position()).norm());
     }
-    [4.0, 2.0, 1.0].iter().find_map(|steps| {
-        let k = along_m
+    let ahead = |steps: f64| {
+        along_m
             .iter()
             .position(|s| *s >= steps * limits.max_step_m)
-            .unwrap_or(poses.len() - 1);
-        let path = shortest(&poses[k]);
-        path.length_m()
-            .is_finite()
-            .then_some(())
-            .and_then(|()| drive_along(start, path, k + 1 == poses.len(), limits, &world))
-    })
+            .unwrap_or(poses.len() - 1)
+    };
+    let nearer = (1..=ahead(1.0)).rev();
+    [ahead(4.0), ahead(2.0)]
+        .into_iter()
+        .chain(nearer)
+        .find_map(|k| {
+            let path = shortest(&poses[k]);
+            path.length_m()
+                .is_finite()
+                .then_some(())
+                .and_then(|()| drive_along(start, path, k + 1 == poses.len(), limits, &world))
+        })
 }
 
 /// The shortest path a car within `limits` drives from `from` to `to`: Reeds-Shepp when
@@ -354,6 +362,56 @@ mod tests {
             .iter()
             .map(|p| p.position())
             .collect()
+    }
+
+    /// A car 17 mm from an obstacle on its right, facing along it (a field of
+    /// `paper-car` with seed 9, agent 2 at step 115): no direct path to its best point is
+    /// clear, the search finds a way, but the shortest paths to the search's poses one,
+    /// two and four steps ahead all cut into the obstacle. It used to stand there for the
+    /// rest of the run; it follows the search's first piece instead.
+    #[test]
+    fn a_car_hugging_an_obstacle_follows_the_search_when_the_poses_ahead_are_not_clear() {
+        let field = Field::new(40.0, 30.0);
+        let obstacles = DiskGrid::new(vec![Disk::new(21.98645, 18.19203, 1.0)]);
+        let world = CarWorld {
+            field: &field,
+            obstacles: &obstacles,
+            others: &[],
+            reach_m: 0.25 + 1e-3,
+            margin_m: 1e-3,
+        };
+        let limits = CarLimits {
+            max_step_m: 0.5,
+            turning_radius_m: 0.5,
+            reverse: true,
+        };
+        let start = Pose::new(20.71884732049971, 18.156064161682124, 1.5438170820003543);
+        let goal = Point::new(24.843056190009495, 19.41040716334562);
+        let headings: Vec<f64> = std::iter::once(0.646)
+            .chain((0..GOAL_HEADINGS).map(|k| std::f64::consts::TAU * k as f64 / 8.0))
+            .chain([start.heading_rad])
+            .collect();
+        let drive = plan_car_drive(&start, &goal, &headings, 1, &limits, &world)
+            .expect("the search finds a way and the car takes it");
+        assert!(drive.waypoints.len() >= 2 && !drive.complete);
+        let chords = crate::kinematics::check_car_move(
+            start.heading_rad,
+            &drive.waypoints,
+            Some(drive.end_heading_rad),
+            &limits,
+        );
+        assert!(
+            chords.is_ok_and(|errors| !errors.is_empty()),
+            "a drivable move"
+        );
+        // Clear of the obstacle by its radius all along (exactly, along each arc).
+        let touching = CarWorld {
+            reach_m: 0.25,
+            ..world
+        };
+        assert!(chords_clear(start.heading_rad, &drive.waypoints, &touching));
+        let end = drive.waypoints.last().copied().unwrap_or(start.position());
+        assert!((end - start.position()).norm() > 1e-3, "it moves");
     }
 
     #[test]

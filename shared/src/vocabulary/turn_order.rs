@@ -34,9 +34,9 @@ impl TurnOrder {
     /// then finds the way ahead cleared by the mates in front; without a top speed every
     /// agent reaches its best point each step, and with `horizon_steps = 0` an agent
     /// chases its slot as it did before the look-ahead, in the order it did. Cars keep
-    /// agent order: on `paper-car` with seeds 1 to 9 the two orders were level (mean
-    /// deviation 0.281 m in agent order, 0.288 m front to back, each order far behind on
-    /// one field; `docs/measurements.md`).
+    /// agent order: on `paper-car` with seeds 1 to 9 the two orders are level (mean
+    /// deviation 0.108 m in agent order, 0.104 m front to back, each lower on some fields;
+    /// `docs/measurements.md`).
     ///
     /// ```
     /// use shared::formation::Slot;
