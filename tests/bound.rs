@@ -48,11 +48,32 @@ fn the_bound_is_below_the_run_and_zero_for_a_slot_that_can_be_followed() {
 }
 
 #[test]
-fn agents_without_a_top_speed_have_no_bound() {
-    // The paper's example: no top speed, so every agent could follow its slot.
+fn without_a_top_speed_only_the_obstacles_bound_and_the_run_stays_above() {
+    // The paper's example: no top speed, so the top speed forces nothing; its slots pass
+    // through obstacles, which force a deviation wherever an agent is.
     let r = bound(None);
-    assert_eq!(r["bound_mean_deviation_m"], 0.0);
-    assert_eq!(r["bound_max_deviation_m"], 0.0);
-    assert!(r["mean_ratio"].is_null());
+    let f = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
+    assert_eq!(f("speed_bound_mean_deviation_m"), 0.0);
+    assert!(f("obstacle_bound_mean_deviation_m") > 0.0, "{r}");
+    assert_eq!(
+        f("bound_mean_deviation_m"),
+        f("obstacle_bound_mean_deviation_m")
+    );
+    assert!(f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-9));
+    assert!(f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-9));
+    assert!(f("mean_ratio") >= 1.0 - 1e-9);
     assert!(r["per_agent"][0]["max_step_m"].is_null());
+}
+
+#[test]
+fn the_run_stays_above_the_bound_with_a_top_speed_among_obstacles() {
+    // Top speed and obstacles both bound the capped paper example; neither alone is as
+    // high as both, and the reference simulation stays above it.
+    let r = bound(Some("scenarios/paper-top-speed.toml"));
+    let f = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
+    assert_eq!(r["collisions"], 0);
+    assert!(f("bound_mean_deviation_m") >= f("speed_bound_mean_deviation_m") * (1.0 - 1e-6));
+    assert!(f("bound_mean_deviation_m") >= f("obstacle_bound_mean_deviation_m") * (1.0 - 1e-6));
+    assert!(f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-6));
+    assert!(f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-6));
 }

@@ -1,19 +1,28 @@
-//! `coordinator bound [SCENARIO]`: the physical limit of tracking under a top speed.
+//! `coordinator bound [SCENARIO]`: the physical limit of tracking under a top speed and
+//! among the static obstacles.
 //!
-//! Each agent alone (no obstacle, no mate), starting at its slot and knowing the whole
-//! centre path, can do no better than the track that solves
+//! Each agent alone (no mate), starting at its slot and knowing the whole centre path,
+//! can do no better than the track that solves
 //!
 //! ```text
-//! minimise   sum_k |x_k - s_k|          k = 1 .. T (s_k: its slot at step k)
-//! subject to |x_k - x_(k-1)| <= c        x_0: its slot at step 0, c: its top speed
+//! minimise   sum_k t_k                  k = 1 .. T (s_k: its slot at step k)
+//! subject to |x_k - s_k| <= t_k
+//!            f_k <= t_k                  f_k: how far s_k lies from where the agent fits
+//!            |x_k - x_(k-1)| <= c        x_0: its slot at step 0, c: its top speed
 //! ```
 //!
 //! a second-order cone programme, solved by Clarabel (an interior-point solver, pure
-//! Rust). Its optimum over `T` and the agents is a lower bound of the mean deviation any
-//! controller can reach with those top speeds, obstacles and mates only adding to it.
-//! The same constraints with `|x_k - s_k| <= t` for every `k`, minimising `t`, bound the
-//! largest deviation from below. The reference simulation is run too, and its figures are
-//! reported against the bounds.
+//! Rust). The floor `f_k` is the distance from the slot to the nearest point where the
+//! agent's disk lies inside the field and clear of every static obstacle (disks, known
+//! or found on the way, and polygons, true sizes): wherever the agent is at step `k`,
+//! its deviation is at least that. (Keeping `x_k` itself out of the obstacles would not
+//! be convex; the floor is its convex part.) The optimum over `T` and the agents is a
+//! lower bound of the mean deviation any controller can reach, mates (and moving
+//! obstacles) only adding to it. The same constraints with one `t` for every `k`,
+//! minimising `t`, bound the largest deviation from below. The bound with the top speed
+//! alone (no floor) and with the obstacles alone (the floors' mean) are reported too, to
+//! say which dominates. The reference simulation is run too, and its figures are reported
+//! against the bounds.
 
 use anyhow::Context;
 use clarabel::algebra::CscMatrix;
@@ -21,8 +30,13 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
 };
 use serde::Serialize;
-use shared::geometry::{Point, Pose};
+use shared::best_point::nearest_free_point;
+use shared::geometry::{
+    DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
+};
+use shared::scenario::Scenario;
 use shared::simulate::simulate_along;
+use shared::vocabulary::AgentSpec;
 
 use crate::cli::BoundArgs;
 use crate::error::CliError;
@@ -49,11 +63,13 @@ pub enum Objective {
 }
 
 /// The optimal track of one agent that starts at `start` and moves at most `max_step_m`
-/// a step, its slot at step `k + 1` being `slots[k]`: the optimal value of `objective`
-/// (metres: summed or largest deviation) and the track (`x_1 .. x_T`).
+/// a step, its slot at step `k + 1` being `slots[k]` and its deviation there at least
+/// `floors_m[k]` (none where the slice ends): the optimal value of `objective` (metres:
+/// summed or largest deviation) and the track (`x_1 .. x_T`).
 pub fn optimal_track(
     start: &Point,
     slots: &[Point],
+    floors_m: &[f64],
     max_step_m: f64,
     objective: Objective,
 ) -> Result<(f64, Vec<Point>), BoundError> {
@@ -107,7 +123,22 @@ pub fn optimal_track(
         cones.push(SupportedConeT::SecondOrderConeT(3));
         cones.push(SupportedConeT::SecondOrderConeT(3));
     }
-    let a = CscMatrix::new_from_triplets(6 * t, n, rows, cols, vals);
+    // Then the floors, t_k - f_k >= 0 (one row each, in the non-negative cone).
+    let floors: Vec<(usize, f64)> = floors_m
+        .iter()
+        .take(t)
+        .copied()
+        .enumerate()
+        .filter(|(_, f)| *f > 0.0)
+        .collect();
+    for (row, (k, floor_m)) in floors.iter().enumerate() {
+        entry(6 * t + row, dev_var(*k), -1.0);
+        b.push(-floor_m);
+    }
+    if !floors.is_empty() {
+        cones.push(SupportedConeT::NonnegativeConeT(floors.len()));
+    }
+    let a = CscMatrix::new_from_triplets(6 * t + floors.len(), n, rows, cols, vals);
     let p = CscMatrix::zeros((n, n));
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
@@ -128,17 +159,70 @@ pub fn optimal_track(
     Ok((sol.obj_val.min(sol.obj_val_dual).max(0.0), track))
 }
 
+/// How far `slot` lies from the nearest point where a disk of `radius_m` fits inside the
+/// field and clear of `obstacles` and `polygons` (true sizes): 0 where it fits there
+/// already, 0 too where it fits nowhere (no bound to give).
+pub fn obstacle_floor_m(
+    field: &Field,
+    obstacles: &DiskGrid,
+    polygons: &PolygonLayer,
+    offset: &Vector,
+    slot: &Point,
+) -> f64 {
+    let layers = [obstacles];
+    let space = FreeSpace::new(*field, &layers).with_polygons(polygons);
+    let query = slot - offset;
+    nearest_free_point(&space, &query).map_or(0.0, |free| (free - query).norm())
+}
+
+/// The floors of agent `spec` at `slots` in `scenario`'s static world
+/// ([`obstacle_floor_m`]).
+fn obstacle_floors_m(scenario: &Scenario, spec: &AgentSpec, slots: &[Point]) -> Vec<f64> {
+    let r = spec.radius_m;
+    // The frame the best point is found in: the field inset by the radius, from (0, 0).
+    let offset = Vector::new(r, r);
+    let field = Field::new(
+        (scenario.field.width_m - 2.0 * r).max(0.0),
+        (scenario.field.height_m - 2.0 * r).max(0.0),
+    );
+    let obstacles = DiskGrid::new(
+        scenario
+            .static_obstacles()
+            .iter()
+            .map(|d| shared::geometry::Disk {
+                centre: d.centre - offset,
+                radius_m: d.radius_m + r,
+            })
+            .collect(),
+    );
+    let polygons = PolygonLayer::new(
+        scenario
+            .polygons
+            .iter()
+            .map(|p| InflatedPolygon::from_polygon(p.translated(&-offset), r))
+            .collect(),
+    );
+    slots
+        .iter()
+        .map(|s| obstacle_floor_m(&field, &obstacles, &polygons, &offset, s))
+        .collect()
+}
+
 /// One agent's bounds.
 #[derive(Clone, Debug, Serialize)]
 pub struct AgentBound {
     /// The agent.
     pub agent: usize,
-    /// Its top speed (`null`: none, so it can follow its slot exactly: both bounds 0).
+    /// Its top speed (`null`: none: only the obstacles bound it).
     pub max_step_m: Option<f64>,
     /// The least mean deviation over the steps, in metres.
     pub mean_deviation_m: f64,
     /// The least largest deviation, in metres.
     pub max_deviation_m: f64,
+    /// The least mean deviation the top speed alone forces (no obstacle), in metres.
+    pub speed_mean_deviation_m: f64,
+    /// The least mean deviation the obstacles alone force (the floors' mean), in metres.
+    pub obstacle_mean_deviation_m: f64,
 }
 
 /// What `bound` prints.
@@ -154,6 +238,10 @@ pub struct BoundReport {
     pub bound_mean_deviation_m: f64,
     /// The least largest deviation any controller can reach, in metres.
     pub bound_max_deviation_m: f64,
+    /// The least mean deviation the top speeds alone force (no obstacle), in metres.
+    pub speed_bound_mean_deviation_m: f64,
+    /// The least mean deviation the static obstacles alone force, in metres.
+    pub obstacle_bound_mean_deviation_m: f64,
     /// The reference simulation's mean deviation (the multi-process run's, to the bit).
     pub mean_deviation_m: f64,
     /// The reference simulation's largest deviation.
@@ -168,41 +256,47 @@ pub struct BoundReport {
     pub per_agent: Vec<AgentBound>,
 }
 
-/// The bounds of every agent along `centre_path`, `specs` giving each agent's slot and
-/// top speed.
+/// The bounds of every agent of `scenario` along `centre_path`.
 pub fn agent_bounds(
-    specs: &[shared::vocabulary::AgentSpec],
+    scenario: &Scenario,
     centre_path: &[Pose],
 ) -> Result<Vec<AgentBound>, BoundError> {
-    specs
+    scenario
+        .agents
         .iter()
         .enumerate()
         .map(|(agent, spec)| {
+            let (start, slots) = match centre_path.split_first() {
+                Some((first, rest)) => (
+                    spec.slot.ideal_position(first),
+                    rest.iter().map(|c| spec.slot.ideal_position(c)).collect(),
+                ),
+                None => (Point::origin(), Vec::new()),
+            };
+            let floors_m = obstacle_floors_m(scenario, spec, &slots);
+            let steps = slots.len().max(1) as f64;
+            let obstacle_mean_m = floors_m.iter().sum::<f64>() / steps;
             let Some(cap) = spec.max_step_m else {
+                // It can be anywhere each step: the nearest point where it fits.
                 return Ok(AgentBound {
                     agent,
                     max_step_m: None,
-                    mean_deviation_m: 0.0,
-                    max_deviation_m: 0.0,
+                    mean_deviation_m: obstacle_mean_m,
+                    max_deviation_m: floors_m.iter().copied().fold(0.0, f64::max),
+                    speed_mean_deviation_m: 0.0,
+                    obstacle_mean_deviation_m: obstacle_mean_m,
                 });
             };
-            let Some((first, rest)) = centre_path.split_first() else {
-                return Ok(AgentBound {
-                    agent,
-                    max_step_m: Some(cap),
-                    mean_deviation_m: 0.0,
-                    max_deviation_m: 0.0,
-                });
-            };
-            let start = spec.slot.ideal_position(first);
-            let slots: Vec<Point> = rest.iter().map(|c| spec.slot.ideal_position(c)).collect();
-            let (sum_m, _) = optimal_track(&start, &slots, cap, Objective::Sum)?;
-            let (max_m, _) = optimal_track(&start, &slots, cap, Objective::Max)?;
+            let (sum_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Sum)?;
+            let (max_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Max)?;
+            let (speed_sum_m, _) = optimal_track(&start, &slots, &[], cap, Objective::Sum)?;
             Ok(AgentBound {
                 agent,
                 max_step_m: Some(cap),
-                mean_deviation_m: sum_m / slots.len().max(1) as f64,
+                mean_deviation_m: sum_m / steps,
                 max_deviation_m: max_m,
+                speed_mean_deviation_m: speed_sum_m / steps,
+                obstacle_mean_deviation_m: obstacle_mean_m,
             })
         })
         .collect()
@@ -212,7 +306,7 @@ pub fn agent_bounds(
 pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let scenario = &loaded.scenario;
-    let per_agent = agent_bounds(&scenario.agents, &loaded.centre_path)
+    let per_agent = agent_bounds(scenario, &loaded.centre_path)
         .context("the tracking bound")
         .map_err(CliError::Other)?;
     let n = per_agent.len().max(1) as f64;
@@ -221,6 +315,9 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         .iter()
         .map(|a| a.max_deviation_m)
         .fold(0.0, f64::max);
+    let mean_of = |f: fn(&AgentBound) -> f64| per_agent.iter().map(f).sum::<f64>() / n;
+    let speed_mean = mean_of(|a| a.speed_mean_deviation_m);
+    let obstacle_mean = mean_of(|a| a.obstacle_mean_deviation_m);
     let run = simulate_along(scenario, &loaded.centre_path).context("the reference simulation")?;
     let summary = run.summary();
     let ratio = |ours: f64, bound: f64| (bound > 0.0).then(|| ours / bound);
@@ -230,6 +327,8 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         steps: loaded.centre_path.len().saturating_sub(1),
         bound_mean_deviation_m: bound_mean,
         bound_max_deviation_m: bound_max,
+        speed_bound_mean_deviation_m: speed_mean,
+        obstacle_bound_mean_deviation_m: obstacle_mean,
         mean_deviation_m: summary.mean_deviation_m,
         max_deviation_m: summary.max_deviation_m,
         mean_ratio: ratio(summary.mean_deviation_m, bound_mean),
@@ -247,11 +346,13 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         }
     };
     eprintln!(
-        "{}: mean deviation {:.4} m against the bound {} m ({}), max {:.3} m against {} m ({})",
+        "{}: mean deviation {:.4} m against the bound {} m ({}; the top speed alone {} m, the obstacles alone {} m), max {:.3} m against {} m ({})",
         report.scenario,
         report.mean_deviation_m,
         metres(report.bound_mean_deviation_m),
         show(report.mean_ratio),
+        metres(report.speed_bound_mean_deviation_m),
+        metres(report.obstacle_bound_mean_deviation_m),
         report.max_deviation_m,
         metres(report.bound_max_deviation_m),
         show(report.max_ratio)
@@ -270,12 +371,12 @@ mod tests {
     fn a_followable_slot_costs_nothing() {
         let start = Point::new(0.0, 0.0);
         let slots: Vec<Point> = (1..=5).map(|k| Point::new(0.4 * k as f64, 0.0)).collect();
-        let (sum, track) = optimal_track(&start, &slots, 0.5, Objective::Sum).unwrap();
+        let (sum, track) = optimal_track(&start, &slots, &[], 0.5, Objective::Sum).unwrap();
         assert!(sum < 1e-6, "{sum}");
         for (p, s) in track.iter().zip(&slots) {
             assert!((p - s).norm() < 1e-5);
         }
-        let (max, _) = optimal_track(&start, &slots, 0.5, Objective::Max).unwrap();
+        let (max, _) = optimal_track(&start, &slots, &[], 0.5, Objective::Max).unwrap();
         assert!(max < 1e-6, "{max}");
     }
 
@@ -287,10 +388,10 @@ mod tests {
         let start = Point::new(0.0, 0.0);
         let t = 8;
         let slots: Vec<Point> = (1..=t).map(|k| Point::new(k as f64, 0.0)).collect();
-        let (sum, _) = optimal_track(&start, &slots, 0.5, Objective::Sum).unwrap();
+        let (sum, _) = optimal_track(&start, &slots, &[], 0.5, Objective::Sum).unwrap();
         let exact = 0.5 * (t * (t + 1) / 2) as f64;
         assert!((sum - exact).abs() < 1e-5 * exact, "{sum} vs {exact}");
-        let (max, _) = optimal_track(&start, &slots, 0.5, Objective::Max).unwrap();
+        let (max, _) = optimal_track(&start, &slots, &[], 0.5, Objective::Max).unwrap();
         assert!((max - 0.5 * t as f64).abs() < 1e-5, "{max}");
     }
 
@@ -305,18 +406,72 @@ mod tests {
                 Point::new(5.0 * a.cos() - 5.0, 5.0 * a.sin())
             })
             .collect();
-        let (best, _) = optimal_track(&start, &slots, 0.8, Objective::Sum).unwrap();
+        let (best, _) = optimal_track(&start, &slots, &[], 0.8, Objective::Sum).unwrap();
         let track = shared::tracking::least_deviation_track(&start, &slots, 0.8, 150);
         let ours = shared::tracking::track_deviation_m(&track, &slots);
         assert!(ours >= best - 1e-6, "{ours} below the optimum {best}");
         assert!(ours <= best * 1.02, "{ours} against the optimum {best}");
     }
 
+    /// The floor is the distance from the slot to where the agent's disk fits: through
+    /// an obstacle, out to its circle grown by the agent's radius; outside the field,
+    /// back in to the field shrunk by it; elsewhere nothing.
+    #[test]
+    fn the_floor_is_the_distance_to_where_the_agent_fits() {
+        let r = 0.5;
+        let offset = Vector::new(r, r);
+        let field = Field::new(20.0 - 2.0 * r, 10.0 - 2.0 * r);
+        let obstacles = DiskGrid::new(vec![shared::geometry::Disk::new(5.0 - r, 5.0 - r, 1.0 + r)]);
+        let polygons = PolygonLayer::new(Vec::new());
+        let floor = |x: f64, y: f64| {
+            obstacle_floor_m(&field, &obstacles, &polygons, &offset, &Point::new(x, y))
+        };
+        assert!((floor(5.0, 5.0) - 1.5).abs() < 1e-9);
+        assert!((floor(5.9, 5.0) - 0.6).abs() < 1e-9);
+        assert_eq!(floor(7.0, 5.0), 0.0);
+        assert!((floor(19.8, 5.0) - 0.3).abs() < 1e-9);
+        assert!((floor(-1.0, 5.0) - 1.5).abs() < 1e-9);
+    }
+
+    /// A slot the agent could follow but for the floors: the optimum is the floors'
+    /// sum, and the largest deviation their largest.
+    #[test]
+    fn floors_add_to_a_followable_slot_exactly() {
+        let start = Point::new(0.0, 0.0);
+        let slots: Vec<Point> = (1..=5).map(|k| Point::new(0.4 * k as f64, 0.0)).collect();
+        let floors = [0.0, 0.3, 0.2, 0.0, 0.1];
+        let (sum, track) = optimal_track(&start, &slots, &floors, 0.5, Objective::Sum).unwrap();
+        assert!((sum - 0.6).abs() < 1e-6, "{sum}");
+        for (k, (p, s)) in track.iter().zip(&slots).enumerate() {
+            assert!(
+                (p - s).norm() <= floors[k] + 1e-5,
+                "step {k}: {p} against {s}"
+            );
+        }
+        let (max, _) = optimal_track(&start, &slots, &floors, 0.5, Objective::Max).unwrap();
+        assert!((max - 0.3).abs() < 1e-6, "{max}");
+    }
+
+    /// The floors and the top speed together bound more than either alone: a slot that
+    /// runs away while passing an obstacle.
+    #[test]
+    fn floors_and_the_top_speed_add_up() {
+        let start = Point::new(0.0, 0.0);
+        let slots: Vec<Point> = (1..=6).map(|k| Point::new(k as f64, 0.0)).collect();
+        let floors = [0.0, 0.0, 0.0, 0.0, 0.0, 5.0];
+        let (speed, _) = optimal_track(&start, &slots, &[], 0.5, Objective::Sum).unwrap();
+        let (both, _) = optimal_track(&start, &slots, &floors, 0.5, Objective::Sum).unwrap();
+        // The speed alone: 0.5 + 1 + ... + 3 = 10.5; at step 6 the agent is 3 m behind,
+        // below the floor of 5 m, which adds 2 m.
+        assert!((speed - 10.5).abs() < 1e-5, "{speed}");
+        assert!((both - 12.5).abs() < 1e-5, "{both}");
+    }
+
     #[test]
     fn a_bad_speed_is_refused() {
         let p = Point::new(0.0, 0.0);
         assert_eq!(
-            optimal_track(&p, &[p], 0.0, Objective::Sum).unwrap_err(),
+            optimal_track(&p, &[p], &[], 0.0, Objective::Sum).unwrap_err(),
             BoundError::BadSpeed(0.0)
         );
     }
