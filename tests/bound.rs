@@ -1,5 +1,6 @@
-//! `coordinator bound`: the physical limit of tracking under a top speed, against the
-//! reference simulation's deviation. No controller can beat the bound.
+//! `coordinator bound`: the physical limit of tracking under a top speed among the static
+//! obstacles, against the reference simulation's deviation. No controller can beat the
+//! bound.
 
 mod support;
 

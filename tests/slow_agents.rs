@@ -1,7 +1,7 @@
 //! Late agents are named and stopped: one that misses two turns of every three (never
 //! three in a row) is `hung` once it has missed 3 of its last 10; one that answers every
-//! turn in time but later than the slow bound (by default a fifth of the deadline; half for a car) is
-//! `slow` at its third late answer. Either is killed and frozen, the others go on
+//! turn in time but later than the slow bound (by default a fifth of the deadline; half
+//! for a car) is `slow` at its third late answer. Either is killed and frozen, the others go on
 //! untouched, and the fault is against the late agent alone. So one late agent costs a
 //! run at most 3 turn deadlines of waiting (750 ms at the default 250 ms) before it is
 //! stopped, whatever it does (a replacement with `--respawn` as much again): what it can

@@ -290,11 +290,15 @@ pub fn agent_bounds(
             let (sum_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Sum)?;
             let (max_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Max)?;
             let (speed_sum_m, _) = optimal_track(&start, &slots, &[], cap, Objective::Sum)?;
+            // Each part is a lower bound too; the solver's answers are exact only to its
+            // tolerance, so the whole is never reported below a part.
+            let floors_sum_m: f64 = floors_m.iter().sum();
+            let largest_floor_m = floors_m.iter().copied().fold(0.0, f64::max);
             Ok(AgentBound {
                 agent,
                 max_step_m: Some(cap),
-                mean_deviation_m: sum_m / steps,
-                max_deviation_m: max_m,
+                mean_deviation_m: sum_m.max(speed_sum_m).max(floors_sum_m) / steps,
+                max_deviation_m: max_m.max(largest_floor_m),
                 speed_mean_deviation_m: speed_sum_m / steps,
                 obstacle_mean_deviation_m: obstacle_mean_m,
             })

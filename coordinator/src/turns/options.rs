@@ -131,8 +131,8 @@ impl RunOptions {
     /// [`Self::slow_turn`], or by default a fifth of the turn deadline, and half of it for
     /// a car. A boxed-in car's turn runs a Hybrid A* search to its end
     /// ([`shared::turn::SEARCH_EXPANSIONS`]), about 65 ms in one process on the project's
-    /// 2-core machine and up to 100 ms among agent processes: honest, and over a fifth of
-    /// the default deadline.
+    /// 2-core machine and up to 83 ms among agent processes on `paper-car`: honest, and
+    /// over a fifth of the default deadline.
     ///
     /// ```
     /// use std::time::Duration;

@@ -32,9 +32,10 @@ pub(super) struct Goal {
     pub cos_phi: f64,
 }
 
-/// A closed-form solution for one base word: from the goal and the cost bound to the
-/// word's free lengths, or `None` when the word cannot reach the goal or its cost
-/// (`|t| + |u| + |v|`, the middle counted twice for `CCCC`) would not be below the bound.
+/// A closed-form solution for one base word: from the goal and the family's cost bound
+/// to the word's free lengths, or `None` when the word cannot reach the goal or its
+/// middle alone (`|u|`, counted twice for `CCCC`) is no shorter than the bound (a word
+/// returned may still cost more than the bound: the search filters it).
 pub(super) type Formula = fn(&Goal, f64) -> Option<Lengths>;
 
 /// Wraps an angle into `[-pi, pi]` (OMPL's `mod2pi`).

@@ -32,7 +32,8 @@
 //! length 2.5 times cheaper (the Hybrid A* search computes one for every pose it reaches)
 //! and change no result: the sine and cosine of the heading change are computed once, not
 //! per formula; and a formula stops before its arc tangents when the part of its word
-//! already known (the middle) is no shorter than the best word so far.
+//! already known (the middle) reaches the family's bound (the best word so far less the
+//! family's fixed arcs).
 //!
 //! Paths are [`CurvePath`]s (module [`crate::curve`], shared with the Dubins solver); the
 //! types are re-exported here, so `shared::reeds_shepp::CurvePath` names the same type.

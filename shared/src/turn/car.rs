@@ -9,8 +9,8 @@
 //! (checked exactly along each arc); with `align_heading`, the centre's heading only.
 //! When none is clear, the project's Hybrid A* searches a way among the obstacles and
 //! the other agents, and the car takes the shortest clear path to the search's pose
-//! four, two or one steps ahead, or else to the farthest nearer one it clears. That path, cut at the top speed, is the move; without
-//! one the car stands. Unlike the holonomic guarantee, a car is not promised to reach
+//! four, two or one steps ahead, or else to the farthest nearer one it clears. That
+//! path, cut at the top speed, is the move; without one the car stands. Unlike the holonomic guarantee, a car is not promised to reach
 //! its best point (a heuristic: `docs/method.md`, reachability by kinematic model).
 
 use std::ops::ControlFlow;
