@@ -73,8 +73,10 @@ fn the_run_stays_above_the_bound_with_a_top_speed_among_obstacles() {
     let r = bound(Some("scenarios/paper-top-speed.toml"));
     let f = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
     assert_eq!(r["collisions"], 0);
-    assert!(f("bound_mean_deviation_m") >= f("speed_bound_mean_deviation_m") * (1.0 - 1e-6));
-    assert!(f("bound_mean_deviation_m") >= f("obstacle_bound_mean_deviation_m") * (1.0 - 1e-6));
+    // Never below a part (the parts are exact, the whole is the solver's to a tolerance,
+    // and the report keeps the larger).
+    assert!(f("bound_mean_deviation_m") >= f("speed_bound_mean_deviation_m"));
+    assert!(f("bound_mean_deviation_m") >= f("obstacle_bound_mean_deviation_m"));
     assert!(f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-6));
     assert!(f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-6));
 }
