@@ -20,6 +20,12 @@ use crate::geometry::{Point, Pose, wrap_angle_rad};
 /// leaving the segment out moves the rest of the path by no more than its length.
 pub const MIN_SEGMENT_M: f64 = 1e-7;
 
+/// Segments shorter than this share of the start's distance from the field's corner are
+/// left out too: 100 m out, a point is known to about 1e-14 m only, so a chord of 1e-7 m
+/// there has a direction known to 1e-7 rad, as much as a chord's turning may be off
+/// ([`CAR_TURN_TOLERANCE_RAD`]); 1e-5 m, this share of 100 m, is known to 1e-9 rad.
+pub const MIN_SEGMENT_PER_M: f64 = 1e-7;
+
 /// Chords shorter than this carry no direction: they are read as standing still.
 const DEGENERATE_CHORD_M: f64 = 1e-12;
 
@@ -261,7 +267,8 @@ pub fn curve_prefix(path: &CurvePath, max_length_m: f64) -> CurvePath {
 
 /// `path` followed from `start` as chords: one per straight segment, and along each arc
 /// as many equal chords as keep each one's turning within [`CAR_CHORD_TURN_RAD`] and its
-/// chord error within `max_chord_error_m`, segments shorter than [`MIN_SEGMENT_M`] left
+/// chord error within `max_chord_error_m`, segments shorter than [`MIN_SEGMENT_M`] (or
+/// [`MIN_SEGMENT_PER_M`] of the start's largest coordinate) left
 /// out; and the heading at the end (of the path so drawn).
 ///
 /// ```
@@ -285,11 +292,8 @@ pub fn car_waypoints(start: &Pose, path: &CurvePath, max_chord_error_m: f64) -> 
     let per_chord_rad = CAR_CHORD_TURN_RAD.min(by_error_rad).max(1e-6);
     let mut points = vec![start.position()];
     let mut pose = *start;
-    for s in path
-        .segments
-        .iter()
-        .filter(|s| s.length_m.abs() >= MIN_SEGMENT_M)
-    {
+    let min_m = MIN_SEGMENT_M.max(MIN_SEGMENT_PER_M * start.x_m.abs().max(start.y_m.abs()));
+    for s in path.segments.iter().filter(|s| s.length_m.abs() >= min_m) {
         let pieces = match s.steer {
             Steer::Straight => 1,
             Steer::Left | Steer::Right => {

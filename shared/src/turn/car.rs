@@ -8,7 +8,7 @@
 //! first whose swept disk keeps clear of every inflated body and inside the field
 //! (checked exactly along each arc); with `align_heading`, the centre's heading only.
 //! When none is clear, the project's Hybrid A* searches a way among the obstacles and
-//! the other agents, and the car takes the shortest clear path to the search's pose
+//! the other agents (in a window of the field round the car and its goal), and the car takes the shortest clear path to the search's pose
 //! four, two or one steps ahead, or else to the farthest nearer one it clears. That
 //! path, cut at the top speed, is the move; without one the car stands. Unlike the holonomic guarantee, a car is not promised to reach
 //! its best point (a heuristic: `docs/method.md`, reachability by kinematic model).
@@ -163,6 +163,35 @@ const START_SLACK_M: f64 = 1e-6;
 /// Expansions a car's local search may take before it gives up (and the car stands).
 pub const SEARCH_EXPANSIONS: usize = 20_000;
 
+/// How far round its start and its goal a car's search looks, at least, metres (and at
+/// least [`SEARCH_WINDOW_TURNS`] turning radii): the search runs in that window of the
+/// field, not the whole field, whose edges it keeps clear of like the field's own.
+pub const SEARCH_WINDOW_M: f64 = 5.0;
+
+/// How far round its start and its goal a car's search looks, at least, in turning radii.
+pub const SEARCH_WINDOW_TURNS: f64 = 8.0;
+
+/// The part of the field a car's search runs in: the box round `start` and `goal` grown
+/// by the window's margin, inside the field, its corner on the search's coarse grid
+/// (so that its cells are the field's). Its origin, and its size as a field.
+fn search_window(
+    field: &Field,
+    start: &Pose,
+    goal: &Pose,
+    settings: &HybridAStarSettings,
+) -> (Point, Field) {
+    let margin_m = SEARCH_WINDOW_M.max(SEARCH_WINDOW_TURNS * settings.turning_radius_m);
+    let grid_m = settings.cell_m * settings.heuristic_downsample as f64;
+    let low = |a: f64, b: f64| (((a.min(b) - margin_m) / grid_m).floor() * grid_m).max(0.0);
+    let origin = Point::new(low(start.x_m, goal.x_m), low(start.y_m, goal.y_m));
+    let far_x = (start.x_m.max(goal.x_m) + margin_m).min(field.width_m);
+    let far_y = (start.y_m.max(goal.y_m) + margin_m).min(field.height_m);
+    (
+        origin,
+        Field::new((far_x - origin.x).max(0.0), (far_y - origin.y).max(0.0)),
+    )
+}
+
 /// When no direct path is clear: the project's Hybrid A* from `start` to the goal facing
 /// the first of `goal_headings`, among the obstacles and the other agents: its dense
 /// poses, with the reach it keeps from every body and
@@ -196,7 +225,32 @@ fn searched_path(
     let mut settings = HybridAStarSettings::new(limits.turning_radius_m, reach_m, limits.reverse);
     settings.max_expansions = SEARCH_EXPANSIONS;
     let to = Pose::new(goal.x, goal.y, heading_rad);
-    let poses = hybrid_astar::plan(world.field, &disks, start, &to, &settings).ok()?;
+    // In a window round the start and the goal: the heuristic's grids cost their cells
+    // at every search (on a 120 m field, most of a boxed-in car's turn), and the way out
+    // of what boxes a car in lies near.
+    let (origin, window) = search_window(world.field, start, &to, &settings);
+    let shift =
+        |p: &Pose, by: f64| Pose::new(p.x_m + by * origin.x, p.y_m + by * origin.y, p.heading_rad);
+    let reach = |d: &Disk| d.radius_m + reach_m;
+    let local: Vec<Disk> = disks
+        .iter()
+        .filter(|d| {
+            d.centre.x + reach(d) >= origin.x
+                && d.centre.x - reach(d) <= origin.x + window.width_m
+                && d.centre.y + reach(d) >= origin.y
+                && d.centre.y - reach(d) <= origin.y + window.height_m
+        })
+        .map(|d| Disk::new(d.centre.x - origin.x, d.centre.y - origin.y, d.radius_m))
+        .collect();
+    let poses = hybrid_astar::plan(
+        &window,
+        &local,
+        &shift(start, -1.0),
+        &shift(&to, -1.0),
+        &settings,
+    )
+    .ok()?;
+    let poses: Vec<Pose> = poses.iter().map(|p| shift(p, 1.0)).collect();
     (poses.len() >= 2).then_some((poses, reach_m))
 }
 
@@ -412,6 +466,45 @@ mod tests {
         assert!(chords_clear(start.heading_rad, &drive.waypoints, &touching));
         let end = drive.waypoints.last().copied().unwrap_or(start.position());
         assert!((end - start.position()).norm() > 1e-3, "it moves");
+    }
+
+    /// The search's window holds the start and the goal with the margin round them
+    /// where the field allows, stays inside the field, and starts on the coarse grid.
+    #[test]
+    fn the_search_window_holds_start_and_goal_with_the_margin_inside_the_field() {
+        let field = Field::new(120.0, 80.0);
+        let settings = HybridAStarSettings::new(0.5, 0.301, true);
+        let grid_m = settings.cell_m * settings.heuristic_downsample as f64;
+        for (start, goal) in [
+            (Pose::new(60.3, 40.7, 0.0), Pose::new(61.9, 39.2, 1.0)),
+            (Pose::new(1.0, 2.0, 0.0), Pose::new(3.0, 0.5, 1.0)),
+            (Pose::new(118.0, 79.0, 0.0), Pose::new(117.0, 77.5, 1.0)),
+        ] {
+            let (origin, window) = search_window(&field, &start, &goal, &settings);
+            let margin_m = SEARCH_WINDOW_M.max(SEARCH_WINDOW_TURNS * 0.5);
+            assert!(origin.x >= 0.0 && origin.y >= 0.0);
+            assert!(origin.x + window.width_m <= field.width_m + 1e-9);
+            assert!(origin.y + window.height_m <= field.height_m + 1e-9);
+            assert!(((origin.x / grid_m).round() * grid_m - origin.x).abs() < 1e-9);
+            assert!(((origin.y / grid_m).round() * grid_m - origin.y).abs() < 1e-9);
+            for p in [&start, &goal] {
+                let left = p.x_m - origin.x;
+                let below = p.y_m - origin.y;
+                let right = origin.x + window.width_m - p.x_m;
+                let above = origin.y + window.height_m - p.y_m;
+                assert!(left >= margin_m.min(p.x_m) - 1e-9, "{p:?}");
+                assert!(below >= margin_m.min(p.y_m) - 1e-9, "{p:?}");
+                assert!(right >= margin_m.min(field.width_m - p.x_m) - 1e-9, "{p:?}");
+                assert!(
+                    above >= margin_m.min(field.height_m - p.y_m) - 1e-9,
+                    "{p:?}"
+                );
+            }
+            // Much smaller than the field in its middle.
+            if start.x_m > 10.0 && start.x_m < 110.0 {
+                assert!(window.width_m * window.height_m < 0.05 * 120.0 * 80.0);
+            }
+        }
     }
 
     #[test]

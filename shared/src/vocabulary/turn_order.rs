@@ -34,8 +34,9 @@ impl TurnOrder {
     /// then finds the way ahead cleared by the mates in front; without a top speed every
     /// agent reaches its best point each step, and with `horizon_steps = 0` an agent
     /// chases its slot as it did before the look-ahead, in the order it did. Cars keep
-    /// agent order: on `paper-car` with seeds 1 to 9 the two orders are level (mean
-    /// deviation 0.108 m in agent order, 0.104 m front to back, each lower on some fields;
+    /// agent order: on `paper-car` with seeds 1 to 9 the two orders come close (mean
+    /// deviation 0.112 m in agent order, 0.099 m front to back, each lower on some fields,
+    /// and the figures move by as much with any change to the car's search;
     /// `docs/measurements.md`).
     ///
     /// ```
