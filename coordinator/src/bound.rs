@@ -32,7 +32,7 @@ use clarabel::solver::{
 use serde::Serialize;
 use shared::best_point::nearest_free_point;
 use shared::geometry::{
-    DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
 };
 use shared::scenario::Scenario;
 use shared::simulate::simulate_along;
@@ -189,7 +189,7 @@ fn obstacle_floors_m(scenario: &Scenario, spec: &AgentSpec, slots: &[Point]) -> 
         scenario
             .static_obstacles()
             .iter()
-            .map(|d| shared::geometry::Disk {
+            .map(|d| Disk {
                 centre: d.centre - offset,
                 radius_m: d.radius_m + r,
             })
@@ -425,7 +425,7 @@ mod tests {
         let r = 0.5;
         let offset = Vector::new(r, r);
         let field = Field::new(20.0 - 2.0 * r, 10.0 - 2.0 * r);
-        let obstacles = DiskGrid::new(vec![shared::geometry::Disk::new(5.0 - r, 5.0 - r, 1.0 + r)]);
+        let obstacles = DiskGrid::new(vec![Disk::new(5.0 - r, 5.0 - r, 1.0 + r)]);
         let polygons = PolygonLayer::new(Vec::new());
         let floor = |x: f64, y: f64| {
             obstacle_floor_m(&field, &obstacles, &polygons, &offset, &Point::new(x, y))

@@ -32,6 +32,30 @@ pub(super) struct Goal {
     pub cos_phi: f64,
 }
 
+impl Goal {
+    /// The goal `(x, y, phi)`.
+    pub fn new(x: f64, y: f64, phi: f64) -> Self {
+        let (sin_phi, cos_phi) = phi.sin_cos();
+        Self {
+            x,
+            y,
+            phi,
+            sin_phi,
+            cos_phi,
+        }
+    }
+
+    /// The goal as seen from the end of a word read backwards (for `CC|C` and
+    /// `C S C|C`).
+    pub fn backwards(&self) -> Self {
+        Self {
+            x: self.x * self.cos_phi + self.y * self.sin_phi,
+            y: self.x * self.sin_phi - self.y * self.cos_phi,
+            ..*self
+        }
+    }
+}
+
 /// A closed-form solution for one base word: from the goal and the family's cost bound
 /// to the word's free lengths, or `None` when the word cannot reach the goal or its
 /// middle alone (`|u|`, counted twice for `CCCC`) is no shorter than the bound (a word

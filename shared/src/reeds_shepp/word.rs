@@ -87,20 +87,8 @@ fn solve_normalized(x: f64, y: f64, phi: f64) -> Word {
     use Steer::{Left as L, Right as R, Straight as S};
     const HALF_PI: f64 = 0.5 * PI;
     let mut best = Word::NONE;
-    let (sin_phi, cos_phi) = phi.sin_cos();
-    let goal = Goal {
-        x,
-        y,
-        phi,
-        sin_phi,
-        cos_phi,
-    };
-    // The goal as seen from the end of a word read backwards (for CC|C and C S C|C).
-    let back = Goal {
-        x: x * cos_phi + y * sin_phi,
-        y: x * sin_phi - y * cos_phi,
-        ..goal
-    };
+    let goal = Goal::new(x, y, phi);
+    let back = goal.backwards();
 
     // CSC: L+S+L+ and L+S+R+.
     let mut search = Search::new(&mut best, 0.0);
@@ -208,19 +196,8 @@ mod tests {
     /// Every formula under every symmetry (and read backwards where the search reads it
     /// so), without a bound: the least total of all the words they give.
     fn least_total_unpruned(x: f64, y: f64, phi: f64) -> f64 {
-        let (sin_phi, cos_phi) = phi.sin_cos();
-        let goal = Goal {
-            x,
-            y,
-            phi,
-            sin_phi,
-            cos_phi,
-        };
-        let back = Goal {
-            x: x * cos_phi + y * sin_phi,
-            y: x * sin_phi - y * cos_phi,
-            ..goal
-        };
+        let goal = Goal::new(x, y, phi);
+        let back = goal.backwards();
         // (formula, its fixed arcs, the weight of its middle length, read backwards too)
         let formulas: [(Formula, f64, f64, bool); 8] = [
             (lp_sp_lp, 0.0, 1.0, false),
