@@ -14,7 +14,8 @@ mod unicycle;
 
 pub use car::{
     CAR_CHORD_TURN_RAD, CAR_HEADING_TOLERANCE_RAD, CAR_TURN_TOLERANCE_RAD, CarLimits, CarMoveError,
-    CarPiece, MIN_SEGMENT_M, car_piece, car_waypoints, check_car_move, curve_prefix,
+    CarPiece, MIN_SEGMENT_M, MIN_SEGMENT_PER_M, car_piece, car_waypoints, check_car_move,
+    curve_prefix,
 };
 pub use unicycle::{
     UnicycleLimits, UnicycleMove, drive_unicycle, driving_headings, unicycle_step_share,
