@@ -8,10 +8,12 @@
 //! first whose swept disk keeps clear of every inflated body and inside the field
 //! (checked exactly along each arc); with `align_heading`, the centre's heading only.
 //! When none is clear, the project's Hybrid A* searches a way among the obstacles and
-//! the other agents (in a window of the field round the car and its goal), and the car takes the shortest clear path to the search's pose
-//! four, two or one steps ahead, or else to the farthest nearer one it clears. That
-//! path, cut at the top speed, is the move; without one the car stands. Unlike the holonomic guarantee, a car is not promised to reach
-//! its best point (a heuristic: `docs/method.md`, reachability by kinematic model).
+//! the other agents (in a window of the field round the car and its goal), and the car
+//! takes the shortest clear path to the search's pose four, two or one steps ahead, or
+//! else to the farthest nearer one it clears. That path, cut at the top speed, is the
+//! move; without one the car stands. Unlike the holonomic guarantee, a car is not
+//! promised to reach its best point (a heuristic: `docs/method.md`, reachability by
+//! kinematic model).
 
 use std::ops::ControlFlow;
 
