@@ -499,6 +499,11 @@ fn agents_killed_from_outside_at_random_moments_of_a_parallel_run_are_survived()
                 f["detection_ms"].as_f64().expect("detection_ms") >= 0.0,
                 "{context}: {f:#}"
             );
+            // A death found between turns names how the process ended: here, the kill.
+            let detail = f["detail"].as_str().expect("detail");
+            if detail.contains("between turns") {
+                assert!(detail.contains("SIGKILL"), "{context}: {f:#}");
+            }
         }
         let kinds = fault_kinds(&s);
         let allowed: &[&str] = if respawn {

@@ -187,6 +187,8 @@ pub struct AgentProcesses {
     /// The run's control group, when its agents are sandboxed: the sweep kills whatever
     /// is in it, whatever pid, session or environment it took.
     cgroup: Option<wire::cgroup::CgroupDirs>,
+    /// How each agent's last reaped process ended.
+    exits: Vec<Option<std::process::ExitStatus>>,
 }
 
 impl AgentProcesses {
@@ -204,6 +206,7 @@ impl AgentProcesses {
             spawned: Vec::new(),
             strays: BTreeMap::new(),
             cgroup: None,
+            exits: vec![None; agents],
         }
     }
 
@@ -258,8 +261,15 @@ impl AgentProcesses {
             .with_context(|| format!("starting {} for agent {agent}", self.bin.display()))?;
         let pid = child.id();
         self.children[agent] = Some(child);
+        self.exits[agent] = None;
         self.spawned.push((pid, agent));
         Ok(pid)
+    }
+
+    /// How agent `agent`'s last reaped process ended (its exit code, or the signal that
+    /// killed it), if one was reaped.
+    pub fn exit_status(&self, agent: usize) -> Option<std::process::ExitStatus> {
+        self.exits.get(agent).copied().flatten()
     }
 
     /// The process id of agent `agent`, if it has one.
@@ -338,7 +348,10 @@ impl AgentProcesses {
         for i in exited {
             if let Some(mut child) = self.children[i].take() {
                 match child.wait() {
-                    Ok(status) => tracing::info!("agent {i} exited: {status}"),
+                    Ok(status) => {
+                        tracing::info!("agent {i} exited: {status}");
+                        self.exits[i] = Some(status);
+                    }
                     Err(e) => tracing::warn!("agent {i}: cannot reap its process: {e}"),
                 }
             }

@@ -263,7 +263,12 @@ impl Driver<'_, '_> {
                 || (0..n).any(|a| self.recorder.alive()[a] && self.procs.pid(a).is_none());
             for agent in (0..n).filter(|_| any_exited) {
                 if self.recorder.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
-                    self.on_death(step, agent, checked.elapsed(), "exited between turns")?;
+                    // How it ended tells a crash (a signal) from an error (a code).
+                    let how = match self.procs.exit_status(agent) {
+                        Some(status) => format!("exited between turns ({status})"),
+                        None => "exited between turns".to_string(),
+                    };
+                    self.on_death(step, agent, checked.elapsed(), &how)?;
                 }
             }
             let groups = turn_groups_ordered(
