@@ -311,6 +311,28 @@ fn orca_in_its_own_model_matches_the_reference() {
     );
 }
 
+/// ORCA's own model in a crowd: the large formation under a top speed, 64 agent
+/// processes moving at once. Agents queue behind one another there (a follower may move
+/// into where its leader stood, as the leader leaves), moves meet in time and are
+/// refused, and a move into a refused mate's place is refused after it. The run, every
+/// refusal included, equals the reference to the bit.
+#[test]
+fn orca_in_its_own_model_in_a_crowd_matches_the_reference() {
+    let file = support::repo_root().join("scenarios/large-top-speed.toml");
+    let mut scenario = Scenario::load(&file)
+        .expect("large-top-speed.toml")
+        .with_controller(shared::vocabulary::ControllerKind::Orca);
+    scenario.turns = shared::vocabulary::TurnMode::Simultaneous;
+    let run = run_and_compare(&scenario);
+    assert_eq!(run.summary().collisions, 0);
+    let refused = run
+        .faults
+        .iter()
+        .filter(|f| f.kind == FaultKind::Rejected)
+        .count();
+    assert!(refused > 0, "no move of the crowd was refused");
+}
+
 /// Strikes over real processes: a moving obstacle that catches agents now and then. The
 /// monitor (parry) and the recorder both let a struck agent move away, and only away; the
 /// run equals the reference to the bit, strikes and all.

@@ -276,6 +276,133 @@ pub fn group_meetings(
     meetings
 }
 
+/// For each move of a group made at once (every agent moving at a constant speed along
+/// its move over the same time: [`TurnMode::Simultaneous`], ORCA's own model), the
+/// first mate it comes within their radii sum of, less [`SAFETY_TOLERANCE_M`], at the
+/// same time; `None` for a move that is taken.
+///
+/// A move marked `refused` is not taken: its agent stands, and `waypoints` must hold
+/// just where it stands. So are the moves found here: in rounds, every move still
+/// taken that comes within reach of a standing agent is refused, and of two taken moves
+/// that come within reach of each other, the one whose agent standing would let the
+/// other pass (a queue: the follower), the later in the list if either would, both if
+/// neither would. The refused stand from the next round on, until a round refuses
+/// none. Each round looks at the standing and the taken as the round found them, so
+/// the moves refused do not depend on the order of the list, but for that tie (and
+/// which mate is named: the first in the list).
+///
+/// `distance_m(a, b)`: the smallest distance between two agents moving along `a` and
+/// `b` at the same time (a single point stands). Pairs whose starts are farther apart
+/// than both lengths and the radii sum are never measured.
+///
+/// ```
+/// use shared::geometry::{Point, distance_at_the_same_time_m};
+/// use shared::groups::{GroupMove, simultaneous_meetings};
+/// // A queue: the follower moves into where the leader stood, while the leader leaves.
+/// let leader = [Point::new(1.0, 0.0), Point::new(2.0, 0.0)];
+/// let follower = [Point::new(0.0, 0.0), Point::new(1.0, 0.0)];
+/// let mv = |waypoints, refused| GroupMove { radius_m: 0.4, waypoints, refused };
+/// let taken = simultaneous_meetings(
+///     &[mv(&leader, false), mv(&follower, false)],
+///     distance_at_the_same_time_m,
+/// );
+/// assert_eq!(taken, vec![None, None]);
+/// // The leader refused (it stands): the follower would run into it, and is refused too.
+/// let stands = [Point::new(1.0, 0.0)];
+/// let cascade = simultaneous_meetings(
+///     &[mv(&stands, true), mv(&follower, false)],
+///     distance_at_the_same_time_m,
+/// );
+/// assert_eq!(cascade[0], None);
+/// assert_eq!(cascade[1].map(|m| m.mate), Some(0));
+/// ```
+pub fn simultaneous_meetings(
+    moves: &[GroupMove<'_>],
+    distance_m: impl Fn(&[Point], &[Point]) -> f64,
+) -> Vec<Option<Meeting>> {
+    let n = moves.len();
+    let lengths_m: Vec<f64> = moves
+        .iter()
+        .map(|m| polyline_length_m(m.waypoints))
+        .collect();
+    let mut standing: Vec<bool> = moves.iter().map(|m| m.refused).collect();
+    let mut meetings: Vec<Option<Meeting>> = vec![None; n];
+    loop {
+        let mut found: Vec<Option<Meeting>> = vec![None; n];
+        for i in 0..n {
+            for j in 0..i {
+                if standing[i] && standing[j] {
+                    continue;
+                }
+                let (a, b) = (&moves[i], &moves[j]);
+                let (Some(start_a), Some(start_b)) = (a.waypoints.first(), b.waypoints.first())
+                else {
+                    continue;
+                };
+                let reach_m = a.radius_m + b.radius_m;
+                let length_m = |k: usize| if standing[k] { 0.0 } else { lengths_m[k] };
+                if (start_a - start_b).norm() > length_m(i) + length_m(j) + reach_m {
+                    continue;
+                }
+                let (path_a, path_b) = (
+                    if standing[i] {
+                        &a.waypoints[..1]
+                    } else {
+                        a.waypoints
+                    },
+                    if standing[j] {
+                        &b.waypoints[..1]
+                    } else {
+                        b.waypoints
+                    },
+                );
+                let d_m = distance_m(path_a, path_b);
+                if d_m < reach_m - SAFETY_TOLERANCE_M {
+                    // Two moves taken: one agent standing may let the other pass (a
+                    // queue: the follower stands, the leader goes on); refuse just that
+                    // one (the later in the list if either would do), else both.
+                    let mut refuse = [i, j];
+                    if !standing[i] && !standing[j] {
+                        let lets_pass = |mv: &[Point], stands: &Point| {
+                            distance_m(mv, std::slice::from_ref(stands))
+                                >= reach_m - SAFETY_TOLERANCE_M
+                        };
+                        match (
+                            lets_pass(b.waypoints, start_a),
+                            lets_pass(a.waypoints, start_b),
+                        ) {
+                            (true, _) => refuse = [i, i],
+                            (false, true) => refuse = [j, j],
+                            (false, false) => {}
+                        }
+                    }
+                    for (k, mate) in [(i, j), (j, i)] {
+                        if refuse.contains(&k)
+                            && !standing[k]
+                            && found[k].is_none_or(|m| mate < m.mate)
+                        {
+                            found[k] = Some(Meeting {
+                                mate,
+                                distance_m: d_m,
+                                reach_m,
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        if found.iter().all(Option::is_none) {
+            return meetings;
+        }
+        for (k, meeting) in found.into_iter().enumerate() {
+            if meeting.is_some() {
+                standing[k] = true;
+                meetings[k] = meeting;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

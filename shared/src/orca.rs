@@ -166,20 +166,21 @@ impl OrcaController {
     /// ([`MoveStatus::Stayed`], or [`MoveStatus::AtSlot`] at the slot) when it cannot
     /// move, and when it already overlaps a body.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
-        self.step_at(centre, me, others, |preferred| {
+        self.step_at(centre, me, others, others, |preferred| {
             self.orca_velocity(me, others, preferred)
         })
     }
 
     /// One straight step at the velocity `orca` gives for the preferred one (straight to
     /// the slot, at most `max_step_m`; zero when it is not finite), kept in the field and
-    /// cut before any contact with `others` or an obstacle; staying put when it cannot
-    /// move or already overlaps a body.
+    /// cut before any contact with `standing` (those of `others` that do not move) or an
+    /// obstacle; staying put when it cannot move or already overlaps a body of `others`.
     fn step_at(
         &self,
         centre: &Pose,
         me: &Point,
         others: &[Body],
+        standing: &[Body],
         orca: impl FnOnce(&Vector) -> Vector,
     ) -> Move {
         let slot = self.slot_position(centre);
@@ -211,7 +212,7 @@ impl OrcaController {
             to_slot * (self.max_step_m / distance_m)
         };
         let v = self.keep_in_field(me, orca(&preferred));
-        let t = self.clear_fraction(me, &v, others).unwrap_or(0.0);
+        let t = self.clear_fraction(me, &v, standing).unwrap_or(0.0);
         if v == Vector::zeros() || t <= 0.0 {
             return stay();
         }
@@ -245,9 +246,11 @@ impl OrcaController {
     /// Reciprocal avoidance, RVO2's way: each other agent (the `max_neighbours` nearest
     /// it senses) takes half of the responsibility, each obstacle none, with the time
     /// horizon of its settings ([`OrcaSettings`], `[orca]` in a scenario). The
-    /// velocity is then kept in the field and cut before any contact with a body where
-    /// it stands now, as in [`Self::plan_move`]; the mates' own moves are the safety
-    /// monitor's to check (a move that would meet one is refused).
+    /// velocity is then kept in the field and cut before any contact with an obstacle or
+    /// a body that stood still over the last step, as in [`Self::plan_move`]. A mate
+    /// that moved is expected to move on, out of the way ORCA leaves: the two moves are
+    /// the safety monitor's to check against each other in time (if they meet, or if
+    /// the mate stands after all and this move runs into it, this one is refused).
     pub fn plan_move_reciprocal(
         &self,
         centre: &Pose,
@@ -256,7 +259,17 @@ impl OrcaController {
         others: &[Body],
         others_velocity: &[Vector],
     ) -> Move {
-        self.step_at(centre, me, others, |preferred| {
+        let standing: Vec<Body> = others
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| {
+                others_velocity
+                    .get(*i)
+                    .is_none_or(|v| *v == Vector::zeros())
+            })
+            .map(|(_, b)| *b)
+            .collect();
+        self.step_at(centre, me, others, &standing, |preferred| {
             self.reciprocal_velocity(me, velocity, others, others_velocity, preferred)
         })
     }

@@ -137,6 +137,7 @@ pub fn check_move(
         obstacles,
         others,
         None,
+        &[],
         radius_m,
         from,
         waypoints,
@@ -163,11 +164,41 @@ pub fn check_move_of(
     chord_errors_m: &[f64],
     max_waypoints: usize,
 ) -> Result<(), Violation> {
+    check_move_among(
+        field,
+        obstacles,
+        bodies,
+        agent,
+        &[],
+        from,
+        waypoints,
+        chord_errors_m,
+        max_waypoints,
+    )
+}
+
+/// [`check_move_of`] against the bodies that stand still: a body `j` with
+/// `passing[j]` moves at the same time as `agent` (simultaneous turns) and is not
+/// looked at here; the two moves are checked against each other in time
+/// ([`crate::groups::simultaneous_meetings`]). An empty `passing` passes no one.
+#[allow(clippy::too_many_arguments)]
+pub fn check_move_among(
+    field: &Field,
+    obstacles: &DiskGrid,
+    bodies: &[Body],
+    agent: usize,
+    passing: &[bool],
+    from: &Point,
+    waypoints: &[Point],
+    chord_errors_m: &[f64],
+    max_waypoints: usize,
+) -> Result<(), Violation> {
     check_move_skipping(
         field,
         obstacles,
         bodies,
         Some(agent),
+        passing,
         bodies[agent].radius_m,
         from,
         waypoints,
@@ -176,13 +207,15 @@ pub fn check_move_of(
     )
 }
 
-/// [`check_move`] against `bodies` but the one at index `skip`, if any.
+/// [`check_move`] against `bodies` but the one at index `skip`, if any, and those
+/// `passing` marks.
 #[allow(clippy::too_many_arguments)]
 fn check_move_skipping(
     field: &Field,
     obstacles: &DiskGrid,
     bodies: &[Body],
     skip: Option<usize>,
+    passing: &[bool],
     radius_m: f64,
     from: &Point,
     waypoints: &[Point],
@@ -241,7 +274,7 @@ fn check_move_skipping(
             return Err(v);
         }
         for (j, o) in bodies.iter().enumerate() {
-            if Some(j) == skip {
+            if Some(j) == skip || passing.get(j).copied().unwrap_or(false) {
                 continue;
             }
             // A body whose centre lies farther than the radii sum outside the segment's

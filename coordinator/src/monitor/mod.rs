@@ -216,8 +216,10 @@ impl SafetyMonitor {
 
     /// Check that agent `agent` (radius `radius_m`, standing at `from`) may follow
     /// `waypoints` to `best` while every body of `bodies` (all agents, by index) stands
-    /// still. `under_way`: the agent says it stops short of `best` (top speed), so the
-    /// move need not end there. `chord_errors_m`: for a car, how far each segment's arc
+    /// still, but each body `j` with `passing[j]`: it moves at the same time
+    /// (`simultaneous` turns), and the two moves are checked against each other in time
+    /// when the group is settled (empty: none). `under_way`: the agent says it stops
+    /// short of `best` (top speed), so the move need not end there. `chord_errors_m`: for a car, how far each segment's arc
     /// bulges from it ([`check_kinematics`]); each segment is checked with the agent's
     /// radius grown by it (empty: straight segments).
     #[allow(clippy::too_many_arguments)]
@@ -229,6 +231,7 @@ impl SafetyMonitor {
         best: &Point,
         under_way: bool,
         bodies: &[Body],
+        passing: &[bool],
         chord_errors_m: &[f64],
         max_waypoints: usize,
     ) -> Result<(), Refusal> {
@@ -331,6 +334,10 @@ impl SafetyMonitor {
                 }
             }
             for (other, body) in bodies.iter().enumerate() {
+                // Moving at the same time: checked against this move in time, later.
+                if passing.get(other).copied().unwrap_or(false) {
+                    continue;
+                }
                 // A body whose centre lies farther than the radii sum outside the
                 // segment's box cannot meet it: skipped without the parry query (with
                 // [`PREFILTER_SLACK_M`] to spare, so no body the query would find is).
@@ -496,14 +503,14 @@ mod tests {
         let from = Point::new(5.0, 9.5);
         let into = [from, Point::new(5.0, 3.3)];
         assert_eq!(
-            m.check(0, &from, &into, &into[1], false, &lone(from), &[], 8),
+            m.check(0, &from, &into, &into[1], false, &lone(from), &[], &[], 8),
             Ok(())
         );
         // 0.1 m too deep, or through a wall, or standing inside: refused.
         for end in [Point::new(5.0, 3.2), Point::new(8.5, 5.0)] {
             let mv = [from, end];
             assert_eq!(
-                m.check(0, &from, &mv, &end, false, &lone(from), &[], 8),
+                m.check(0, &from, &mv, &end, false, &lone(from), &[], &[], 8),
                 Err(Refusal::Polygon {
                     segment: 0,
                     polygon: 0
@@ -513,7 +520,17 @@ mod tests {
         }
         let inside = Point::new(3.5, 5.0);
         assert!(matches!(
-            m.check(0, &inside, &[inside], &inside, false, &lone(inside), &[], 8),
+            m.check(
+                0,
+                &inside,
+                &[inside],
+                &inside,
+                false,
+                &lone(inside),
+                &[],
+                &[],
+                8
+            ),
             Err(Refusal::Polygon { .. })
         ));
     }
@@ -524,12 +541,22 @@ mod tests {
         let from = Point::new(1.0, 5.0);
         let clear = [from, Point::new(3.0, 3.0)];
         assert_eq!(
-            m.check(0, &from, &clear, &clear[1], false, &bodies(), &[], 8),
+            m.check(0, &from, &clear, &clear[1], false, &bodies(), &[], &[], 8),
             Ok(())
         );
         let through = [from, Point::new(9.0, 5.0)];
         assert!(matches!(
-            m.check(0, &from, &through, &through[1], false, &bodies(), &[], 8),
+            m.check(
+                0,
+                &from,
+                &through,
+                &through[1],
+                false,
+                &bodies(),
+                &[],
+                &[],
+                8
+            ),
             Err(Refusal::Obstacle { obstacle: 0, .. })
         ));
         let around = [
@@ -539,41 +566,61 @@ mod tests {
             Point::new(9.0, 5.0),
         ];
         assert_eq!(
-            m.check(0, &from, &around, &around[3], false, &bodies()[..1], &[], 8),
+            m.check(
+                0,
+                &from,
+                &around,
+                &around[3],
+                false,
+                &bodies()[..1],
+                &[],
+                &[],
+                8
+            ),
             Ok(())
         );
         assert!(matches!(
-            m.check(0, &from, &around, &around[3], false, &bodies(), &[], 8),
+            m.check(0, &from, &around, &around[3], false, &bodies(), &[], &[], 8),
             Err(Refusal::Agent { agent: 1, .. })
         ));
         let nan = [from, Point::new(f64::NAN, 0.0)];
         assert!(matches!(
-            m.check(0, &from, &nan, &nan[1], false, &bodies(), &[], 8),
+            m.check(0, &from, &nan, &nan[1], false, &bodies(), &[], &[], 8),
             Err(Refusal::NotFinite(1))
         ));
         let jump = [Point::new(2.0, 2.0)];
         assert!(matches!(
-            m.check(0, &from, &jump, &jump[0], false, &bodies(), &[], 8),
+            m.check(0, &from, &jump, &jump[0], false, &bodies(), &[], &[], 8),
             Err(Refusal::Teleport(_))
         ));
         let out = [from, Point::new(0.2, 5.0)];
         assert!(matches!(
-            m.check(0, &from, &out, &out[1], false, &bodies(), &[], 8),
+            m.check(0, &from, &out, &out[1], false, &bodies(), &[], &[], 8),
             Err(Refusal::OutsideField(1))
         ));
         assert!(matches!(
-            m.check(0, &from, &clear, &from, false, &bodies(), &[], 8),
+            m.check(0, &from, &clear, &from, false, &bodies(), &[], &[], 8),
             Err(Refusal::WrongEnd)
         ));
         // Under way, a move may stop short of its best point.
         assert_eq!(
-            m.check(0, &from, &clear, &from, true, &bodies(), &[], 8),
+            m.check(0, &from, &clear, &from, true, &bodies(), &[], &[], 8),
             Ok(())
         );
         // Touching is allowed: exactly the radii sum away.
         let touch = [from, Point::new(3.7, 5.0)];
         assert_eq!(
-            m.check(0, &from, &touch, &touch[1], false, &bodies()[..1], &[], 8),
+            m.check(
+                0,
+                &from,
+                &touch,
+                &touch[1],
+                false,
+                &bodies()[..1],
+                &[],
+                &[],
+                8
+            ),
             Ok(())
         );
     }

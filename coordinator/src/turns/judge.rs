@@ -2,7 +2,7 @@
 //! moves against each other, then the recorder's own checks (plain geometry).
 
 use shared::geometry::Point;
-use shared::groups::{GroupMove, group_meetings};
+use shared::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
 use shared::record::{FaultKind, Recorder};
 use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
 use wire::StateMsg;
@@ -10,8 +10,10 @@ use wire::StateMsg;
 use crate::monitor::{self, Refusal, SafetyMonitor};
 
 /// Check a published move with the monitor (parry) alone, against the bodies where they
-/// stand: the move if it passes, else `None` with the refusal recorded (the agent stays).
-/// The recorder's own checks come when the group is settled ([`settle_group`]).
+/// stand (but those `passing` marks: in `simultaneous` turns, the group's agents, which
+/// move at the same time): the move if it passes, else `None` with the refusal recorded
+/// (the agent stays). The moves against each other, and the recorder's own checks, come
+/// when the group is settled ([`settle_group`]).
 pub(super) fn judge_move(
     monitor: &SafetyMonitor,
     recorder: &mut Recorder,
@@ -19,6 +21,7 @@ pub(super) fn judge_move(
     agent: usize,
     slot: Point,
     msg: StateMsg,
+    passing: &[bool],
 ) -> Option<Move> {
     let from = recorder.bodies()[agent].position;
     let max_step_m = recorder.scenario().agents[agent].max_step_m;
@@ -42,6 +45,7 @@ pub(super) fn judge_move(
                 &msg.best,
                 status == MoveStatus::UnderWay,
                 recorder.bodies(),
+                passing,
                 &chord_errors_m,
                 MAX_WAYPOINTS,
             )
@@ -67,26 +71,55 @@ pub(super) fn judge_move(
 }
 
 /// Take the moves of one group that passed [`judge_move`]: the monitor checks every pair
-/// against each other's whole move (both refused if they meet; in `simultaneous` turns,
-/// where every agent moves at once at a constant speed, if they meet at the same time),
-/// then the recorder checks and takes what is left.
+/// against each other's whole move (both refused if they meet), then the recorder checks
+/// and takes what is left.
+///
+/// In `simultaneous` turns, where every agent moves at once at a constant speed, two
+/// moves meet if they come close at the same time, and each move is also checked
+/// against every body that does not move this step (a mate whose answer was refused or
+/// missing stands where it is), again after each refusal
+/// ([`shared::groups::simultaneous_meetings`]).
 pub(super) fn settle_group(recorder: &mut Recorder, step: usize, moves: Vec<(usize, Move)>) {
+    let simultaneous = recorder.scenario().turns == TurnMode::Simultaneous;
+    let bodies = recorder.bodies();
+    // Every agent in order, moving or standing where it is.
+    let mut moving: Vec<Option<&Move>> = vec![None; bodies.len()];
+    if simultaneous {
+        for (agent, mv) in &moves {
+            moving[*agent] = Some(mv);
+        }
+    }
+    let stands: Vec<[Point; 1]> = bodies.iter().map(|b| [b.position]).collect();
+    let all: Vec<GroupMove<'_>> = (0..bodies.len())
+        .filter(|_| simultaneous)
+        .map(|agent| GroupMove {
+            radius_m: bodies[agent].radius_m,
+            waypoints: moving[agent].map_or(&stands[agent][..], |mv| &mv.waypoints[..]),
+            refused: moving[agent].is_none(),
+        })
+        .collect();
     let group: Vec<GroupMove<'_>> = moves
         .iter()
         .map(|(agent, mv)| GroupMove {
-            radius_m: recorder.bodies()[*agent].radius_m,
+            radius_m: bodies[*agent].radius_m,
             waypoints: &mv.waypoints,
             refused: false,
         })
         .collect();
     // Moves made at once at constant speeds (ORCA's own model) meet only if the agents
     // are close at the same time; a parallel group's timing is not known: anywhere.
-    let meetings = if recorder.scenario().turns == TurnMode::Simultaneous {
-        group_meetings(&group, monitor::distance_between_simultaneous_moves_m)
+    let (meetings, mates): (Vec<Option<Meeting>>, Vec<usize>) = if simultaneous {
+        let found = simultaneous_meetings(&all, monitor::distance_between_simultaneous_moves_m);
+        (
+            moves.iter().map(|(agent, _)| found[*agent]).collect(),
+            (0..bodies.len()).collect(),
+        )
     } else {
-        group_meetings(&group, monitor::distance_between_moves_m)
+        (
+            group_meetings(&group, monitor::distance_between_moves_m),
+            moves.iter().map(|(agent, _)| *agent).collect(),
+        )
     };
-    let mates: Vec<usize> = moves.iter().map(|(agent, _)| *agent).collect();
     let mut kept = Vec::with_capacity(moves.len());
     for ((agent, mv), meeting) in moves.into_iter().zip(meetings) {
         match meeting {

@@ -137,6 +137,13 @@ impl Driver<'_, '_> {
         centre: &Pose,
     ) -> anyhow::Result<Option<Vec<(usize, Move)>>> {
         let mut moves = Vec::with_capacity(turns.len());
+        // Agents moving at once are checked against each other in time, when the group
+        // is settled: each move alone is checked against the bodies that stand.
+        let passing: Vec<bool> = if self.scenario.turns == TurnMode::Simultaneous {
+            self.recorder.alive().to_vec()
+        } else {
+            Vec::new()
+        };
         for turn in turns {
             let agent = turn.agent;
             // Handled already while a group mate's answer was awaited (killed for
@@ -157,7 +164,7 @@ impl Driver<'_, '_> {
                     if self.on_late_answer(step, agent, slot, latency)? {
                         continue;
                     }
-                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg) {
+                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg, &passing) {
                         moves.push((agent, mv));
                     }
                 }
@@ -178,7 +185,8 @@ impl Driver<'_, '_> {
     }
 
     /// Record the timing of the move `msg` that answered `turn`, and judge it with the
-    /// monitor alone: the move if it passes.
+    /// monitor alone (against the bodies that stand: not those `passing` marks): the
+    /// move if it passes.
     fn take_move(
         &mut self,
         monitor: &SafetyMonitor,
@@ -186,6 +194,7 @@ impl Driver<'_, '_> {
         turn: &Turn,
         slot: Point,
         msg: StateMsg,
+        passing: &[bool],
     ) -> Option<Move> {
         let held_ns = monotonic_ns();
         let agent = turn.agent;
@@ -213,6 +222,6 @@ impl Driver<'_, '_> {
         self.progress.latency_us.push(sample.latency_us);
         self.progress.compute_us.push(sample.compute_us);
         self.progress.turn_samples.push(sample);
-        judge_move(monitor, self.recorder, step, agent, slot, msg)
+        judge_move(monitor, self.recorder, step, agent, slot, msg, passing)
     }
 }

@@ -7,7 +7,7 @@ use crate::geometry::{
     DiskGrid, Point, Pose, Vector, distance_at_the_same_time_m, distance_polyline_polyline,
     polyline_length_m, wrap_angle_rad,
 };
-use crate::groups::{GroupMove, group_meetings};
+use crate::groups::{GroupMove, group_meetings, simultaneous_meetings};
 use crate::kinematics::{CarLimits, UnicycleLimits, check_car_move, unicycle_step_share};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
@@ -258,30 +258,56 @@ impl<'a> Recorder<'a> {
     /// length against the agent's top speed, and its end against its best point (it may
     /// stop short only [`MoveStatus::UnderWay`]); then every pair of the moves that passed
     /// is checked against each other's whole move: two that come within their radii sum
-    /// are both rejected (in [`TurnMode::Simultaneous`], where every agent moves at once
-    /// at a constant speed along its move, two that do so at the same time).
+    /// are both rejected.
+    ///
+    /// In [`TurnMode::Simultaneous`], where every agent moves at once at a constant speed
+    /// along its move, a move is checked alone against the bodies that are not in the
+    /// group (they stand), and against the group's moves in time: two that come within
+    /// their radii sum at the same time are both rejected, and so is a move that comes
+    /// within reach of a mate whose move was rejected (it stands), until none does
+    /// ([`simultaneous_meetings`]).
     pub fn submit_group(
         &mut self,
         step: usize,
         moves: Vec<(usize, Move)>,
     ) -> Vec<Result<(), Violation>> {
+        // At once at constant speeds (ORCA's own model), the group's moves are checked
+        // against each other in time, and each alone against the bodies that stand; a
+        // parallel group's timing is not known: against the others where they stand,
+        // then against each other anywhere.
+        let simultaneous = self.scenario.turns == TurnMode::Simultaneous;
+        let mut passing = Vec::new();
+        if simultaneous {
+            passing = vec![false; self.bodies.len()];
+            for (agent, _) in &moves {
+                passing[*agent] = true;
+            }
+        }
         let mut verdicts: Vec<Result<(), Violation>> = moves
             .iter()
-            .map(|(agent, mv)| self.check_alone(*agent, mv))
+            .map(|(agent, mv)| self.check_alone(*agent, mv, &passing))
+            .collect();
+        // A move refused on its own leaves its agent where it stands.
+        let starts: Vec<[Point; 1]> = moves
+            .iter()
+            .map(|(agent, _)| [self.bodies[*agent].position])
             .collect();
         let group: Vec<GroupMove<'_>> = moves
             .iter()
             .zip(&verdicts)
-            .map(|((agent, mv), verdict)| GroupMove {
+            .zip(&starts)
+            .map(|(((agent, mv), verdict), start)| GroupMove {
                 radius_m: self.bodies[*agent].radius_m,
-                waypoints: &mv.waypoints,
+                waypoints: if simultaneous && verdict.is_err() {
+                    start
+                } else {
+                    &mv.waypoints
+                },
                 refused: verdict.is_err(),
             })
             .collect();
-        // At once at constant speeds (ORCA's own model): close at the same time; a
-        // parallel group's timing is not known: anywhere.
-        let meetings = if self.scenario.turns == TurnMode::Simultaneous {
-            group_meetings(&group, distance_at_the_same_time_m)
+        let meetings = if simultaneous {
+            simultaneous_meetings(&group, distance_at_the_same_time_m)
         } else {
             group_meetings(&group, distance_polyline_polyline)
         };
@@ -311,9 +337,9 @@ impl<'a> Recorder<'a> {
         verdicts
     }
 
-    /// Check one move against the bodies where they stand, the field, the agent's top
-    /// speed and its best point.
-    fn check_alone(&self, agent: usize, mv: &Move) -> Result<(), Violation> {
+    /// Check one move against the bodies where they stand (but those `passing` marks:
+    /// they move at the same time), the field, the agent's top speed and its best point.
+    fn check_alone(&self, agent: usize, mv: &Move, passing: &[bool]) -> Result<(), Violation> {
         let body = self.bodies[agent];
         let spec = &self.scenario.agents[agent];
         // A car's chords stand for arcs: read them back, and grow each by its bulge.
@@ -335,11 +361,12 @@ impl<'a> Recorder<'a> {
             }
             _ => Vec::new(),
         };
-        safety::check_move_of(
+        safety::check_move_among(
             &self.scenario.field,
             &self.obstacles,
             &self.bodies,
             agent,
+            passing,
             &body.position,
             &mv.waypoints,
             &chord_errors_m,
