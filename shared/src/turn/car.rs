@@ -108,9 +108,16 @@ pub(super) fn plan_car_drive(
             .unwrap_or(poses.len() - 1)
     };
     let nearer = (1..=ahead(1.0)).rev();
+    // A short search gives the same pose for several of these: each is tried once.
+    let mut tried = Vec::new();
     [ahead(4.0), ahead(2.0)]
         .into_iter()
         .chain(nearer)
+        .filter(|k| {
+            let first = !tried.contains(k);
+            tried.push(*k);
+            first
+        })
         .find_map(|k| {
             let path = shortest(&poses[k]);
             path.length_m()
