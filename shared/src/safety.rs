@@ -478,4 +478,43 @@ mod tests {
             Err(Violation::OutsideField { index: 1, .. })
         ));
     }
+
+    /// A body that moves at the same time is left to the check in time; one that stands
+    /// is in the way, and is numbered as among the others.
+    #[test]
+    fn a_passing_body_is_not_in_the_way_of_a_move_alone() {
+        let field = Field::new(10.0, 10.0);
+        let obstacles = DiskGrid::new(Vec::new());
+        let body = |x: f64| Body {
+            position: Point::new(x, 5.0),
+            radius_m: 0.3,
+        };
+        // Agent 1 moves along a row through where agent 2 stands; agent 0 is behind it.
+        let bodies = [body(1.0), body(2.0), body(4.0)];
+        let from = bodies[1].position;
+        let ahead = [from, Point::new(6.0, 5.0)];
+        let check = |passing: &[bool]| {
+            check_move_among(
+                &field,
+                &obstacles,
+                &bodies,
+                1,
+                passing,
+                &from,
+                &ahead,
+                &[],
+                8,
+            )
+        };
+        assert!(matches!(
+            check(&[]),
+            Err(Violation::HitsBody { body: 1, .. })
+        ));
+        assert!(check(&[false, true, true]).is_ok());
+        // Agent 0 passing changes nothing: agent 2 still stands in the way.
+        assert!(matches!(
+            check(&[true, true, false]),
+            Err(Violation::HitsBody { body: 1, .. })
+        ));
+    }
 }

@@ -219,9 +219,9 @@ impl SafetyMonitor {
     /// still, but each body `j` with `passing[j]`: it moves at the same time
     /// (`simultaneous` turns), and the two moves are checked against each other in time
     /// when the group is settled (empty: none). `under_way`: the agent says it stops
-    /// short of `best` (top speed), so the move need not end there. `chord_errors_m`: for a car, how far each segment's arc
-    /// bulges from it ([`check_kinematics`]); each segment is checked with the agent's
-    /// radius grown by it (empty: straight segments).
+    /// short of `best` (top speed), so the move need not end there. `chord_errors_m`:
+    /// for a car, how far each segment's arc bulges from it ([`check_kinematics`]); each
+    /// segment is checked with the agent's radius grown by it (empty: straight segments).
     #[allow(clippy::too_many_arguments)]
     pub fn check(
         &self,
@@ -583,6 +583,23 @@ mod tests {
             m.check(0, &from, &around, &around[3], false, &bodies(), &[], &[], 8),
             Err(Refusal::Agent { agent: 1, .. })
         ));
+        // A mate that moves at the same time is not in the way here: the two moves are
+        // checked against each other in time when the group is settled.
+        let passing = vec![false, true];
+        assert_eq!(
+            m.check(
+                0,
+                &from,
+                &around,
+                &around[3],
+                false,
+                &bodies(),
+                &passing,
+                &[],
+                8
+            ),
+            Ok(())
+        );
         let nan = [from, Point::new(f64::NAN, 0.0)];
         assert!(matches!(
             m.check(0, &from, &nan, &nan[1], false, &bodies(), &[], &[], 8),
