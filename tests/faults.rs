@@ -168,7 +168,9 @@ fn random_agents_killed_at_random_steps_over_twenty_seeds() {
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
         let kill_arg = format!("{agent}@{step}");
-        let mut args = vec!["--kill-agent", &kill_arg];
+        // A generous turn deadline: the death is noticed by the process check, and a
+        // loaded machine must not get an honest agent killed as slow.
+        let mut args = vec!["--kill-agent", &kill_arg, "--turn-deadline-ms", "10000"];
         if respawn {
             args.push("--respawn");
         }
@@ -240,10 +242,15 @@ fn agents_killed_from_outside_at_random_moments_are_survived() {
         let out = dir.path().join("out");
         let scenario = large_scenario_in(dir.path());
         let step = rng.random_range(1..=latest);
-        let mut run = Watched::spawn(
-            coordinator(&[scenario.to_str().expect("utf-8 path")], &out),
-            &[step],
-        );
+        // A generous turn deadline: the death is noticed by the process check, and a
+        // loaded machine must not get an honest agent killed as slow (seen with three
+        // test suites running at once at the default 250 ms).
+        let args = [
+            scenario.to_str().expect("utf-8 path"),
+            "--turn-deadline-ms",
+            "10000",
+        ];
+        let mut run = Watched::spawn(coordinator(&args, &out), &[step]);
         let pid = run.id();
         support::wait_for_agents(pid, 64);
         let held = run.hold();

@@ -444,7 +444,14 @@ fn agents_killed_from_outside_at_random_moments_of_a_parallel_run_are_survived()
         let respawn = seed % 2 == 1;
         let dir = tempfile::tempdir().expect("tempdir");
         let out = dir.path().join("out");
-        let mut args = vec![file.to_str().expect("utf-8 path")];
+        // A generous turn deadline: a death is noticed by the process check, and a
+        // loaded machine must not turn an honest agent's late answer into a missed turn
+        // (seen once at the default 250 ms with three test suites running at once).
+        let mut args = vec![
+            file.to_str().expect("utf-8 path"),
+            "--turn-deadline-ms",
+            "10000",
+        ];
         if respawn {
             args.push("--respawn");
         }

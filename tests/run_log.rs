@@ -222,12 +222,15 @@ fn a_coordinator_killed_at_seeded_random_moments_leaves_every_step_before_the_ki
         let reference = simulate_along(&scenario, &path).expect("reference");
         let latest = progress::latest_hold_step(path.len() - 1);
         let uninterrupted = dir.path().join(format!("{name}-uninterrupted"));
-        let (output, pid) = run_to_end(&[file.to_str().expect("utf-8")], &uninterrupted);
+        // A generous turn deadline (the log keeps it for `--resume`): the runs are
+        // compared byte for byte, and a loaded machine must not turn an honest agent's
+        // late answer into a missed turn or a slow kill.
+        let args = [file.to_str().expect("utf-8"), "--turn-deadline-ms", "10000"];
+        let (output, pid) = run_to_end(&args, &uninterrupted);
         assert!(output.status.success(), "{name}: the uninterrupted run");
         killed.push(pid);
         for kill_number in 0..10 {
             let out = dir.path().join(format!("{name}-{kill_number}"));
-            let args = [file.to_str().expect("utf-8")];
             let reported = if kill_number == 0 {
                 let mut child = coordinator(&args, &out).spawn().expect("start");
                 wait_for_step_zero(&out);
@@ -539,7 +542,10 @@ fn resumed_runs_with_deaths_replacements_parallel_turns_and_moving_obstacles_equ
     let mut pids = Vec::new();
     for (name, file, extra) in cases {
         let file = lengthened_file(dir.path(), &file);
-        let mut args = vec![file.to_str().expect("utf-8")];
+        // A generous turn deadline (kept in the log for `--resume`): the runs are
+        // compared byte for byte, and a loaded machine must not get an honest agent
+        // killed as slow.
+        let mut args = vec![file.to_str().expect("utf-8"), "--turn-deadline-ms", "10000"];
         args.extend_from_slice(extra);
         let uninterrupted = dir.path().join(format!("{name}-uninterrupted"));
         let (output, pid) = run_to_end(&args, &uninterrupted);
