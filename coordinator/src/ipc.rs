@@ -521,38 +521,6 @@ impl CoordinatorIpc {
             .collect()
     }
 
-    /// Whether the run's live nodes are this process's and at most one for each of
-    /// `agent_pids`, and nothing else: then no process can have opened an agent's
-    /// services but the agent itself (every node of the run lives below its private
-    /// root, so any that opened one is listed). One listing of the run's nodes, against
-    /// a look at every service's nodes for [`Self::intruders`]; false (look closer) on
-    /// any other node, a node whose state cannot be told, or a failed listing.
-    pub fn only_own_nodes(&self, agent_pids: &[u32]) -> bool {
-        let own = std::process::id();
-        let mut seen: std::collections::BTreeSet<u32> = Default::default();
-        let mut clean = true;
-        let listed = Node::<ipc::Service>::list(self.node.config(), |state| {
-            match state {
-                NodeState::Alive(view) => {
-                    let pid = pid_of_id(view.id().value());
-                    // A second node of one agent process is one it should not have made.
-                    if pid != own && !(agent_pids.contains(&pid) && seen.insert(pid)) {
-                        clean = false;
-                    }
-                }
-                // A dead node holds no port any more.
-                NodeState::Dead(_) => {}
-                NodeState::Inaccessible(_) | NodeState::Undefined(_) => clean = false,
-            }
-            if clean {
-                CallbackProgression::Continue
-            } else {
-                CallbackProgression::Stop
-            }
-        });
-        listed.is_ok() && clean
-    }
-
     /// Processes other than the coordinator and `owner_pid` attached to `agent`'s
     /// channel: an agent has no business opening another agent's services.
     pub fn intruders(&self, agent: usize, owner_pid: u32) -> Vec<u32> {
