@@ -202,6 +202,26 @@ fn two_agents_killed_at_one_step_in_sequential_mode_match_the_reference_to_the_b
     assert_eq!(dead, at_25);
 }
 
+/// ORCA's own model (every agent moves at once) with agents killed mid-step: the large
+/// formation under a top speed, 64 processes, three deaths. Each dead agent stands frozen
+/// where it was, and every move is judged against it as the reference judges it: the
+/// run equals the reference with those deaths, to the bit.
+#[test]
+fn agents_killed_in_orcas_own_model_match_the_reference() {
+    let file = support::repo_root().join("scenarios/large-top-speed.toml");
+    let mut scenario = Scenario::load(&file)
+        .expect("large-top-speed.toml")
+        .with_controller(shared::vocabulary::ControllerKind::Orca);
+    scenario.turns = TurnMode::Simultaneous;
+    let run = run_and_compare(&scenario, &[(20, 30), (41, 31), (9, 150)]);
+    let dead = run
+        .faults
+        .iter()
+        .filter(|f| f.kind == FaultKind::Dead)
+        .count();
+    assert_eq!(dead, 3, "{:?}", run.faults);
+}
+
 /// The same in a changing world: the patrol scenario (moving obstacles crossing the
 /// formation's path, the centre replanning) with agent 2 killed at step 60 equals the
 /// reference with that death, to the bit, with no collision.

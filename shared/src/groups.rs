@@ -198,7 +198,9 @@ pub struct GroupMove<'a> {
     pub radius_m: f64,
     /// Its move, from where it stands.
     pub waypoints: &'a [Point],
-    /// Already refused on its own: it will not be taken, so it meets no one.
+    /// Already refused on its own: it will not be taken. [`group_meetings`] then looks
+    /// at it no more; [`simultaneous_meetings`] takes its agent as standing at the first
+    /// of `waypoints`.
     pub refused: bool,
 }
 

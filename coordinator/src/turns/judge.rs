@@ -79,8 +79,48 @@ pub(super) fn judge_move(
 /// against every body that does not move this step (a mate whose answer was refused or
 /// missing stands where it is), again after each refusal
 /// ([`shared::groups::simultaneous_meetings`]).
-pub(super) fn settle_group(recorder: &mut Recorder, step: usize, moves: Vec<(usize, Move)>) {
+pub(super) fn settle_group(
+    monitor: &SafetyMonitor,
+    recorder: &mut Recorder,
+    step: usize,
+    moves: Vec<(usize, Move)>,
+) {
     let simultaneous = recorder.scenario().turns == TurnMode::Simultaneous;
+    // Moving at once, a move was judged alone against the bodies of the agents not
+    // alive when the answers began to be collected. One that died since stands frozen:
+    // each move is judged alone against it now, as the reference judges a move alone
+    // against an agent frozen before the turns (a live mate whose move is refused, or
+    // who gave none, stands too: the rounds below look at it, as the reference does).
+    let moves = if simultaneous {
+        let movers = recorder.alive().to_vec();
+        let mut kept = Vec::with_capacity(moves.len());
+        for (agent, mv) in moves {
+            let verdict = monitor.check(
+                agent,
+                &recorder.bodies()[agent].position,
+                &mv.waypoints,
+                &mv.best,
+                mv.status == MoveStatus::UnderWay,
+                recorder.bodies(),
+                &movers,
+                &[],
+                MAX_WAYPOINTS,
+            );
+            match verdict {
+                Ok(()) => kept.push((agent, mv)),
+                Err(r) => {
+                    let why = r.to_string();
+                    tracing::debug!(
+                        "step {step}: agent {agent}'s move rejected by the monitor: {why}"
+                    );
+                    recorder.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
+                }
+            }
+        }
+        kept
+    } else {
+        moves
+    };
     let bodies = recorder.bodies();
     // Every agent in order, moving or standing where it is.
     let mut moving: Vec<Option<&Move>> = vec![None; bodies.len()];

@@ -55,7 +55,7 @@ impl Driver<'_, '_> {
         }
         // A mate frozen after its move was judged does not move.
         moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
-        settle_group(self.recorder, step, moves);
+        settle_group(monitor, self.recorder, step, moves);
         Ok(false)
     }
 

@@ -262,9 +262,10 @@ impl<'a> Recorder<'a> {
     ///
     /// In [`TurnMode::Simultaneous`], where every agent moves at once at a constant speed
     /// along its move, a move is checked alone against the bodies that are not in the
-    /// group (they stand), and against the group's moves in time: two that come within
-    /// their radii sum at the same time are both rejected, and so is a move that comes
-    /// within reach of a mate whose move was rejected (it stands), until none does
+    /// group (they stand), and against the group's moves in time: of two that come within
+    /// their radii sum at the same time, the one whose agent, standing, lets the other
+    /// pass is rejected (both if neither does), and so is a move that comes within reach
+    /// of a mate whose move was rejected (it stands), until none does
     /// ([`simultaneous_meetings`]).
     pub fn submit_group(
         &mut self,
