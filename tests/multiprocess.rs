@@ -318,11 +318,7 @@ fn orca_in_its_own_model_matches_the_reference() {
 /// refusal included, equals the reference to the bit.
 #[test]
 fn orca_in_its_own_model_in_a_crowd_matches_the_reference() {
-    let file = support::repo_root().join("scenarios/large-top-speed.toml");
-    let mut scenario = Scenario::load(&file)
-        .expect("large-top-speed.toml")
-        .with_controller(shared::vocabulary::ControllerKind::Orca);
-    scenario.turns = shared::vocabulary::TurnMode::Simultaneous;
+    let scenario = support::orca_crowd();
     let run = run_and_compare(&scenario);
     assert_eq!(run.summary().collisions, 0);
     let refused = run

@@ -208,11 +208,7 @@ fn two_agents_killed_at_one_step_in_sequential_mode_match_the_reference_to_the_b
 /// run equals the reference with those deaths, to the bit.
 #[test]
 fn agents_killed_in_orcas_own_model_match_the_reference() {
-    let file = support::repo_root().join("scenarios/large-top-speed.toml");
-    let mut scenario = Scenario::load(&file)
-        .expect("large-top-speed.toml")
-        .with_controller(shared::vocabulary::ControllerKind::Orca);
-    scenario.turns = TurnMode::Simultaneous;
+    let scenario = support::orca_crowd();
     let run = run_and_compare(&scenario, &[(20, 30), (41, 31), (9, 150)]);
     let dead = run
         .faults

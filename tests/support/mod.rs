@@ -46,6 +46,17 @@ pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The large formation under a top speed (`scenarios/large-top-speed.toml`, 64 agents)
+/// with the `orca` controller in its own model: every agent moves at once.
+pub fn orca_crowd() -> shared::scenario::Scenario {
+    let file = repo_root().join("scenarios/large-top-speed.toml");
+    let mut scenario = shared::scenario::Scenario::load(&file)
+        .expect("large-top-speed.toml")
+        .with_controller(shared::vocabulary::ControllerKind::Orca);
+    scenario.turns = shared::vocabulary::TurnMode::Simultaneous;
+    scenario
+}
+
 /// Every shipped scenario file.
 pub fn shipped_scenarios() -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(repo_root().join("scenarios"))

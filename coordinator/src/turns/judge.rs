@@ -4,7 +4,7 @@
 use shared::geometry::Point;
 use shared::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
 use shared::record::{FaultKind, Recorder};
-use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
+use shared::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
 use wire::StateMsg;
 
 use crate::monitor::{self, Refusal, SafetyMonitor};
@@ -121,44 +121,29 @@ pub(super) fn settle_group(
     } else {
         moves
     };
-    let bodies = recorder.bodies();
-    // Every agent in order, moving or standing where it is.
-    let mut moving: Vec<Option<&Move>> = vec![None; bodies.len()];
-    if simultaneous {
-        for (agent, mv) in &moves {
-            moving[*agent] = Some(mv);
-        }
-    }
-    let stands: Vec<[Point; 1]> = bodies.iter().map(|b| [b.position]).collect();
-    let all: Vec<GroupMove<'_>> = (0..bodies.len())
-        .filter(|_| simultaneous)
-        .map(|agent| GroupMove {
-            radius_m: bodies[agent].radius_m,
-            waypoints: moving[agent].map_or(&stands[agent][..], |mv| &mv.waypoints[..]),
-            refused: moving[agent].is_none(),
-        })
-        .collect();
-    let group: Vec<GroupMove<'_>> = moves
-        .iter()
-        .map(|(agent, mv)| GroupMove {
-            radius_m: bodies[*agent].radius_m,
-            waypoints: &mv.waypoints,
-            refused: false,
-        })
-        .collect();
     // Moves made at once at constant speeds (ORCA's own model) meet only if the agents
-    // are close at the same time; a parallel group's timing is not known: anywhere.
-    let (meetings, mates): (Vec<Option<Meeting>>, Vec<usize>) = if simultaneous {
-        let found = simultaneous_meetings(&all, monitor::distance_between_simultaneous_moves_m);
-        (
-            moves.iter().map(|(agent, _)| found[*agent]).collect(),
-            (0..bodies.len()).collect(),
-        )
+    // are close at the same time; a parallel group's timing is not known: anywhere. Each
+    // meeting names the mate by its agent index.
+    let meetings = if simultaneous {
+        meetings_at_once(recorder.bodies(), &moves)
     } else {
-        (
-            group_meetings(&group, monitor::distance_between_moves_m),
-            moves.iter().map(|(agent, _)| *agent).collect(),
-        )
+        let group: Vec<GroupMove<'_>> = moves
+            .iter()
+            .map(|(agent, mv)| GroupMove {
+                radius_m: recorder.bodies()[*agent].radius_m,
+                waypoints: &mv.waypoints,
+                refused: false,
+            })
+            .collect();
+        group_meetings(&group, monitor::distance_between_moves_m)
+            .into_iter()
+            .map(|m| {
+                m.map(|m| Meeting {
+                    mate: moves[m.mate].0,
+                    ..m
+                })
+            })
+            .collect()
     };
     let mut kept = Vec::with_capacity(moves.len());
     for ((agent, mv), meeting) in moves.into_iter().zip(meetings) {
@@ -166,7 +151,7 @@ pub(super) fn settle_group(
             None => kept.push((agent, mv)),
             Some(m) => {
                 let why = Refusal::GroupMate {
-                    agent: mates[m.mate],
+                    agent: m.mate,
                     distance_m: m.distance_m,
                     reach_m: m.reach_m,
                 }
@@ -182,4 +167,27 @@ pub(super) fn settle_group(
             tracing::debug!("step {step}: agent {agent}'s move rejected: {v}");
         }
     }
+}
+
+/// For each of `moves` (made at once), its meeting with a mate in time, the mate named by
+/// its agent index: every agent of `bodies` takes part, those without a move standing
+/// where they are ([`simultaneous_meetings`]).
+fn meetings_at_once(bodies: &[Body], moves: &[(usize, Move)]) -> Vec<Option<Meeting>> {
+    let mut moving: Vec<Option<&Move>> = vec![None; bodies.len()];
+    for (agent, mv) in moves {
+        moving[*agent] = Some(mv);
+    }
+    let stands: Vec<[Point; 1]> = bodies.iter().map(|b| [b.position]).collect();
+    let all: Vec<GroupMove<'_>> = bodies
+        .iter()
+        .zip(&moving)
+        .zip(&stands)
+        .map(|((body, mv), stand)| GroupMove {
+            radius_m: body.radius_m,
+            waypoints: mv.map_or(&stand[..], |mv| &mv.waypoints[..]),
+            refused: mv.is_none(),
+        })
+        .collect();
+    let found = simultaneous_meetings(&all, monitor::distance_between_simultaneous_moves_m);
+    moves.iter().map(|(agent, _)| found[*agent]).collect()
 }
