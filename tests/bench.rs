@@ -429,6 +429,8 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
         for (ratio, a, b) in [
             ("startup_vs_floor", "startup_s", "spawn_floor_s"),
             ("loop_vs_simulate", "loop_s", "simulate_s"),
+            ("wake_floor_vs_simulate", "wake_floor_s", "simulate_s"),
+            ("loop_vs_wake_floor", "loop_s", "wake_floor_s"),
         ] {
             let (a, b) = (number(p, a), number(p, b));
             assert!(a > 0.0 && b > 0.0, "{p}");
@@ -437,6 +439,8 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
                 "{ratio}: {p}"
             );
         }
+        // Every agent answered every empty turn of the wake-up floor.
+        assert_eq!(p["wake_floor_unanswered"], 0, "{p}");
         // Parallel turns: fewer groups than agents once there is more than one.
         let groups = number(p, "mean_groups_per_step");
         assert!(groups >= 1.0 && groups <= f64::from(n), "{p}");
@@ -470,7 +474,7 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
     let svg = report["scale"]["plot_svg"].as_str().expect("plot");
     let text = std::fs::read_to_string(svg).expect("the plot");
     assert!(
-        text.starts_with("<svg") && text.contains("spawn floor"),
+        text.starts_with("<svg") && text.contains("spawn floor") && text.contains("wake-up floor"),
         "{svg}"
     );
     for bad in ["0", "5000"] {

@@ -74,7 +74,7 @@ const BLOCKS: usize = 40;
 /// Round trips dropped at the start of every block (the switch between mechanisms).
 const BLOCK_WARMUP: usize = 10;
 /// How long an agent has to answer an echo.
-const ECHO_DEADLINE: Duration = Duration::from_secs(2);
+pub(super) const ECHO_DEADLINE: Duration = Duration::from_secs(2);
 /// Most steps: the generated field must stay within the largest field accepted.
 pub const MAX_BENCH_STEPS: usize = 20_000;
 

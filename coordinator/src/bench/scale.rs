@@ -8,10 +8,16 @@
 //! 2. `simulate()`: the reference simulation of the same scenario, every agent in this
 //!    process, one after the other;
 //! 3. the real run: N agent processes over iceoryx2, its start-up split into phases, its
-//!    step loop, its turns, and each agent's CPU time and memory (PSS) at the end.
+//!    step loop, its turns, and each agent's CPU time and memory (PSS) at the end;
+//! 4. within the run, after each of its steps (and not counted in its step loop), the
+//!    wake-up floor: the same agents rung the same way, group by group as the step
+//!    took them, each answering an empty turn (no world, no planning, no move, no
+//!    judging). What waking N processes once a step costs on this machine, whatever
+//!    they compute.
 //!
 //! Reported per N, with the two ratios the runtime is judged by (start-up against the
-//! spawn floor, step loop against `simulate()`), and drawn against N in an SVG.
+//! spawn floor, step loop against `simulate()`), the wake-up floor against both, and
+//! drawn against N in an SVG.
 
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -21,13 +27,13 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::simulate::simulate_along;
 
-use super::plot::{BLUE, Curve, GREEN, GREY, ScaleChart, VERMILLION};
+use super::plot::{BLUE, Curve, GREEN, GREY, ORANGE, ScaleChart, VERMILLION};
 use super::run_options::bench_run_options;
 use super::scenario::{Kind, generate_kind};
 use crate::error::CliError;
 use crate::output::{GroupTiming, StartupPhases};
 use crate::stats::Distribution;
-use crate::turns::run_scenario;
+use crate::turns::run_scenario_with;
 
 /// Steps of the swarm's straight path when `--scale-steps` is not given (the length of
 /// `scenarios/swarm1000.toml`'s path).
@@ -64,6 +70,17 @@ pub struct ScalePoint {
     pub loop_s: f64,
     /// `loop_s / simulate_s`: what the processes and the hand-overs cost.
     pub loop_vs_simulate: f64,
+    /// The wake-up floor: after each step, every live agent rung an empty turn (an
+    /// echo), group by group as the step took them (a group's rings at once, then its
+    /// answers collected), summed over the steps, seconds. Not in `loop_s`.
+    pub wake_floor_s: f64,
+    /// `wake_floor_s / simulate_s`: the least a step loop of these processes woken this
+    /// way can cost against `simulate()`, before any world, planning or judging.
+    pub wake_floor_vs_simulate: f64,
+    /// `loop_s / wake_floor_s`: the step loop against its wake-up floor.
+    pub loop_vs_wake_floor: f64,
+    /// Empty turns of the wake-up floor not answered within the deadline (0 normally).
+    pub wake_floor_unanswered: usize,
     /// Steps per second of the step loop.
     pub steps_per_s: f64,
     /// Turn groups per step (agents granted together), mean.
@@ -141,8 +158,24 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
     simulate_along(&scenario, &path)
         .map_err(|e| anyhow::anyhow!("the reference simulation: {e}"))?;
     let simulate_s = started.elapsed().as_secs_f64();
-    let outcome =
-        run_scenario(&scenario, &path, &bench_run_options(bin)).map_err(|failure| failure.error)?;
+    let (mut wake_floor_s, mut wake_floor_unanswered) = (0.0, 0);
+    let outcome = run_scenario_with(&scenario, &path, &bench_run_options(bin), &mut |ctx| {
+        let started = Instant::now();
+        for group in ctx.groups {
+            let members: Vec<(usize, u32)> = group
+                .iter()
+                .filter(|&&a| ctx.alive[a])
+                .filter_map(|&a| Some((a, ctx.pids.get(a).copied().flatten()?)))
+                .collect();
+            let answered = ctx
+                .ipc
+                .echo_group(&members, Instant::now() + super::ECHO_DEADLINE)?;
+            wake_floor_unanswered += members.len() - answered;
+        }
+        wake_floor_s += started.elapsed().as_secs_f64();
+        Ok(())
+    })
+    .map_err(|failure| failure.error)?;
     if outcome.interrupted {
         anyhow::bail!("interrupted");
     }
@@ -164,6 +197,10 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
         simulate_s,
         loop_s,
         loop_vs_simulate: super::ratio(loop_s, simulate_s),
+        wake_floor_s,
+        wake_floor_vs_simulate: super::ratio(wake_floor_s, simulate_s),
+        loop_vs_wake_floor: super::ratio(loop_s, wake_floor_s),
+        wake_floor_unanswered,
         steps_per_s: timing.steps_per_s,
         mean_groups_per_step: summary.mean_groups_per_step,
         groups: timing.groups.clone(),
@@ -231,6 +268,7 @@ pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
                 curve("spawn floor (N agent --help)", GREY, &|p| p.spawn_floor_s),
                 curve("step loop", VERMILLION, &|p| p.loop_s),
                 curve("simulate(), one process", GREEN, &|p| p.simulate_s),
+                curve("wake-up floor (empty turns)", ORANGE, &|p| p.wake_floor_s),
             ],
         },
         ScaleChart {
@@ -240,6 +278,9 @@ pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
                 curve("start-up / spawn floor", BLUE, &|p| p.startup_vs_floor),
                 curve("step loop / simulate()", VERMILLION, &|p| {
                     p.loop_vs_simulate
+                }),
+                curve("wake-up floor / simulate()", ORANGE, &|p| {
+                    p.wake_floor_vs_simulate
                 }),
             ],
         },
@@ -256,7 +297,7 @@ pub fn table(r: &ScaleReport) -> String {
     );
     let _ = writeln!(
         t,
-        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
+        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>7} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
         "agents",
         "steps",
         "start s",
@@ -270,6 +311,8 @@ pub fn table(r: &ScaleReport) -> String {
         "simul s",
         "ratio",
         "steps/s",
+        "wake s",
+        "/simul",
         "turn p50",
         "groups",
         "size max",
@@ -281,7 +324,7 @@ pub fn table(r: &ScaleReport) -> String {
         let ph = &p.startup_phases_s;
         let _ = writeln!(
             t,
-            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
+            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.3} {:>6.1}x | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
             p.agents,
             p.steps,
             p.startup_s,
@@ -295,6 +338,8 @@ pub fn table(r: &ScaleReport) -> String {
             p.simulate_s,
             p.loop_vs_simulate,
             p.steps_per_s,
+            p.wake_floor_s,
+            p.wake_floor_vs_simulate,
             p.turn_us.p50,
             p.mean_groups_per_step,
             p.groups.size.max,

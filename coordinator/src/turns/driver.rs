@@ -38,6 +38,8 @@ pub struct BetweenSteps<'a> {
     pub(crate) ipc: &'a CoordinatorIpc,
     /// Which agents are alive.
     pub alive: &'a [bool],
+    /// The step's groups of turns (agents granted together), in the order taken.
+    pub groups: &'a [Vec<usize>],
     /// Each agent's process id, if it has a process.
     pub pids: &'a [Option<u32>],
 }
@@ -243,6 +245,10 @@ impl Driver<'_, '_> {
         bar.set_position(step as u64);
 
         let stepping = Instant::now();
+        // What the caller does between the steps (a benchmark's references) is not the
+        // step loop's time.
+        let mut between_s = 0.0;
+        let mut between_ticks = (0, 0);
         let ticks_at_start = procfs::machine_cpu_ticks();
         'steps: while let Some(centre) =
             course.advance(step + 1, self.recorder.bodies(), self.recorder.alive())
@@ -301,13 +307,20 @@ impl Driver<'_, '_> {
                 tell_step_done(step);
             }
             let pids = self.pids();
+            let (between, ticks_before) = (Instant::now(), procfs::machine_cpu_ticks());
             (self.between_steps)(BetweenSteps {
                 step,
                 prefix: self.ipc.prefix(),
                 ipc: self.ipc,
                 alive: self.recorder.alive(),
+                groups: &groups,
                 pids: &pids,
             })?;
+            between_s += between.elapsed().as_secs_f64();
+            if let Some((from, to)) = ticks_before.zip(procfs::machine_cpu_ticks()) {
+                between_ticks.0 += to.0.saturating_sub(from.0);
+                between_ticks.1 += to.1.saturating_sub(from.1);
+            }
             if self.ipc.termination_requested() {
                 self.progress.interrupted = true;
                 break;
@@ -316,8 +329,9 @@ impl Driver<'_, '_> {
         bar.finish_and_clear();
         self.recorder.note_course(&course);
         self.progress.gave_up = course.gave_up();
-        self.progress.steps_s = stepping.elapsed().as_secs_f64();
+        self.progress.steps_s = stepping.elapsed().as_secs_f64() - between_s;
         self.progress.loop_idle_share = ticks_at_start
+            .map(|(idle, total)| (idle + between_ticks.0, total + between_ticks.1))
             .zip(procfs::machine_cpu_ticks())
             .and_then(|(from, to)| procfs::idle_share(from, to));
         let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
