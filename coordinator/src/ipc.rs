@@ -466,9 +466,8 @@ impl CoordinatorIpc {
                     let held_ns = wire::monotonic_ns();
                     return TurnSplit::of(rung_ns, msg, held_ns);
                 }
-                if incoming.publisher_pid.is_none() {
-                    return None;
-                }
+                // A sample that could not be received at all ends the wait.
+                incoming.publisher_pid?;
             }
             if !self.wait_done(agent, deadline) {
                 return None;
