@@ -431,6 +431,8 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
             ("loop_vs_simulate", "loop_s", "simulate_s"),
             ("wake_floor_vs_simulate", "wake_floor_s", "simulate_s"),
             ("loop_vs_wake_floor", "loop_s", "wake_floor_s"),
+            ("futex_floor_vs_simulate", "futex_floor_s", "simulate_s"),
+            ("wake_floor_vs_futex_floor", "wake_floor_s", "futex_floor_s"),
         ] {
             let (a, b) = (number(p, a), number(p, b));
             assert!(a > 0.0 && b > 0.0, "{p}");

@@ -28,6 +28,7 @@
 //! Speed is reported, never asserted.
 
 pub mod floor;
+pub mod futex_floor;
 pub mod log_cost;
 pub mod loops;
 pub mod plot;

@@ -41,6 +41,8 @@ pub const GREEN: RGBColor = RGBColor(0, 158, 115);
 pub const VERMILLION: RGBColor = RGBColor(213, 94, 0);
 /// Okabe-Ito orange.
 pub const ORANGE: RGBColor = RGBColor(230, 159, 0);
+/// Okabe-Ito sky blue.
+pub const SKY: RGBColor = RGBColor(86, 180, 233);
 
 const BINS: usize = 60;
 const PANEL_W: u32 = 960;

@@ -13,7 +13,10 @@
 //!    wake-up floor: the same agents rung the same way, group by group as the step
 //!    took them, each answering an empty turn (no world, no planning, no move, no
 //!    judging). What waking N processes once a step costs on this machine, whatever
-//!    they compute.
+//!    they compute;
+//! 5. after the run, the operating system's own floor ([`super::futex_floor`]): N forked
+//!    processes woken the same way, group sizes and all, each on a futex word of its
+//!    own, with no channel at all.
 //!
 //! Reported per N, with the two ratios the runtime is judged by (start-up against the
 //! spawn floor, step loop against `simulate()`), the wake-up floor against both, and
@@ -27,7 +30,7 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::simulate::simulate_along;
 
-use super::plot::{BLUE, Curve, GREEN, GREY, ORANGE, ScaleChart, VERMILLION};
+use super::plot::{BLUE, Curve, GREEN, GREY, ORANGE, SKY, ScaleChart, VERMILLION};
 use super::run_options::bench_run_options;
 use super::scenario::{Kind, generate_kind};
 use crate::error::CliError;
@@ -81,6 +84,15 @@ pub struct ScalePoint {
     pub loop_vs_wake_floor: f64,
     /// Empty turns of the wake-up floor not answered within the deadline (0 normally).
     pub wake_floor_unanswered: usize,
+    /// The operating system's wake-up floor: N forked processes woken in the same group
+    /// sizes, step by step, each on a futex word of its own and answering on a shared
+    /// counter (no iceoryx2, no sample, no socket), seconds.
+    pub futex_floor_s: f64,
+    /// `futex_floor_s / simulate_s`.
+    pub futex_floor_vs_simulate: f64,
+    /// `wake_floor_s / futex_floor_s`: what iceoryx2's events and an empty sample each
+    /// way cost over a bare futex wake-up.
+    pub wake_floor_vs_futex_floor: f64,
     /// Steps per second of the step loop.
     pub steps_per_s: f64,
     /// Turn groups per step (agents granted together), mean.
@@ -159,7 +171,14 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
         .map_err(|e| anyhow::anyhow!("the reference simulation: {e}"))?;
     let simulate_s = started.elapsed().as_secs_f64();
     let (mut wake_floor_s, mut wake_floor_unanswered) = (0.0, 0);
+    let mut group_sizes = Vec::with_capacity(steps);
     let outcome = run_scenario_with(&scenario, &path, &bench_run_options(bin), &mut |ctx| {
+        group_sizes.push(
+            ctx.groups
+                .iter()
+                .map(|g| g.iter().filter(|&&a| ctx.alive[a]).count())
+                .collect::<Vec<_>>(),
+        );
         let started = Instant::now();
         for group in ctx.groups {
             let members: Vec<(usize, u32)> = group
@@ -179,6 +198,7 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
     if outcome.interrupted {
         anyhow::bail!("interrupted");
     }
+    let futex_floor_s = super::futex_floor::futex_floor(agents, &group_sizes)?;
     let summary = outcome.run.summary();
     let timing = &outcome.timing;
     let steps_run = outcome.run.steps.len().saturating_sub(1) as f64;
@@ -201,6 +221,9 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
         wake_floor_vs_simulate: super::ratio(wake_floor_s, simulate_s),
         loop_vs_wake_floor: super::ratio(loop_s, wake_floor_s),
         wake_floor_unanswered,
+        futex_floor_s,
+        futex_floor_vs_simulate: super::ratio(futex_floor_s, simulate_s),
+        wake_floor_vs_futex_floor: super::ratio(wake_floor_s, futex_floor_s),
         steps_per_s: timing.steps_per_s,
         mean_groups_per_step: summary.mean_groups_per_step,
         groups: timing.groups.clone(),
@@ -269,6 +292,7 @@ pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
                 curve("step loop", VERMILLION, &|p| p.loop_s),
                 curve("simulate(), one process", GREEN, &|p| p.simulate_s),
                 curve("wake-up floor (empty turns)", ORANGE, &|p| p.wake_floor_s),
+                curve("futex floor (no channel)", SKY, &|p| p.futex_floor_s),
             ],
         },
         ScaleChart {
@@ -281,6 +305,9 @@ pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
                 }),
                 curve("wake-up floor / simulate()", ORANGE, &|p| {
                     p.wake_floor_vs_simulate
+                }),
+                curve("futex floor / simulate()", SKY, &|p| {
+                    p.futex_floor_vs_simulate
                 }),
             ],
         },
@@ -297,7 +324,7 @@ pub fn table(r: &ScaleReport) -> String {
     );
     let _ = writeln!(
         t,
-        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>7} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
+        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>7} {:>9} {:>7} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
         "agents",
         "steps",
         "start s",
@@ -313,6 +340,8 @@ pub fn table(r: &ScaleReport) -> String {
         "steps/s",
         "wake s",
         "/simul",
+        "futex s",
+        "/simul",
         "turn p50",
         "groups",
         "size max",
@@ -324,7 +353,7 @@ pub fn table(r: &ScaleReport) -> String {
         let ph = &p.startup_phases_s;
         let _ = writeln!(
             t,
-            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.3} {:>6.1}x | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
+            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.3} {:>6.1}x {:>9.3} {:>6.1}x | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
             p.agents,
             p.steps,
             p.startup_s,
@@ -340,6 +369,8 @@ pub fn table(r: &ScaleReport) -> String {
             p.steps_per_s,
             p.wake_floor_s,
             p.wake_floor_vs_simulate,
+            p.futex_floor_s,
+            p.futex_floor_vs_simulate,
             p.turn_us.p50,
             p.mean_groups_per_step,
             p.groups.size.max,
