@@ -441,6 +441,17 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
                 "{ratio}: {p}"
             );
         }
+        // The same run rung by iceoryx2 events: as safe, its ratio the quotient it names.
+        let events = &p["event_rings"];
+        assert_eq!(events["collisions"], 0, "{p}");
+        assert_eq!(events["faults"], 0, "{p}");
+        let (event_loop, loop_s) = (number(events, "loop_s"), number(p, "loop_s"));
+        assert!(event_loop > 0.0 && number(events, "wake_floor_s") > 0.0, "{p}");
+        assert!(
+            (number(events, "loop_vs_doorbells") - event_loop / loop_s).abs()
+                <= 1e-9 * (event_loop / loop_s),
+            "{p}"
+        );
         // Every agent answered every empty turn of the wake-up floor.
         assert_eq!(p["wake_floor_unanswered"], 0, "{p}");
         // Parallel turns: fewer groups than agents once there is more than one.

@@ -56,28 +56,33 @@ fn a_killed_agent_is_frozen_as_an_obstacle_and_the_run_completes_safely() {
     assert_nothing_left(pid);
 }
 
+/// Rung by doorbells (the default) or by iceoryx2 events, a replacement process takes
+/// the killed one's slot and its rings.
 #[test]
 fn a_respawned_agent_takes_its_slot_again() {
-    let dir = tempfile::tempdir().expect("tempdir");
-    let out = dir.path().join("out");
-    let (output, pid) = run_to_end(&["--kill-agent", "1@30", "--respawn"], &out);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let s = summary(&out);
-    assert_safe(&s);
-    assert_eq!(faults_of(&s, "dead").len(), 1);
-    assert_eq!(faults_of(&s, "respawned").len(), 1);
-    let rows = agent_rows(&out, 1);
-    let last = rows.last().expect("rows");
-    assert!(last.3, "the replacement is alive at the end");
-    assert!(
-        s["final_mean_deviation_m"].as_f64().expect("final") < 0.05,
-        "{s:#}"
-    );
-    assert_nothing_left(pid);
+    for wake in ["doorbell", "event"] {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let out = dir.path().join("out");
+        let (output, pid) =
+            run_to_end(&["--kill-agent", "1@30", "--respawn", "--wake", wake], &out);
+        assert!(
+            output.status.success(),
+            "{wake}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let s = summary(&out);
+        assert_safe(&s);
+        assert_eq!(faults_of(&s, "dead").len(), 1, "{wake}");
+        assert_eq!(faults_of(&s, "respawned").len(), 1, "{wake}");
+        let rows = agent_rows(&out, 1);
+        let last = rows.last().expect("rows");
+        assert!(last.3, "{wake}: the replacement is alive at the end");
+        assert!(
+            s["final_mean_deviation_m"].as_f64().expect("final") < 0.05,
+            "{wake}: {s:#}"
+        );
+        assert_nothing_left(pid);
+    }
 }
 
 #[test]

@@ -4,7 +4,7 @@
 
 mod support;
 
-use coordinator::turns::{RunOptions, WaitMode, run_scenario};
+use coordinator::turns::{RunOptions, WaitMode, WakeMode, run_scenario};
 use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
@@ -63,24 +63,31 @@ fn run_and_compare(scenario: &Scenario) -> Run {
     run
 }
 
-/// Sleeping and spinning hand the turns over differently, never decide differently: in
-/// sequential and parallel turns, both equal the reference to the bit.
+/// Sleeping and spinning hand the turns over differently, rung by doorbells or by
+/// iceoryx2 events, and never decide differently: in sequential and parallel turns, all
+/// four equal the reference to the bit.
 #[test]
-fn both_wait_modes_match_the_reference_to_the_bit() {
+fn every_wait_and_wake_mode_matches_the_reference_to_the_bit() {
     let parallel = Scenario::load(&support::repo_root().join("tests/data/swarm16-parallel.toml"))
         .expect("swarm16-parallel.toml");
     for scenario in [Scenario::paper(), parallel] {
         let path = plan_centre_path(&scenario).expect("centre path");
         let reference = simulate_along(&scenario, &path).expect("reference simulation");
         for wait in [WaitMode::Block, WaitMode::Spin] {
-            let outcome =
-                run_scenario(&scenario, &path, &options_waiting(wait)).expect("multi-process run");
-            assert_eq!(
-                outcome.run.steps, reference.steps,
-                "{} {wait:?}",
-                scenario.name
-            );
-            assert!(support::leftovers(&outcome.prefix).is_empty());
+            for wake in [WakeMode::Doorbell, WakeMode::Event] {
+                let options = RunOptions {
+                    wake,
+                    ..options_waiting(wait)
+                };
+                let outcome = run_scenario(&scenario, &path, &options).expect("multi-process run");
+                assert_eq!(
+                    outcome.run.steps, reference.steps,
+                    "{} {wait:?} {wake:?}",
+                    scenario.name
+                );
+                assert!(outcome.run.faults.is_empty(), "{:?}", outcome.run.faults);
+                assert!(support::leftovers(&outcome.prefix).is_empty());
+            }
         }
     }
 }

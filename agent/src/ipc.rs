@@ -67,6 +67,20 @@ pub struct IpcPorts {
     node: Node<ipc::Service>,
     world_sub: Subscriber<ipc::Service, World, ()>,
     state_pub: Publisher<ipc::Service, AgentState, ()>,
+    rings: Rings,
+}
+
+/// How this agent and its coordinator ring each other: by the run's doorbells if the run
+/// has them ([`wire::Doorbells`]), else by iceoryx2 events.
+enum Rings {
+    /// This agent's doorbell, and the coordinator's answer counter.
+    Doorbells(wire::Doorbells),
+    /// The turn service's listener, and a notifier on the run's done service.
+    Events(Box<EventPorts>),
+}
+
+/// The ports of [`Rings::Events`].
+struct EventPorts {
     turn_listener: Listener<ipc::Service>,
     done_notifier: Notifier<ipc::Service>,
 }
@@ -74,17 +88,33 @@ pub struct IpcPorts {
 impl Channel for IpcPorts {
     fn wait(&mut self, timeout: Duration) -> (Events, Result<(), ListenerWaitError>) {
         let mut events = Events::default();
-        let woke = self.turn_listener.timed_wait(
-            |event| match event.id.as_value() {
-                EVENT_TURN => events.turn = true,
-                EVENT_ECHO => events.echo = true,
-                EVENT_QUIT => events.quit = true,
-                EVENT_PREPARE => events.prepare = true,
-                _ => {}
+        let mut heard = |event: usize| match event {
+            EVENT_TURN => events.turn = true,
+            EVENT_ECHO => events.echo = true,
+            EVENT_QUIT => events.quit = true,
+            EVENT_PREPARE => events.prepare = true,
+            _ => {}
+        };
+        let woke = match &self.rings {
+            Rings::Doorbells(doorbells) => match doorbells.wait(self.agent, timeout) {
+                Ok((rung, woken)) => {
+                    (0..u32::BITS as usize)
+                        .filter(|e| rung & (1 << e) != 0)
+                        .for_each(&mut heard);
+                    match woken {
+                        wire::Woken::Look => Ok(()),
+                        wire::Woken::Interrupted => Err(ListenerWaitError::InterruptSignal),
+                    }
+                }
+                // Not for an agent the file was opened for (its word was checked then).
+                Err(_) => Err(ListenerWaitError::InternalFailure),
             },
-            timeout,
-        );
-        (events, woke.map(|_| ()))
+            Rings::Events(ports) => ports
+                .turn_listener
+                .timed_wait(|event| heard(event.id.as_value()), timeout)
+                .map(|_| ()),
+        };
+        (events, woke)
     }
 
     fn read_world(&mut self) -> anyhow::Result<Option<TurnInput>> {
@@ -153,7 +183,12 @@ impl Channel for IpcPorts {
         fill(state)?;
         state.sent_ns = wire::monotonic_ns();
         sample.send().context("sending the state")?;
-        self.done_notifier.notify().context("notifying done")?;
+        match &self.rings {
+            Rings::Doorbells(doorbells) => doorbells.answer(),
+            Rings::Events(ports) => {
+                ports.done_notifier.notify().context("notifying done")?;
+            }
+        }
         Ok(())
     }
 
@@ -240,18 +275,37 @@ impl IpcTransport {
             .publish_subscribe::<AgentState>()
             .open()
             .with_context(|| format!("opening {}", names.state))?;
-        let turn = node
-            .service_builder(&name(&names.turn)?)
-            .event()
-            .open()
-            .with_context(|| format!("opening {}", names.turn))?;
-        let done = node
-            .service_builder(&name(wire::DONE_SERVICE)?)
-            .event()
-            .open()
-            .with_context(|| format!("opening {}", wire::DONE_SERVICE))?;
-
+        // A run rung by doorbells has their file; one rung by events has none, and the
+        // agent then opens the event services.
+        let rings = match wire::Doorbells::open(prefix, agent) {
+            Ok(doorbells) => Rings::Doorbells(doorbells),
+            Err(wire::DoorbellError::Io { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound =>
+            {
+                let turn = node
+                    .service_builder(&name(&names.turn)?)
+                    .event()
+                    .open()
+                    .with_context(|| format!("opening {}", names.turn))?;
+                let done = node
+                    .service_builder(&name(wire::DONE_SERVICE)?)
+                    .event()
+                    .open()
+                    .with_context(|| format!("opening {}", wire::DONE_SERVICE))?;
+                Rings::Events(Box::new(EventPorts {
+                    turn_listener: turn.listener_builder().create().context("turn listener")?,
+                    // The run's one done service, rung with this agent's index.
+                    done_notifier: done
+                        .notifier_builder()
+                        .default_event_id(EventId::new(agent))
+                        .create()
+                        .context("done notifier")?,
+                }))
+            }
+            Err(e) => return Err(e).context("the run's doorbells"),
+        };
         let channel = IpcPorts {
+            rings,
             agent,
             world_sub: world
                 .subscriber_builder()
@@ -265,13 +319,6 @@ impl IpcTransport {
                 .backpressure_strategy(BackpressureStrategy::DiscardData)
                 .create()
                 .context("state publisher")?,
-            turn_listener: turn.listener_builder().create().context("turn listener")?,
-            // The run's one done service, rung with this agent's index.
-            done_notifier: done
-                .notifier_builder()
-                .default_event_id(EventId::new(agent))
-                .create()
-                .context("done notifier")?,
             node,
         };
         let transport = Self {

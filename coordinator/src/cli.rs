@@ -7,7 +7,7 @@ use shared::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 use wire::cgroup::Limits;
 use wire::misbehave::Misbehave;
 
-use crate::turns::{SandboxOptions, WaitMode};
+use crate::turns::{SandboxOptions, WaitMode, WakeMode};
 
 /// Decentralized formation control with collision avoidance: each agent its own process,
 /// talking over iceoryx2 shared memory.
@@ -128,6 +128,11 @@ pub struct RunArgs {
     /// cores or more, block on one).
     #[arg(long, value_enum, default_value_t = WaitMode::Auto)]
     pub wait: WaitMode,
+    /// How the coordinator and the agents wake each other: `doorbell` (a futex word per
+    /// agent and an answer counter in the run's private folder: a ring is a store and at
+    /// most one system call) or `event` (iceoryx2 events: a datagram socket per listener).
+    #[arg(long, value_enum, default_value_t = WakeMode::Doorbell)]
+    pub wake: WakeMode,
     /// How agents reach the coordinator: `--transport` and the Zenoh options.
     #[command(flatten)]
     pub network: NetworkArgs,

@@ -26,6 +26,8 @@ use wire::{
     MalformedState, Role, StateKind, StateMsg, World,
 };
 
+use crate::turns::WakeMode;
+
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
 /// [`wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,7 +107,8 @@ struct Channel {
     turn_service: EventFactory<ipc::Service>,
     world_pub: Publisher<ipc::Service, World, ()>,
     state_sub: Subscriber<ipc::Service, AgentState, ()>,
-    turn_notifier: Notifier<ipc::Service>,
+    /// Rung by iceoryx2 events only ([`WakeMode::Event`]).
+    turn_notifier: Option<Notifier<ipc::Service>>,
 }
 
 /// Nodes a channel's service admits: the coordinator, the agent, and one more, so that
@@ -138,7 +141,46 @@ pub struct CoordinatorIpc {
     /// The run's done service ([`wire::DONE_SERVICE`]): every agent's notifier, rung with
     /// its index, and this listener.
     done_service: EventFactory<ipc::Service>,
-    done_listener: Listener<ipc::Service>,
+    /// How the rings go, both ways.
+    rings: Rings,
+}
+
+/// How the coordinator and the agents ring each other ([`WakeMode`]).
+enum Rings {
+    /// The run's doorbells.
+    Doorbells(wire::Doorbells),
+    /// iceoryx2 events: each channel's turn notifier, and the done service's listener.
+    Events(Box<Listener<ipc::Service>>),
+}
+
+/// [`CoordinatorIpc::wait_done`] on iceoryx2 events: until `agent` rings the run's done
+/// service or `until` passes.
+fn wait_done_event(done_listener: &Listener<ipc::Service>, agent: usize, until: Instant) -> bool {
+    let now = Instant::now();
+    if now >= until {
+        return false;
+    }
+    // Every agent rings the one done service with its own index; a ring for another
+    // agent is taken off and waited past (that agent's state is looked at directly
+    // before anyone waits for it, so nothing is lost).
+    loop {
+        let mut done = false;
+        let now = Instant::now();
+        if now >= until {
+            return false;
+        }
+        match done_listener.timed_wait(|event| done |= event.id.as_value() == agent, until - now) {
+            Ok(_) if done => return true,
+            Ok(0) => return Instant::now() < until,
+            Ok(_) => continue,
+            Err(ListenerWaitError::InterruptSignal) => return false,
+            Err(e) => {
+                tracing::debug!("waiting for agent {agent}: {e:?}");
+                std::thread::sleep(until.saturating_duration_since(Instant::now()));
+                return false;
+            }
+        }
+    }
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
@@ -190,7 +232,12 @@ fn os_seed() -> anyhow::Result<[u8; 32]> {
 }
 
 impl Channel {
-    fn open(node: &Node<ipc::Service>, agent: usize, generation: u32) -> anyhow::Result<Self> {
+    fn open(
+        node: &Node<ipc::Service>,
+        agent: usize,
+        generation: u32,
+        wake: WakeMode,
+    ) -> anyhow::Result<Self> {
         let names = AgentServiceNames::new(agent, generation);
         let world_service = downlink::<World>(node, &names.world)?;
         let state_service = node
@@ -216,11 +263,16 @@ impl Channel {
                 .subscriber_builder()
                 .create()
                 .with_context(|| format!("state subscriber of agent {agent}"))?,
-            turn_notifier: turn_service
-                .notifier_builder()
-                .default_event_id(EventId::new(EVENT_TURN))
-                .create()
-                .with_context(|| format!("turn notifier of agent {agent}"))?,
+            turn_notifier: match wake {
+                WakeMode::Event => Some(
+                    turn_service
+                        .notifier_builder()
+                        .default_event_id(EventId::new(EVENT_TURN))
+                        .create()
+                        .with_context(|| format!("turn notifier of agent {agent}"))?,
+                ),
+                WakeMode::Doorbell => None,
+            },
             world_service,
             state_service,
             turn_service,
@@ -248,7 +300,7 @@ impl Channel {
 impl CoordinatorIpc {
     /// Create the node and a channel for each of `scenario`'s agents in run `prefix`
     /// (the mission file is written beforehand, [`wire::write_mission`]).
-    pub fn create(prefix: &str, scenario: &Scenario) -> anyhow::Result<Self> {
+    pub fn create(prefix: &str, scenario: &Scenario, wake: WakeMode) -> anyhow::Result<Self> {
         let agents = scenario.agents.len();
         let config = wire::ipc_config(prefix, Role::Coordinator)?;
         let node = NodeBuilder::new()
@@ -275,11 +327,19 @@ impl CoordinatorIpc {
             .event_id_max_value(agents.max(1))
             .create()
             .with_context(|| format!("creating {}", wire::DONE_SERVICE))?;
-        let done_listener = done_service
-            .listener_builder()
-            .create()
-            .context("the done listener")?;
+        let rings = match wake {
+            WakeMode::Doorbell => Rings::Doorbells(
+                wire::Doorbells::create(prefix, agents).context("the run's doorbells")?,
+            ),
+            WakeMode::Event => Rings::Events(Box::new(
+                done_service
+                    .listener_builder()
+                    .create()
+                    .context("the done listener")?,
+            )),
+        };
         let mut ipc = Self {
+            rings,
             prefix: prefix.to_string(),
             config,
             node,
@@ -288,7 +348,6 @@ impl CoordinatorIpc {
             tokens: ChaCha20Rng::from_seed(os_seed()?),
             seq: 0,
             done_service,
-            done_listener,
         };
         for agent in 0..agents {
             ipc.open_channel(agent)?;
@@ -306,7 +365,11 @@ impl CoordinatorIpc {
         let generation = *slot;
         *slot += 1;
         self.channels[agent] = None;
-        let channel = Channel::open(&self.node, agent, generation)?;
+        let wake = match self.rings {
+            Rings::Doorbells(_) => WakeMode::Doorbell,
+            Rings::Events(_) => WakeMode::Event,
+        };
+        let channel = Channel::open(&self.node, agent, generation, wake)?;
         self.channels[agent] = Some(channel);
         Ok(generation)
     }
@@ -383,28 +446,39 @@ impl CoordinatorIpc {
 
     /// Ring `agent`'s turn event.
     pub fn notify_turn(&self, agent: usize) -> anyhow::Result<()> {
-        self.channel(agent)?
-            .turn_notifier
-            .notify()
-            .with_context(|| format!("ringing agent {agent}'s turn"))?;
+        self.ring(agent, EVENT_TURN)
+            .with_context(|| format!("ringing agent {agent}'s turn"))
+    }
+
+    /// Ring `event` for `agent`, if its channel is open.
+    fn ring(&self, agent: usize, event: usize) -> anyhow::Result<()> {
+        let channel = self.channel(agent)?;
+        match (&self.rings, &channel.turn_notifier) {
+            (Rings::Doorbells(doorbells), _) => doorbells.ring(agent, event)?,
+            (Rings::Events(_), Some(notifier)) => {
+                notifier.notify_with_custom_event_id(EventId::new(event))?;
+            }
+            (Rings::Events(_), None) => {
+                anyhow::bail!("agent {agent}'s channel has no turn notifier")
+            }
+        }
         Ok(())
     }
 
     /// Tell `agent` its turn comes next, so it spins on its world instead of sleeping
     /// (`--wait spin`).
     pub fn notify_prepare(&self, agent: usize) -> anyhow::Result<()> {
-        self.channel(agent)?
-            .turn_notifier
-            .notify_with_custom_event_id(EventId::new(EVENT_PREPARE))
-            .with_context(|| format!("ringing agent {agent}'s prepare"))?;
-        Ok(())
+        self.ring(agent, EVENT_PREPARE)
+            .with_context(|| format!("ringing agent {agent}'s prepare"))
     }
 
     /// Take every pending ring off the run's done service without waiting: when the
     /// coordinator spins on the states instead of waiting on the rings, they would pile
     /// up in the listener's buffer.
     pub fn drain_done(&self) {
-        let _ = self.done_listener.try_wait(|_| {});
+        if let Rings::Events(done_listener) = &self.rings {
+            let _ = done_listener.try_wait(|_| {});
+        }
     }
 
     /// Ring `agent`'s echo and wait until `deadline` for its empty answer from process
@@ -439,9 +513,7 @@ impl CoordinatorIpc {
     /// Ring `agent`'s echo: the moment it was rung ([`wire::monotonic_ns`]).
     fn ring_echo(&self, agent: usize) -> anyhow::Result<u64> {
         let rung_ns = wire::monotonic_ns();
-        self.channel(agent)?
-            .turn_notifier
-            .notify_with_custom_event_id(EventId::new(EVENT_ECHO))
+        self.ring(agent, EVENT_ECHO)
             .with_context(|| format!("ringing agent {agent}'s echo"))?;
         Ok(rung_ns)
     }
@@ -477,11 +549,8 @@ impl CoordinatorIpc {
 
     /// Ask `agent` to leave cleanly.
     pub fn notify_quit(&self, agent: usize) -> anyhow::Result<()> {
-        self.channel(agent)?
-            .turn_notifier
-            .notify_with_custom_event_id(EventId::new(EVENT_QUIT))
-            .with_context(|| format!("asking agent {agent} to quit"))?;
-        Ok(())
+        self.ring(agent, EVENT_QUIT)
+            .with_context(|| format!("asking agent {agent} to quit"))
     }
 
     /// Take the next state sample from `agent`'s channel, copied out of shared memory and
@@ -509,33 +578,31 @@ impl CoordinatorIpc {
     /// [`Self::termination_requested`]). A wait that fails (a closed channel) sleeps
     /// until `until` instead, so callers poll at their own pace.
     pub fn wait_done(&self, agent: usize, until: Instant) -> bool {
+        match &self.rings {
+            Rings::Doorbells(doorbells) => self.wait_doorbell(doorbells, agent, until),
+            Rings::Events(done_listener) => wait_done_event(done_listener, agent, until),
+        }
+    }
+
+    /// [`Self::wait_done`] on the doorbells: until any answer is counted (the caller
+    /// looks at `agent`'s channel again) or `until` passes.
+    fn wait_doorbell(&self, doorbells: &wire::Doorbells, agent: usize, until: Instant) -> bool {
+        // The counter first: an answer counted after this read ends the sleep at once,
+        // one counted before it is on the channel already.
+        let seen = doorbells.answers();
+        if self
+            .channel(agent)
+            .is_ok_and(|c| c.state_sub.has_samples().unwrap_or(true))
+        {
+            return true;
+        }
         let now = Instant::now();
         if now >= until {
             return false;
         }
-        // Every agent rings the one done service with its own index; a ring for another
-        // agent is taken off and waited past (that agent's state is looked at directly
-        // before anyone waits for it, so nothing is lost).
-        loop {
-            let mut done = false;
-            let now = Instant::now();
-            if now >= until {
-                return false;
-            }
-            match self
-                .done_listener
-                .timed_wait(|event| done |= event.id.as_value() == agent, until - now)
-            {
-                Ok(_) if done => return true,
-                Ok(0) => return Instant::now() < until,
-                Ok(_) => continue,
-                Err(ListenerWaitError::InterruptSignal) => return false,
-                Err(e) => {
-                    tracing::debug!("waiting for agent {agent}: {e:?}");
-                    std::thread::sleep(until.saturating_duration_since(Instant::now()));
-                    return false;
-                }
-            }
+        match doorbells.wait_answer(seen, until - now) {
+            wire::Woken::Interrupted => false,
+            wire::Woken::Look => Instant::now() < until,
         }
     }
 

@@ -78,6 +78,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         misbehave: record.misbehave,
         progress: !args.quiet,
         wait: args.wait,
+        wake: args.wake,
         network,
         sandbox,
         log: Some(crate::run_log::LogOptions {

@@ -43,6 +43,8 @@ pub const VERMILLION: RGBColor = RGBColor(213, 94, 0);
 pub const ORANGE: RGBColor = RGBColor(230, 159, 0);
 /// Okabe-Ito sky blue.
 pub const SKY: RGBColor = RGBColor(86, 180, 233);
+/// Okabe-Ito reddish purple.
+pub const PURPLE: RGBColor = RGBColor(204, 121, 167);
 
 const BINS: usize = 60;
 const PANEL_W: u32 = 960;

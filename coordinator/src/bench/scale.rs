@@ -8,7 +8,8 @@
 //! 2. `simulate()`: the reference simulation of the same scenario, every agent in this
 //!    process, one after the other;
 //! 3. the real run: N agent processes over iceoryx2, its start-up split into phases, its
-//!    step loop, its turns, and each agent's CPU time and memory (PSS) at the end;
+//!    step loop, its turns, and each agent's CPU time and memory (PSS) at the end; then
+//!    the same run rung by iceoryx2 events instead of the doorbells (`--wake event`);
 //! 4. within the run, after each of its steps (and not counted in its step loop), the
 //!    wake-up floor: the same agents rung the same way, group by group as the step
 //!    took them, each answering an empty turn (no world, no planning, no move, no
@@ -30,13 +31,15 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::simulate::simulate_along;
 
-use super::plot::{BLUE, Curve, GREEN, GREY, ORANGE, SKY, ScaleChart, VERMILLION};
+use super::plot::{BLUE, Curve, GREEN, GREY, ORANGE, PURPLE, SKY, ScaleChart, VERMILLION};
 use super::run_options::bench_run_options;
 use super::scenario::{Kind, generate_kind};
 use crate::error::CliError;
 use crate::output::{GroupTiming, StartupPhases};
 use crate::stats::Distribution;
-use crate::turns::run_scenario_with;
+use crate::turns::{RunOptions, RunOutcome, WakeMode, run_scenario_with};
+use shared::geometry::Pose;
+use shared::scenario::Scenario;
 
 /// Steps of the swarm's straight path when `--scale-steps` is not given (the length of
 /// `scenarios/swarm1000.toml`'s path).
@@ -90,9 +93,12 @@ pub struct ScalePoint {
     pub futex_floor_s: f64,
     /// `futex_floor_s / simulate_s`.
     pub futex_floor_vs_simulate: f64,
-    /// `wake_floor_s / futex_floor_s`: what iceoryx2's events and an empty sample each
-    /// way cost over a bare futex wake-up.
+    /// `wake_floor_s / futex_floor_s`: what the rings and an empty sample each way cost
+    /// over a bare futex wake-up.
     pub wake_floor_vs_futex_floor: f64,
+    /// The same run once more, rung by iceoryx2 events (`--wake event`) instead of the
+    /// doorbells, right after it.
+    pub event_rings: EventRings,
     /// Steps per second of the step loop.
     pub steps_per_s: f64,
     /// Turn groups per step (agents granted together), mean.
@@ -112,6 +118,26 @@ pub struct ScalePoint {
     /// Collisions the run's record holds (0 when safe).
     pub collisions: usize,
     /// Faults of the run (0 when every agent answered every turn).
+    pub faults: usize,
+}
+
+/// The figures of the run rung by iceoryx2 events (the others are of the run rung by
+/// the doorbells, the default).
+#[derive(Clone, Debug, Serialize)]
+pub struct EventRings {
+    /// Its start-up, seconds.
+    pub startup_s: f64,
+    /// Its step loop, seconds.
+    pub loop_s: f64,
+    /// `loop_s / simulate_s`.
+    pub loop_vs_simulate: f64,
+    /// Its wake-up floor (empty turns rung by events), seconds.
+    pub wake_floor_s: f64,
+    /// Its step loop against the doorbells' (`loop_s` of the size).
+    pub loop_vs_doorbells: f64,
+    /// Collisions its record holds.
+    pub collisions: usize,
+    /// Its faults.
     pub faults: usize,
 }
 
@@ -163,16 +189,33 @@ pub fn measure(
     })
 }
 
-fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScalePoint> {
-    let (_, scenario, path) = generate_kind(agents, steps, Kind::Swarm)?;
-    let spawn_floor_s = spawn_floor(bin, agents)?;
-    let started = Instant::now();
-    simulate_along(&scenario, &path)
-        .map_err(|e| anyhow::anyhow!("the reference simulation: {e}"))?;
-    let simulate_s = started.elapsed().as_secs_f64();
+/// One real run of `scenario` along `path` rung by `wake`, with the wake-up floor
+/// measured after each step (outside the step loop's time).
+struct FlooredRun {
+    outcome: RunOutcome,
+    /// The step loop, seconds.
+    loop_s: f64,
+    /// The wake-up floor summed over the steps, seconds.
+    wake_floor_s: f64,
+    /// Empty turns of the floor not answered in time.
+    wake_floor_unanswered: usize,
+    /// The live agents of each group, step by step.
+    group_sizes: Vec<Vec<usize>>,
+}
+
+fn run_with_floor(
+    scenario: &Scenario,
+    path: &[Pose],
+    bin: &Path,
+    wake: WakeMode,
+) -> anyhow::Result<FlooredRun> {
     let (mut wake_floor_s, mut wake_floor_unanswered) = (0.0, 0);
-    let mut group_sizes = Vec::with_capacity(steps);
-    let outcome = run_scenario_with(&scenario, &path, &bench_run_options(bin), &mut |ctx| {
+    let mut group_sizes = Vec::with_capacity(path.len());
+    let options = RunOptions {
+        wake,
+        ..bench_run_options(bin)
+    };
+    let outcome = run_scenario_with(scenario, path, &options, &mut |ctx| {
         group_sizes.push(
             ctx.groups
                 .iter()
@@ -198,15 +241,40 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
     if outcome.interrupted {
         anyhow::bail!("interrupted");
     }
-    let futex_floor_s = super::futex_floor::futex_floor(agents, &group_sizes)?;
-    let summary = outcome.run.summary();
-    let timing = &outcome.timing;
     let steps_run = outcome.run.steps.len().saturating_sub(1) as f64;
-    let loop_s = if timing.steps_per_s > 0.0 {
-        steps_run / timing.steps_per_s
+    let loop_s = if outcome.timing.steps_per_s > 0.0 {
+        steps_run / outcome.timing.steps_per_s
     } else {
         0.0
     };
+    Ok(FlooredRun {
+        outcome,
+        loop_s,
+        wake_floor_s,
+        wake_floor_unanswered,
+        group_sizes,
+    })
+}
+
+fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScalePoint> {
+    let (_, scenario, path) = generate_kind(agents, steps, Kind::Swarm)?;
+    let spawn_floor_s = spawn_floor(bin, agents)?;
+    let started = Instant::now();
+    simulate_along(&scenario, &path)
+        .map_err(|e| anyhow::anyhow!("the reference simulation: {e}"))?;
+    let simulate_s = started.elapsed().as_secs_f64();
+    let run = run_with_floor(&scenario, &path, bin, WakeMode::Doorbell)?;
+    let events = run_with_floor(&scenario, &path, bin, WakeMode::Event)?;
+    let futex_floor_s = super::futex_floor::futex_floor(agents, &run.group_sizes)?;
+    let FlooredRun {
+        outcome,
+        loop_s,
+        wake_floor_s,
+        wake_floor_unanswered,
+        ..
+    } = run;
+    let summary = outcome.run.summary();
+    let timing = &outcome.timing;
     Ok(ScalePoint {
         agents,
         steps,
@@ -220,10 +288,19 @@ fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScaleP
         wake_floor_s,
         wake_floor_vs_simulate: super::ratio(wake_floor_s, simulate_s),
         loop_vs_wake_floor: super::ratio(loop_s, wake_floor_s),
-        wake_floor_unanswered,
+        wake_floor_unanswered: wake_floor_unanswered + events.wake_floor_unanswered,
         futex_floor_s,
         futex_floor_vs_simulate: super::ratio(futex_floor_s, simulate_s),
         wake_floor_vs_futex_floor: super::ratio(wake_floor_s, futex_floor_s),
+        event_rings: EventRings {
+            startup_s: events.outcome.timing.startup_s,
+            loop_s: events.loop_s,
+            loop_vs_simulate: super::ratio(events.loop_s, simulate_s),
+            wake_floor_s: events.wake_floor_s,
+            loop_vs_doorbells: super::ratio(events.loop_s, loop_s),
+            collisions: events.outcome.run.summary().collisions,
+            faults: events.outcome.run.faults.len(),
+        },
         steps_per_s: timing.steps_per_s,
         mean_groups_per_step: summary.mean_groups_per_step,
         groups: timing.groups.clone(),
@@ -290,6 +367,9 @@ pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
                 curve("start-up", BLUE, &|p| p.startup_s),
                 curve("spawn floor (N agent --help)", GREY, &|p| p.spawn_floor_s),
                 curve("step loop", VERMILLION, &|p| p.loop_s),
+                curve("step loop rung by iceoryx2 events", PURPLE, &|p| {
+                    p.event_rings.loop_s
+                }),
                 curve("simulate(), one process", GREEN, &|p| p.simulate_s),
                 curve("wake-up floor (empty turns)", ORANGE, &|p| p.wake_floor_s),
                 curve("futex floor (no channel)", SKY, &|p| p.futex_floor_s),
@@ -324,7 +404,7 @@ pub fn table(r: &ScaleReport) -> String {
     );
     let _ = writeln!(
         t,
-        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>7} {:>9} {:>7} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
+        "{:>6} {:>6} | {:>9} {:>9} {:>7} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>9} {:>7} {:>8} | {:>9} {:>7} {:>9} {:>7} | {:>9} {:>9} | {:>9} {:>8} {:>9} {:>8} {:>9} {:>9}",
         "agents",
         "steps",
         "start s",
@@ -342,6 +422,8 @@ pub fn table(r: &ScaleReport) -> String {
         "/simul",
         "futex s",
         "/simul",
+        "ev loop",
+        "ev wake",
         "turn p50",
         "groups",
         "size max",
@@ -353,7 +435,7 @@ pub fn table(r: &ScaleReport) -> String {
         let ph = &p.startup_phases_s;
         let _ = writeln!(
             t,
-            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.3} {:>6.1}x {:>9.3} {:>6.1}x | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
+            "{:>6} {:>6} | {:>9.3} {:>9.3} {:>6.1}x | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9.3} {:>9.3} {:>6.1}x {:>8.1} | {:>9.3} {:>6.1}x {:>9.3} {:>6.1}x | {:>9.3} {:>9.3} | {:>9.1} {:>8.2} {:>9.0} {:>7.0}% {:>9.1} {:>9.0}",
             p.agents,
             p.steps,
             p.startup_s,
@@ -371,6 +453,8 @@ pub fn table(r: &ScaleReport) -> String {
             p.wake_floor_vs_simulate,
             p.futex_floor_s,
             p.futex_floor_vs_simulate,
+            p.event_rings.loop_s,
+            p.event_rings.wake_floor_s,
             p.turn_us.p50,
             p.mean_groups_per_step,
             p.groups.size.max,

@@ -39,7 +39,7 @@ mod turn;
 
 pub use driver::{BetweenSteps, PROGRESS_TARGET};
 pub use options::{
-    RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode, running_as_root,
+    RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode, WakeMode, running_as_root,
 };
 pub(crate) use outcome::TurnSample;
 pub use outcome::{RunFailure, RunOutcome};

@@ -41,6 +41,20 @@ impl WaitMode {
     }
 }
 
+/// How the coordinator and the agents wake each other (a ring: "your turn", "my state is
+/// published").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum WakeMode {
+    /// The run's doorbells ([`wire::Doorbells`]): a futex word per agent and one answer
+    /// counter, in a file of the run's private folder; a ring is a store and at most one
+    /// system call on each side.
+    #[default]
+    Doorbell,
+    /// iceoryx2 events: each agent's `turn` service, and the run's `done` service rung
+    /// with the agent's index (a datagram socket per listener).
+    Event,
+}
+
 /// How long the coordinator spins on an agent's state before it sleeps (`--wait spin`):
 /// a turn computes in tens of microseconds; a longer one then sleeps on the `done` event like `--wait block`.
 pub const SPIN_BUDGET: Duration = Duration::from_millis(1);
@@ -81,6 +95,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// How turns are handed over: sleeping, spinning, or chosen by the core count.
     pub wait: WaitMode,
+    /// How the coordinator and the agents wake each other.
+    pub wake: WakeMode,
     /// Benchmark hook: after the ready handshake, hold every agent idle this long (no
     /// turn) and measure the CPU time they used meanwhile (the outcome's idle CPU, for `bench`).
     pub idle_probe: Option<Duration>,
@@ -227,6 +243,7 @@ impl Default for RunOptions {
             misbehave: Vec::new(),
             progress: true,
             wait: WaitMode::default(),
+            wake: WakeMode::default(),
             idle_probe: None,
             network: None,
             sandbox: None,

@@ -116,7 +116,7 @@ pub fn run_scenario_with(
             tracing::warn!("the run's control group: {e}");
         }
     };
-    let mut ipc = match CoordinatorIpc::create(&prefix, scenario) {
+    let mut ipc = match CoordinatorIpc::create(&prefix, scenario, options.wake) {
         Ok(ipc) => ipc,
         Err(e) => {
             abort(&mut procs);

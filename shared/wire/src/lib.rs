@@ -23,6 +23,8 @@
 //! - `mission_file`: the mission (the scenario as run) as a file in the run's private
 //!   folder ([`write_mission`], [`read_mission`]);
 //! - `services`: the names of an agent's channel and the events rung on it;
+//! - `doorbell`: the run's rings as futex words in shared memory ([`Doorbells`]), the
+//!   default way to ring those events (iceoryx2's event services the other);
 //! - `config`: the iceoryx2 configuration of a run ([`ipc_config`]);
 //! - `prefix`: the run prefix ([`RunPrefix`]);
 //! - `run_folder`: the run's private folder and files ([`RunRoot`]);
@@ -41,6 +43,7 @@ pub mod cgroup;
 mod clock;
 mod config;
 mod descriptors;
+mod doorbell;
 mod loan;
 pub mod logging;
 mod message;
@@ -58,6 +61,7 @@ pub use bench::{
 pub use clock::monotonic_ns;
 pub use config::{Role, ipc_config};
 pub use descriptors::mark_cloexec_from;
+pub use doorbell::{DOORBELL_FILE_NAME, DoorbellError, Doorbells, Woken};
 pub use loan::loan_default;
 pub use message::{
     AgentState, CapacityError, MAX_COMPUTE_NS, MalformedState, StateKind, StateMsg, WireBody,

@@ -15,6 +15,13 @@
 //! open-file limit is what bounds the number of agents. An agent ringing another's id
 //! only wakes the coordinator early: it then looks at that agent's own state channel,
 //! which holds nothing of the ringer's.
+//!
+//! Those two event services ring a run started with `--wake event`. By default the same
+//! events are rung on the run's doorbells ([`crate::Doorbells`]): the event ids below
+//! are then bits of the agent's doorbell word, and "my state is published" is a count on
+//! the run's answer counter. The `turn` and done services are made either way (an agent
+//! rung by doorbells opens neither), so a process that opens or hoards their ports is
+//! still seen.
 
 /// The names of the three services of one agent's channel (see the crate documentation).
 #[derive(Clone, Debug, PartialEq, Eq)]
