@@ -446,7 +446,10 @@ fn bench_measures_the_runtime_against_the_number_of_agents() {
         assert_eq!(events["collisions"], 0, "{p}");
         assert_eq!(events["faults"], 0, "{p}");
         let (event_loop, loop_s) = (number(events, "loop_s"), number(p, "loop_s"));
-        assert!(event_loop > 0.0 && number(events, "wake_floor_s") > 0.0, "{p}");
+        assert!(
+            event_loop > 0.0 && number(events, "wake_floor_s") > 0.0,
+            "{p}"
+        );
         assert!(
             (number(events, "loop_vs_doorbells") - event_loop / loop_s).abs()
                 <= 1e-9 * (event_loop / loop_s),

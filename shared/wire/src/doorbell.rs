@@ -1,6 +1,7 @@
 //! A run's doorbells: how the coordinator wakes an agent and an agent wakes the
 //! coordinator. One file in the run's private folder ([`crate::run_root`]), mapped shared
-//! by the coordinator and every agent process (or relay) of the run, holds futex words:
+//! by the coordinator and every agent process (or relay) of the run, holds futex words,
+//! each on a cache line of its own:
 //!
 //! - one word per agent: the events rung for it and not yet taken, one bit per event id
 //!   ([`crate::EVENT_TURN`], ...); the coordinator sets a bit and wakes the agent, the
@@ -27,9 +28,13 @@ use crate::run_folder::{RunFilesError, check_run_root, effective_uid, run_root};
 /// The file's name in the run's private folder.
 pub const DOORBELL_FILE_NAME: &str = "doorbells";
 
-/// Words before the agents' words: the answer counter, and whether the coordinator sleeps
-/// on it.
-const HEADER_WORDS: usize = 2;
+/// Bytes of a cache line: every agent's word has a line of its own, so that ringing one
+/// agent or its taking the ring does not pull the line from under its neighbours.
+const LINE_BYTES: usize = 64;
+/// Words in a line.
+const LINE_WORDS: usize = LINE_BYTES / std::mem::size_of::<AtomicU32>();
+/// The first line holds the answer counter and whether the coordinator sleeps on it;
+/// agent `i`'s word is the first of line `i + 1`.
 const ANSWERS: usize = 0;
 const SLEEPING: usize = 1;
 
@@ -123,7 +128,7 @@ impl Doorbells {
             .custom_flags(libc::O_NOFOLLOW)
             .open(&path)
             .map_err(io)?;
-        let len = (HEADER_WORDS + agents) * std::mem::size_of::<AtomicU32>();
+        let len = (1 + agents) * LINE_BYTES;
         file.set_len(len as u64).map_err(io)?;
         Self::map(&file, len, agents).map_err(io)
     }
@@ -160,13 +165,13 @@ impl Doorbells {
                 meta.mode() & 0o7777
             )));
         }
-        let word = std::mem::size_of::<AtomicU32>() as u64;
+        let line = LINE_BYTES as u64;
         let len = meta.len();
-        if len % word != 0 || len / word < HEADER_WORDS as u64 + agent as u64 + 1 {
+        if len % line != 0 || len / line < agent as u64 + 2 {
             return Err(untrusted(format!("{len} bytes: no word for agent {agent}")));
         }
         let len = usize::try_from(len).map_err(|_| untrusted(format!("{len} bytes")))?;
-        let agents = len / word as usize - HEADER_WORDS;
+        let agents = len / LINE_BYTES - 1;
         Self::map(&file, len, agents).map_err(io)
     }
 
@@ -196,7 +201,7 @@ impl Doorbells {
     }
 
     fn word(&self, index: usize) -> &AtomicU32 {
-        debug_assert!(index < HEADER_WORDS + self.agents);
+        debug_assert!(index < (1 + self.agents) * LINE_WORDS);
         // SAFETY: `index` is within the mapping (callers check it against `agents`), the
         // mapping is page-aligned and lives as long as `self`, and `AtomicU32` has the
         // layout of `u32`.
@@ -210,7 +215,7 @@ impl Doorbells {
                 agents: self.agents,
             });
         }
-        Ok(self.word(HEADER_WORDS + agent))
+        Ok(self.word((1 + agent) * LINE_WORDS))
     }
 
     /// Ring event `event` (an id below 32) for agent `agent`, and wake it.
