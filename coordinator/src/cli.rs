@@ -408,6 +408,10 @@ pub struct RenderArgs {
 /// Arguments of `bench`.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
+    /// How the measured runs' processes wake each other (`--scale` runs both, side by
+    /// side): `doorbell` or `event`, as `run --wake`.
+    #[arg(long, value_enum, default_value_t = WakeMode::Doorbell)]
+    pub wake: WakeMode,
     /// Formation sizes to measure (repeatable or comma-separated; default 6,200, or none
     /// with --turns-scenario or --loop-scenario).
     #[arg(long, value_name = "N", value_delimiter = ',')]

@@ -11,7 +11,7 @@ use crate::bench::run_options::bench_run_options;
 use crate::error::CliError;
 use crate::run_log::{LogOptions, SyncPolicy};
 use crate::stats::median;
-use crate::turns::{RunOptions, run_scenario};
+use crate::turns::{RunOptions, WakeMode, run_scenario};
 use crate::validate::{Loaded, load_and_plan};
 
 /// The comparison (`log_cost` in the report).
@@ -63,10 +63,11 @@ pub fn measure(
     loaded: &Loaded,
     rounds: usize,
     bin: &Path,
+    wake: WakeMode,
     log_path: &Path,
     verbose: bool,
 ) -> Result<LogCostReport, CliError> {
-    let base = bench_run_options(bin);
+    let base = bench_run_options(bin, wake);
     let logged = RunOptions {
         log: Some(LogOptions {
             path: log_path.to_path_buf(),

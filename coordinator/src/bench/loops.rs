@@ -13,7 +13,7 @@ use shared::simulate::simulate_along;
 use crate::bench::run_options::bench_run_options;
 use crate::error::CliError;
 use crate::stats::{Distribution, median};
-use crate::turns::{RunOptions, RunOutcome, TurnSample, WaitMode, run_scenario};
+use crate::turns::{RunOptions, RunOutcome, TurnSample, WaitMode, WakeMode, run_scenario};
 use crate::validate::{Loaded, load_and_plan};
 
 /// Round trips of each floor per round, after [`FLOOR_WARMUP`] unrecorded ones.
@@ -100,11 +100,12 @@ pub fn prepare(file: &Path, rounds: usize) -> Result<Loaded, CliError> {
 }
 
 /// Run the comparison on `loaded` ([`prepare`]), `rounds` rounds, with the agent
-/// executable `bin`.
+/// executable `bin`, rung as `wake` has it.
 pub fn measure(
     loaded: Loaded,
     rounds: usize,
     bin: &Path,
+    wake: WakeMode,
     verbose: bool,
 ) -> Result<LoopsReport, CliError> {
     let Loaded {
@@ -115,7 +116,7 @@ pub fn measure(
     } = loaded;
     let options = |wait| RunOptions {
         wait,
-        ..bench_run_options(bin)
+        ..bench_run_options(bin, wake)
     };
     let mut simulate_s = Vec::with_capacity(rounds);
     let (mut block, mut spin) = (Vec::new(), Vec::new());

@@ -214,7 +214,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
                 b.rounds
             );
         }
-        report.turns = Some(turns::measure(b, prepared, &bin)?);
+        report.turns = Some(turns::measure(b, prepared, &bin, args.wake)?);
     }
     if let (Some(file), Some(loaded)) = (&args.loop_scenario, loop_prepared) {
         if !args.json {
@@ -224,7 +224,13 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
                 args.loop_rounds
             );
         }
-        report.loops = Some(loops::measure(loaded, args.loop_rounds, &bin, !args.json)?);
+        report.loops = Some(loops::measure(
+            loaded,
+            args.loop_rounds,
+            &bin,
+            args.wake,
+            !args.json,
+        )?);
     }
     if let Some(loaded) = &log_prepared {
         if !args.json {
@@ -237,6 +243,7 @@ pub fn execute(args: &BenchArgs) -> Result<(), CliError> {
             loaded,
             args.log_rounds,
             &bin,
+            args.wake,
             &out.with_extension("mcap"),
             !args.json,
         )?);
@@ -380,7 +387,7 @@ fn bench_one(
     let reply_bytes = MOVE_HEADER_BYTES + BYTES_PER_WAYPOINT * REPLY_WAYPOINTS;
     let options = RunOptions {
         idle_probe: Some(Duration::from_millis(args.idle_ms)),
-        ..bench_run_options(bin)
+        ..bench_run_options(bin, args.wake)
     };
     let mut session = floor::PingPongSession::start().context("starting the ping-pong")?;
     let floor_prefix = session.prefix().to_string();

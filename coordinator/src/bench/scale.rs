@@ -37,7 +37,7 @@ use super::scenario::{Kind, generate_kind};
 use crate::error::CliError;
 use crate::output::{GroupTiming, StartupPhases};
 use crate::stats::Distribution;
-use crate::turns::{RunOptions, RunOutcome, WakeMode, run_scenario_with};
+use crate::turns::{RunOutcome, WakeMode, run_scenario_with};
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 
@@ -211,10 +211,7 @@ fn run_with_floor(
 ) -> anyhow::Result<FlooredRun> {
     let (mut wake_floor_s, mut wake_floor_unanswered) = (0.0, 0);
     let mut group_sizes = Vec::with_capacity(path.len());
-    let options = RunOptions {
-        wake,
-        ..bench_run_options(bin)
-    };
+    let options = bench_run_options(bin, wake);
     let outcome = run_scenario_with(scenario, path, &options, &mut |ctx| {
         group_sizes.push(
             ctx.groups

@@ -16,7 +16,7 @@ use crate::bench::run_options::bench_run_options;
 use crate::compare::with_turn_mode;
 use crate::error::CliError;
 use crate::stats::{Distribution, median};
-use crate::turns::{NetworkOptions, RunOptions, RunOutcome, run_scenario};
+use crate::turns::{NetworkOptions, RunOptions, RunOutcome, WakeMode, run_scenario};
 use crate::validate::load_and_plan;
 
 /// The comparison (`turns` in the report).
@@ -189,11 +189,12 @@ pub fn prepare(b: &TurnsBench<'_>) -> Result<Prepared, CliError> {
 }
 
 /// Run the comparison `b`, prepared as `prepared` ([`prepare`]), with the agent
-/// executable `bin`.
+/// executable `bin`, rung as `wake` has it.
 pub fn measure(
     b: &TurnsBench<'_>,
     prepared: Prepared,
     bin: &Path,
+    wake: WakeMode,
 ) -> Result<TurnsReport, CliError> {
     let Prepared {
         sequential: seq,
@@ -202,7 +203,7 @@ pub fn measure(
         source,
         own,
     } = prepared;
-    let options = bench_run_options(bin);
+    let options = bench_run_options(bin, wake);
     // A second host for the veth runs, made once (needs root).
     let host = if b.links.contains(&Link::ZenohVeth) {
         Some(crate::netns::NetnsHost::new().map_err(CliError::Other)?)
