@@ -373,7 +373,7 @@ pub fn charts(r: &ScaleReport) -> Vec<ScaleChart> {
             ],
         },
         ScaleChart {
-            title: "the ratios: start-up / spawn floor, step loop / simulate()".into(),
+            title: "the ratios: start-up / spawn floor, step loop and floors / simulate()".into(),
             y_desc: "ratio (log scale)".into(),
             curves: vec![
                 curve("start-up / spawn floor", BLUE, &|p| p.startup_vs_floor),
