@@ -64,6 +64,8 @@ pub trait Channel {
 /// The agent's iceoryx2 ports: its own channel ([`AgentServiceNames`]).
 pub struct IpcPorts {
     agent: usize,
+    /// This process's id, stamped on every state (read once: a system call each time).
+    pid: u32,
     node: Node<ipc::Service>,
     world_sub: Subscriber<ipc::Service, World, ()>,
     state_pub: Publisher<ipc::Service, AgentState, ()>,
@@ -179,7 +181,7 @@ impl Channel for IpcPorts {
         let mut sample = wire::loan_default(&self.state_pub).context("loaning a state sample")?;
         let state = sample.payload_mut();
         state.agent = self.agent as u32;
-        state.pid = std::process::id();
+        state.pid = self.pid;
         fill(state)?;
         state.sent_ns = wire::monotonic_ns();
         sample.send().context("sending the state")?;
@@ -307,6 +309,7 @@ impl IpcTransport {
         let channel = IpcPorts {
             rings,
             agent,
+            pid: std::process::id(),
             world_sub: world
                 .subscriber_builder()
                 .create()
