@@ -103,9 +103,13 @@ impl Channel for IpcPorts {
                     (0..u32::BITS as usize)
                         .filter(|e| rung & (1 << e) != 0)
                         .for_each(&mut heard);
+                    // Rings taken are acted on even if a signal ended the wait (the signal
+                    // is noted by its handler and looked at before the next wait).
                     match woken {
-                        wire::Woken::Look => Ok(()),
-                        wire::Woken::Interrupted => Err(ListenerWaitError::InterruptSignal),
+                        wire::Woken::Interrupted if rung == 0 => {
+                            Err(ListenerWaitError::InterruptSignal)
+                        }
+                        _ => Ok(()),
                     }
                 }
                 // Not for an agent the file was opened for (its word was checked then).
@@ -277,13 +281,12 @@ impl IpcTransport {
             .publish_subscribe::<AgentState>()
             .open()
             .with_context(|| format!("opening {}", names.state))?;
-        // A run rung by doorbells has their file; one rung by events has none, and the
-        // agent then opens the event services.
-        let rings = match wire::Doorbells::open(prefix, agent) {
-            Ok(doorbells) => Rings::Doorbells(doorbells),
-            Err(wire::DoorbellError::Io { source, .. })
-                if source.kind() == std::io::ErrorKind::NotFound =>
-            {
+        // The run's doorbells say how the run rings; rung by events, the agent opens the
+        // event services.
+        let doorbells = wire::Doorbells::open(prefix, agent).context("the run's doorbells")?;
+        let rings = match doorbells.wake_by() {
+            Some(wire::WakeBy::Doorbells) => Rings::Doorbells(doorbells),
+            Some(wire::WakeBy::Events) => {
                 let turn = node
                     .service_builder(&name(&names.turn)?)
                     .event()
@@ -304,7 +307,7 @@ impl IpcTransport {
                         .context("done notifier")?,
                 }))
             }
-            Err(e) => return Err(e).context("the run's doorbells"),
+            None => bail!("the run's doorbells say neither how to ring nor how to be rung"),
         };
         let channel = IpcPorts {
             rings,

@@ -138,19 +138,17 @@ pub struct CoordinatorIpc {
     /// Draws the turns' tokens; seeded from the OS random source.
     tokens: ChaCha20Rng,
     seq: u64,
-    /// The run's done service ([`wire::DONE_SERVICE`]): every agent's notifier, rung with
-    /// its index, and this listener.
+    /// The run's done service ([`wire::DONE_SERVICE`]): rung by every agent with its
+    /// index when the run rings by iceoryx2 events; made either way, so that a process
+    /// hoarding its ports is seen.
     done_service: EventFactory<ipc::Service>,
-    /// How the rings go, both ways.
-    rings: Rings,
-}
-
-/// How the coordinator and the agents ring each other ([`WakeMode`]).
-enum Rings {
-    /// The run's doorbells.
-    Doorbells(wire::Doorbells),
-    /// iceoryx2 events: each channel's turn notifier, and the done service's listener.
-    Events(Box<Listener<ipc::Service>>),
+    /// How the run's processes ring each other.
+    wake: WakeMode,
+    /// The run's doorbells: how the run rings, written there for the agents, and the
+    /// rings themselves with [`WakeMode::Doorbell`].
+    doorbells: wire::Doorbells,
+    /// With [`WakeMode::Event`]: the done service's listener.
+    done_listener: Option<Box<Listener<ipc::Service>>>,
 }
 
 /// [`CoordinatorIpc::wait_done`] on iceoryx2 events: until `agent` rings the run's done
@@ -327,11 +325,15 @@ impl CoordinatorIpc {
             .event_id_max_value(agents.max(1))
             .create()
             .with_context(|| format!("creating {}", wire::DONE_SERVICE))?;
-        let rings = match wake {
-            WakeMode::Doorbell => Rings::Doorbells(
-                wire::Doorbells::create(prefix, agents).context("the run's doorbells")?,
-            ),
-            WakeMode::Event => Rings::Events(Box::new(
+        let wake_by = match wake {
+            WakeMode::Doorbell => wire::WakeBy::Doorbells,
+            WakeMode::Event => wire::WakeBy::Events,
+        };
+        let doorbells =
+            wire::Doorbells::create(prefix, agents, wake_by).context("the run's doorbells")?;
+        let done_listener = match wake {
+            WakeMode::Doorbell => None,
+            WakeMode::Event => Some(Box::new(
                 done_service
                     .listener_builder()
                     .create()
@@ -339,7 +341,9 @@ impl CoordinatorIpc {
             )),
         };
         let mut ipc = Self {
-            rings,
+            wake,
+            doorbells,
+            done_listener,
             prefix: prefix.to_string(),
             config,
             node,
@@ -365,11 +369,9 @@ impl CoordinatorIpc {
         let generation = *slot;
         *slot += 1;
         self.channels[agent] = None;
-        let wake = match self.rings {
-            Rings::Doorbells(_) => WakeMode::Doorbell,
-            Rings::Events(_) => WakeMode::Event,
-        };
-        let channel = Channel::open(&self.node, agent, generation, wake)?;
+        // A ring the old process left untaken is not the new one's.
+        self.doorbells.clear(agent)?;
+        let channel = Channel::open(&self.node, agent, generation, self.wake)?;
         self.channels[agent] = Some(channel);
         Ok(generation)
     }
@@ -453,12 +455,13 @@ impl CoordinatorIpc {
     /// Ring `event` for `agent`, if its channel is open.
     fn ring(&self, agent: usize, event: usize) -> anyhow::Result<()> {
         let channel = self.channel(agent)?;
-        match (&self.rings, &channel.turn_notifier) {
-            (Rings::Doorbells(doorbells), _) => doorbells.ring(agent, event)?,
-            (Rings::Events(_), Some(notifier)) => {
+        match (self.wake, &channel.turn_notifier) {
+            (WakeMode::Doorbell, _) => self.doorbells.ring(agent, event)?,
+            (WakeMode::Event, Some(notifier)) => {
                 notifier.notify_with_custom_event_id(EventId::new(event))?;
             }
-            (Rings::Events(_), None) => {
+            // A channel of a run rung by events is made with its notifier.
+            (WakeMode::Event, None) => {
                 anyhow::bail!("agent {agent}'s channel has no turn notifier")
             }
         }
@@ -476,7 +479,7 @@ impl CoordinatorIpc {
     /// coordinator spins on the states instead of waiting on the rings, they would pile
     /// up in the listener's buffer.
     pub fn drain_done(&self) {
-        if let Rings::Events(done_listener) = &self.rings {
+        if let Some(done_listener) = &self.done_listener {
             let _ = done_listener.try_wait(|_| {});
         }
     }
@@ -573,20 +576,22 @@ impl CoordinatorIpc {
         }
     }
 
-    /// Block (no polling) until `agent` signals a published state or `until` passes;
-    /// false at the deadline or when a signal interrupted the wait (look at
-    /// [`Self::termination_requested`]). A wait that fails (a closed channel) sleeps
-    /// until `until` instead, so callers poll at their own pace.
+    /// Block (no polling) until `agent` signals a published state (rung by events) or any
+    /// agent counts an answer (rung by doorbells: the caller looks at `agent`'s channel
+    /// again), or `until` passes; false at the deadline or when a signal interrupted the
+    /// wait (look at [`Self::termination_requested`]). A wait that fails (a closed
+    /// channel) sleeps until `until` instead, so callers poll at their own pace.
     pub fn wait_done(&self, agent: usize, until: Instant) -> bool {
-        match &self.rings {
-            Rings::Doorbells(doorbells) => self.wait_doorbell(doorbells, agent, until),
-            Rings::Events(done_listener) => wait_done_event(done_listener, agent, until),
+        match &self.done_listener {
+            Some(done_listener) => wait_done_event(done_listener, agent, until),
+            None => self.wait_doorbell(agent, until),
         }
     }
 
     /// [`Self::wait_done`] on the doorbells: until any answer is counted (the caller
     /// looks at `agent`'s channel again) or `until` passes.
-    fn wait_doorbell(&self, doorbells: &wire::Doorbells, agent: usize, until: Instant) -> bool {
+    fn wait_doorbell(&self, agent: usize, until: Instant) -> bool {
+        let doorbells = &self.doorbells;
         // The counter first: an answer counted after this read ends the sleep at once,
         // one counted before it is on the channel already.
         let seen = doorbells.answers();

@@ -4,7 +4,8 @@
 //! and can be spread over the run:
 //!
 //! - iceoryx2 floor: a small sample published, the ping event rung, then the same wait a
-//!   turn uses (take what arrived, else block in `Listener::timed_wait`) until the pong
+//!   turn rung by iceoryx2 events uses (`--wake event`: take what arrived, else block in
+//!   `Listener::timed_wait`) until the pong
 //!   sample is in. The clock runs from just before the notify to the pong received, the
 //!   same span as a turn's latency (a turn's world is published before its clock starts
 //!   too).

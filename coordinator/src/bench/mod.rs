@@ -1,5 +1,5 @@
 //! `coordinator bench`: the end-to-end latency of a turn over real agent processes,
-//! against the floor of the mechanism it uses and against a Unix socket, in one run.
+//! against the floor of iceoryx2's events and against a Unix socket, in one run.
 //!
 //! For every formation size N:
 //! 1. a generated scenario ([`scenario`]) runs through the real [`run_scenario`]; every
@@ -13,7 +13,9 @@
 //!    turn costs by itself, so the turn's overhead can be read against both.
 //! 3. one process of the bench's own ping-pong program ([`floor::PEER_BIN`], beside the
 //!    coordinator) answers an iceoryx2 event + publish-subscribe
-//!    ping-pong (the floor: the same wake-up as a turn) and a Unix socket ping-pong with
+//!    ping-pong (the floor: the wake-up of a turn rung by iceoryx2 events, `--wake
+//!    event`; the runs are rung as `--wake` says, by default by the doorbells, whose turns
+//!    can come in under it) and a Unix socket ping-pong with
 //!    turn-sized payloads ([`floor`]), in short alternating blocks spread between the
 //!    steps of that same run, so the floor sees the same (shared, noisy) machine as the
 //!    turns.

@@ -9,7 +9,8 @@
 //!    process, one after the other;
 //! 3. the real run: N agent processes over iceoryx2, its start-up split into phases, its
 //!    step loop, its turns, and each agent's CPU time and memory (PSS) at the end; then
-//!    the same run rung by iceoryx2 events instead of the doorbells (`--wake event`);
+//!    the same run rung by iceoryx2 events instead of the doorbells (`--wake event`),
+//!    after it at the first, third, ... size and before it at the others;
 //! 4. within the run, after each of its steps (and not counted in its step loop), the
 //!    wake-up floor: the same agents rung the same way, group by group as the step
 //!    took them, each answering an empty turn (no world, no planning, no move, no
@@ -85,7 +86,8 @@ pub struct ScalePoint {
     pub wake_floor_vs_simulate: f64,
     /// `loop_s / wake_floor_s`: the step loop against its wake-up floor.
     pub loop_vs_wake_floor: f64,
-    /// Empty turns of the wake-up floor not answered within the deadline (0 normally).
+    /// Empty turns of the wake-up floors (of both runs, doorbells and events) not
+    /// answered within the deadline (0 normally).
     pub wake_floor_unanswered: usize,
     /// The operating system's wake-up floor: N forked processes woken in the same group
     /// sizes, step by step, each on a futex word of its own and answering on a shared
@@ -97,7 +99,7 @@ pub struct ScalePoint {
     /// over a bare futex wake-up.
     pub wake_floor_vs_futex_floor: f64,
     /// The same run once more, rung by iceoryx2 events (`--wake event`) instead of the
-    /// doorbells, right after it.
+    /// doorbells, right after it (right before it at every other size).
     pub event_rings: EventRings,
     /// Steps per second of the step loop.
     pub steps_per_s: f64,
@@ -170,11 +172,12 @@ pub fn measure(
     verbose: bool,
 ) -> anyhow::Result<ScaleReport> {
     let mut points = Vec::with_capacity(sizes.len());
-    for &n in sizes {
+    for (k, &n) in sizes.iter().enumerate() {
         if verbose {
             eprintln!("bench: scale, {n} agents, {steps} steps: spawn floor, simulate(), run ...");
         }
-        let point = measure_one(n, steps, bin)?;
+        // Which wake mode runs first alternates from size to size.
+        let point = measure_one(n, steps, bin, k % 2 == 1)?;
         if verbose {
             eprintln!(
                 "bench: scale, {n} agents: start-up {:.2} s ({:.1}x the floor), step loop {:.3} s ({:.1}x simulate())",
@@ -253,15 +256,30 @@ fn run_with_floor(
     })
 }
 
-fn measure_one(agents: usize, steps: usize, bin: &Path) -> anyhow::Result<ScalePoint> {
+/// Measure `agents` agents over `steps` steps; the run rung by events before the one
+/// rung by doorbells if `events_first`.
+fn measure_one(
+    agents: usize,
+    steps: usize,
+    bin: &Path,
+    events_first: bool,
+) -> anyhow::Result<ScalePoint> {
     let (_, scenario, path) = generate_kind(agents, steps, Kind::Swarm)?;
     let spawn_floor_s = spawn_floor(bin, agents)?;
     let started = Instant::now();
     simulate_along(&scenario, &path)
         .map_err(|e| anyhow::anyhow!("the reference simulation: {e}"))?;
     let simulate_s = started.elapsed().as_secs_f64();
-    let run = run_with_floor(&scenario, &path, bin, WakeMode::Doorbell)?;
-    let events = run_with_floor(&scenario, &path, bin, WakeMode::Event)?;
+    let (run, events) = if events_first {
+        let events = run_with_floor(&scenario, &path, bin, WakeMode::Event)?;
+        (
+            run_with_floor(&scenario, &path, bin, WakeMode::Doorbell)?,
+            events,
+        )
+    } else {
+        let run = run_with_floor(&scenario, &path, bin, WakeMode::Doorbell)?;
+        (run, run_with_floor(&scenario, &path, bin, WakeMode::Event)?)
+    };
     let futex_floor_s = super::futex_floor::futex_floor(agents, &run.group_sizes)?;
     let FlooredRun {
         outcome,

@@ -44,6 +44,9 @@ pub struct BetweenSteps<'a> {
     pub pids: &'a [Option<u32>],
 }
 
+/// What a caller does after every step ([`super::run_scenario_with`]).
+pub type BetweenStepsFn<'a> = dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()> + 'a;
+
 /// One run while it goes: the scenario and options, the ports and processes, the record
 /// and what the step loop has measured.
 pub(super) struct Driver<'a, 's> {
@@ -73,7 +76,8 @@ pub(super) struct Driver<'a, 's> {
     /// The agents already started, behind their gate (none over a network).
     pub(super) early: Option<EarlyStart>,
     /// Called after every step.
-    pub(super) between_steps: &'a mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
+    /// What the caller does after every step (benchmarks), if anything.
+    pub(super) between_steps: Option<&'a mut BetweenStepsFn<'a>>,
 }
 
 /// The agents started before the run's channels existed, waiting behind a gate
@@ -306,20 +310,24 @@ impl Driver<'_, '_> {
             if self.log.is_none() {
                 tell_step_done(step);
             }
-            let pids = self.pids();
-            let (between, ticks_before) = (Instant::now(), procfs::machine_cpu_ticks());
-            (self.between_steps)(BetweenSteps {
-                step,
-                prefix: self.ipc.prefix(),
-                ipc: self.ipc,
-                alive: self.recorder.alive(),
-                groups: &groups,
-                pids: &pids,
-            })?;
-            between_s += between.elapsed().as_secs_f64();
-            if let Some((from, to)) = ticks_before.zip(procfs::machine_cpu_ticks()) {
-                between_ticks.0 += to.0.saturating_sub(from.0);
-                between_ticks.1 += to.1.saturating_sub(from.1);
+            let pids = self.between_steps.is_some().then(|| self.pids());
+            if let (Some(between_steps), Some(pids)) = (self.between_steps.as_mut(), pids) {
+                let ticks_before = procfs::machine_cpu_ticks();
+                let between = Instant::now();
+                between_steps(BetweenSteps {
+                    step,
+                    prefix: self.ipc.prefix(),
+                    ipc: self.ipc,
+                    alive: self.recorder.alive(),
+                    groups: &groups,
+                    pids: &pids,
+                })?;
+                let ticks_after = procfs::machine_cpu_ticks();
+                between_s += between.elapsed().as_secs_f64();
+                if let Some((from, to)) = ticks_before.zip(ticks_after) {
+                    between_ticks.0 += to.0.saturating_sub(from.0);
+                    between_ticks.1 += to.1.saturating_sub(from.1);
+                }
             }
             if self.ipc.termination_requested() {
                 self.progress.interrupted = true;

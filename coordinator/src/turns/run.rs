@@ -10,7 +10,7 @@ use shared::record::Recorder;
 use shared::scenario::Scenario;
 use wire::{RunPrefix, RunRoot};
 
-use super::driver::{BetweenSteps, Driver, EarlyStart, agent_args, tell_step_done};
+use super::driver::{BetweenSteps, BetweenStepsFn, Driver, EarlyStart, agent_args, tell_step_done};
 use super::hand_over::HandOver;
 use super::lateness::TurnHistory;
 use super::options::RunOptions;
@@ -25,7 +25,7 @@ pub fn run_scenario(
     centre_path: &[Pose],
     options: &RunOptions,
 ) -> Result<RunOutcome, RunFailure> {
-    run_scenario_with(scenario, centre_path, options, &mut |_| Ok(()))
+    run_scenario_between(scenario, centre_path, options, None)
 }
 
 /// [`run_scenario`] calling `between_steps` after every step (benchmarks measure their
@@ -35,6 +35,16 @@ pub fn run_scenario_with(
     centre_path: &[Pose],
     options: &RunOptions,
     between_steps: &mut dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()>,
+) -> Result<RunOutcome, RunFailure> {
+    run_scenario_between(scenario, centre_path, options, Some(between_steps))
+}
+
+/// [`run_scenario`], with `between_steps` called after every step if given.
+fn run_scenario_between(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    options: &RunOptions,
+    between_steps: Option<&mut BetweenStepsFn<'_>>,
 ) -> Result<RunOutcome, RunFailure> {
     let started = Instant::now();
     let n = scenario.agents.len();
@@ -191,7 +201,9 @@ pub fn run_scenario_with(
             turns_logged: 0,
             mission_digest,
             early: early.take(),
-            between_steps,
+            // Reborrowed for the driver's lifetime (a trait object's bound shortens only
+            // through a coercion, which an `Option` does not make by itself).
+            between_steps: between_steps.map(|f| f as &mut BetweenStepsFn<'_>),
         }
         .drive(centre_path, started)
     }));

@@ -8,14 +8,19 @@
 //!   agent takes every bit at once and sleeps on the word while it is zero;
 //! - the run's answer counter: an agent counts one after each state it publishes, and
 //!   wakes the coordinator if it sleeps; the coordinator sleeps while the counter holds
-//!   what it saw, and then looks at the state channel of the agent it waits for.
+//!   what it saw, and then looks at the state channel of the agent it waits for;
+//! - how the run rings ([`WakeBy`]): the coordinator makes the file in either case, and
+//!   an agent reads there whether to wait on its word or on iceoryx2's event services.
 //!
 //! A ring is a store and, at most, one system call on each side: no socket, no buffer.
-//! The words carry no data and no authority: the samples stay on the iceoryx2 channels,
-//! checked as ever. A process that writes a word it should not (any process of the run's
-//! user can) wakes someone for nothing, who finds nothing new and sleeps again, or takes
-//! a ring meant for an agent, who then sleeps until its next look at its world (see the
-//! agent's wait).
+//! The words carry no data: the samples stay on the iceoryx2 channels, checked as ever.
+//! The file is private to the run's user, so a sandboxed agent cannot reach it (its
+//! relay, the coordinator's child, rings for it). A trusted agent, which runs as that
+//! user, can: by writing another agent's word it can wake it for nothing (it finds no
+//! world for it and sleeps again), take its turn's ring (it then misses the turn) or ring
+//! it `quit` (it leaves, and is recorded dead), as it could already signal or kill that
+//! agent; by writing the counter it wakes the coordinator for nothing or delays it by a
+//! liveness slice. Nothing it writes is used but as a reason to look again.
 
 use std::num::NonZeroUsize;
 use std::path::PathBuf;
@@ -23,10 +28,10 @@ use std::ptr::NonNull;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
 
-use crate::run_folder::{RunFilesError, check_run_root, effective_uid, run_root};
+use crate::run_folder::{RunFilesError, check_run_root, private_file_problem, run_root};
 
 /// The file's name in the run's private folder.
-pub const DOORBELL_FILE_NAME: &str = "doorbells";
+const DOORBELL_FILE_NAME: &str = "doorbells";
 
 /// Bytes of a cache line: every agent's word has a line of its own, so that ringing one
 /// agent or its taking the ring does not pull the line from under its neighbours.
@@ -37,6 +42,26 @@ const LINE_WORDS: usize = LINE_BYTES / std::mem::size_of::<AtomicU32>();
 /// agent `i`'s word is the first of line `i + 1`.
 const ANSWERS: usize = 0;
 const SLEEPING: usize = 1;
+const WAKE_BY: usize = 2;
+
+/// How a run's processes ring each other, as the coordinator wrote it in the file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WakeBy {
+    /// By these doorbells.
+    Doorbells,
+    /// By iceoryx2's event services (the `turn` service of each channel, the run's done
+    /// service); the file then holds only this.
+    Events,
+}
+
+impl WakeBy {
+    fn word(self) -> u32 {
+        match self {
+            Self::Doorbells => 1,
+            Self::Events => 2,
+        }
+    }
+}
 
 /// Why the doorbells cannot be made or used.
 #[derive(Debug, thiserror::Error)]
@@ -111,9 +136,10 @@ fn doorbell_path(prefix: &str) -> Result<PathBuf, DoorbellError> {
 }
 
 impl Doorbells {
-    /// Make run `prefix`'s doorbells for `agents` agents (the coordinator, once, after the
-    /// run's private folder exists): a new file, readable and writable by its owner only.
-    pub fn create(prefix: &str, agents: usize) -> Result<Self, DoorbellError> {
+    /// Make run `prefix`'s doorbells for `agents` agents, rung as `wake_by` says (the
+    /// coordinator, once, after the run's private folder exists): a new file, readable
+    /// and writable by its owner only.
+    pub fn create(prefix: &str, agents: usize, wake_by: WakeBy) -> Result<Self, DoorbellError> {
         use std::os::unix::fs::OpenOptionsExt;
         let path = doorbell_path(prefix)?;
         let io = |source| DoorbellError::Io {
@@ -130,13 +156,17 @@ impl Doorbells {
             .map_err(io)?;
         let len = (1 + agents) * LINE_BYTES;
         file.set_len(len as u64).map_err(io)?;
-        Self::map(&file, len, agents).map_err(io)
+        let doorbells = Self::map(&file, len, agents).map_err(io)?;
+        doorbells
+            .word(WAKE_BY)
+            .store(wake_by.word(), Ordering::SeqCst);
+        Ok(doorbells)
     }
 
     /// Open run `prefix`'s doorbells as agent `agent` (or its relay): refused unless the
     /// file is a regular file of this user, private, with a word for `agent`.
     pub fn open(prefix: &str, agent: usize) -> Result<Self, DoorbellError> {
-        use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+        use std::os::unix::fs::OpenOptionsExt;
         let path = doorbell_path(prefix)?;
         let io = |source| DoorbellError::Io {
             path: path.clone(),
@@ -153,17 +183,8 @@ impl Doorbells {
             .open(&path)
             .map_err(io)?;
         let meta = file.metadata().map_err(io)?;
-        if !meta.file_type().is_file() {
-            return Err(untrusted("not a regular file".into()));
-        }
-        if meta.uid() != effective_uid() {
-            return Err(untrusted(format!("owned by user {}", meta.uid())));
-        }
-        if meta.mode() & 0o7777 != 0o600 {
-            return Err(untrusted(format!(
-                "mode {:04o}, not 0600",
-                meta.mode() & 0o7777
-            )));
+        if let Some(why) = private_file_problem(&meta) {
+            return Err(untrusted(why));
         }
         let line = LINE_BYTES as u64;
         let len = meta.len();
@@ -198,6 +219,21 @@ impl Doorbells {
         let words = NonNull::new(base.cast::<AtomicU32>())
             .ok_or_else(|| std::io::Error::other("a null mapping"))?;
         Ok(Self { words, len, agents })
+    }
+
+    /// How the run rings, as the coordinator wrote it; `None` if the word says neither.
+    pub fn wake_by(&self) -> Option<WakeBy> {
+        let word = self.word(WAKE_BY).load(Ordering::SeqCst);
+        [WakeBy::Doorbells, WakeBy::Events]
+            .into_iter()
+            .find(|w| w.word() == word)
+    }
+
+    /// As the coordinator, before agent `agent`'s new process starts: nothing rung for it
+    /// (a ring its predecessor left untaken is not the new process's).
+    pub fn clear(&self, agent: usize) -> Result<(), DoorbellError> {
+        self.agent_word(agent)?.store(0, Ordering::SeqCst);
+        Ok(())
     }
 
     fn word(&self, index: usize) -> &AtomicU32 {
@@ -305,7 +341,7 @@ fn futex_wake(word: &AtomicU32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{EVENT_ECHO, EVENT_QUIT, EVENT_TURN, RunPrefix, RunRoot};
+    use crate::{EVENT_ECHO, EVENT_QUIT, EVENT_TURN, RunPrefix, RunRoot, WakeBy};
 
     /// A run folder of its own, removed with its files when dropped.
     fn run() -> (String, RunRoot) {
@@ -317,7 +353,7 @@ mod tests {
     #[test]
     fn a_ring_is_taken_once_with_every_event_rung_since() {
         let (prefix, _root) = run();
-        let coordinator = Doorbells::create(&prefix, 3).expect("made");
+        let coordinator = Doorbells::create(&prefix, 3, WakeBy::Doorbells).expect("made");
         let agent = Doorbells::open(&prefix, 2).expect("opened");
         coordinator.ring(2, EVENT_TURN).expect("rung");
         coordinator.ring(2, EVENT_ECHO).expect("rung");
@@ -336,12 +372,26 @@ mod tests {
                 agents: 3
             })
         ));
+        // A ring left for a process that is gone is cleared before its replacement runs.
+        coordinator.ring(2, EVENT_QUIT).expect("rung");
+        coordinator.clear(2).expect("cleared");
+        assert_eq!(agent.wait(2, Duration::ZERO).expect("waited").0, 0);
+    }
+
+    #[test]
+    fn an_agent_reads_how_the_run_rings() {
+        for wake_by in [WakeBy::Doorbells, WakeBy::Events] {
+            let (prefix, _root) = run();
+            let _coordinator = Doorbells::create(&prefix, 1, wake_by).expect("made");
+            let agent = Doorbells::open(&prefix, 0).expect("opened");
+            assert_eq!(agent.wake_by(), Some(wake_by));
+        }
     }
 
     #[test]
     fn a_ring_from_another_thread_wakes_the_sleeper() {
         let (prefix, _root) = run();
-        let coordinator = Doorbells::create(&prefix, 1).expect("made");
+        let coordinator = Doorbells::create(&prefix, 1, WakeBy::Doorbells).expect("made");
         let agent = Doorbells::open(&prefix, 0).expect("opened");
         std::thread::scope(|s| {
             let waiter = s.spawn(|| {
@@ -361,7 +411,7 @@ mod tests {
     #[test]
     fn an_answer_counted_ends_the_coordinators_sleep() {
         let (prefix, _root) = run();
-        let coordinator = Doorbells::create(&prefix, 2).expect("made");
+        let coordinator = Doorbells::create(&prefix, 2, WakeBy::Doorbells).expect("made");
         let agent = Doorbells::open(&prefix, 1).expect("opened");
         let seen = coordinator.answers();
         // Counted before the sleep: the sleep ends at once.
@@ -400,14 +450,14 @@ mod tests {
             Doorbells::open(&prefix, 0),
             Err(DoorbellError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound
         ));
-        let made = Doorbells::create(&prefix, 2).expect("made");
+        let made = Doorbells::create(&prefix, 2, WakeBy::Doorbells).expect("made");
         // No word for an agent beyond the run's.
         assert!(matches!(
             Doorbells::open(&prefix, 2),
             Err(DoorbellError::Untrusted { .. })
         ));
         // Made once only.
-        assert!(Doorbells::create(&prefix, 2).is_err());
+        assert!(Doorbells::create(&prefix, 2, WakeBy::Doorbells).is_err());
         let path = doorbell_path(&prefix).expect("the path");
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o644)).expect("chmod");
         assert!(matches!(

@@ -61,7 +61,7 @@ pub use bench::{
 pub use clock::monotonic_ns;
 pub use config::{Role, ipc_config};
 pub use descriptors::mark_cloexec_from;
-pub use doorbell::{DOORBELL_FILE_NAME, DoorbellError, Doorbells, Woken};
+pub use doorbell::{DoorbellError, Doorbells, WakeBy, Woken};
 pub use loan::loan_default;
 pub use message::{
     AgentState, CapacityError, MAX_COMPUTE_NS, MalformedState, StateKind, StateMsg, WireBody,

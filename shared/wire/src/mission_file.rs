@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use shared::scenario::{Checks, Scenario, ScenarioError};
 
 use crate::prefix::{PrefixError, is_valid_prefix};
-use crate::run_folder::{RunFilesError, check_run_root, effective_uid, run_root};
+use crate::run_folder::{RunFilesError, check_run_root, private_file_problem, run_root};
 
 /// The mission file's name in the run folder.
 pub const MISSION_FILE_NAME: &str = "mission.json";
@@ -212,7 +212,7 @@ pub fn read_mission_text(
     prefix: &str,
     expected: Option<MissionDigest>,
 ) -> Result<MissionText, MissionFileError> {
-    use std::os::unix::fs::{MetadataExt, OpenOptionsExt};
+    use std::os::unix::fs::OpenOptionsExt;
     let path = private_mission_path(prefix)?;
     let untrusted = |why: String| MissionFileError::Untrusted {
         path: path.clone(),
@@ -230,17 +230,8 @@ pub fn read_mission_text(
         path: path.clone(),
         source,
     })?;
-    if !meta.file_type().is_file() {
-        return Err(untrusted("not a regular file".into()));
-    }
-    if meta.uid() != effective_uid() {
-        return Err(untrusted(format!("owned by user {}", meta.uid())));
-    }
-    if meta.mode() & 0o7777 != 0o600 {
-        return Err(untrusted(format!(
-            "mode {:04o}, not 0600",
-            meta.mode() & 0o7777
-        )));
+    if let Some(why) = private_file_problem(&meta) {
+        return Err(untrusted(why));
     }
     if meta.len() > MAX_MISSION_BYTES {
         return Err(untrusted(format!(

@@ -81,6 +81,21 @@ pub fn effective_uid() -> u32 {
     unsafe { libc::geteuid() }
 }
 
+/// What is wrong with a file of a run's private folder, by its metadata (read from the
+/// opened file, not from its path): not a regular file, another user's, or readable or
+/// writable by anyone but its owner (a mode other than 0600). `None`: nothing.
+pub fn private_file_problem(meta: &std::fs::Metadata) -> Option<String> {
+    use std::os::unix::fs::MetadataExt;
+    if !meta.file_type().is_file() {
+        return Some("not a regular file".into());
+    }
+    if meta.uid() != effective_uid() {
+        return Some(format!("owned by user {}", meta.uid()));
+    }
+    let mode = meta.mode() & 0o7777;
+    (mode != 0o600).then(|| format!("mode {mode:04o}, not 0600"))
+}
+
 /// Check that `path` is a run folder no other user can reach: a directory, not a symbolic
 /// link (lstat), owned by this process's effective user, mode exactly 0700. Every agent
 /// checks it before it opens anything. Checking the path and then using it is safe here:
