@@ -72,8 +72,8 @@ pub struct IpcPorts {
     rings: Rings,
 }
 
-/// How this agent and its coordinator ring each other: by the run's doorbells if the run
-/// has them ([`wire::Doorbells`]), else by iceoryx2 events.
+/// How this agent and its coordinator ring each other, as the run's doorbells file says
+/// ([`wire::Doorbells`]): by the doorbells, or by iceoryx2 events.
 enum Rings {
     /// This agent's doorbell, and the coordinator's answer counter.
     Doorbells(wire::Doorbells),

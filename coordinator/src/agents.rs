@@ -277,6 +277,15 @@ impl AgentProcesses {
         self.children[agent].as_ref().map(Child::id)
     }
 
+    /// The newest process started for agent `agent` in this run, running or not.
+    pub fn last_pid(&self, agent: usize) -> Option<u32> {
+        self.spawned
+            .iter()
+            .rev()
+            .find(|&&(_, a)| a == agent)
+            .map(|&(pid, _)| pid)
+    }
+
     /// The agent whose process is or was `pid` in this run, if any.
     pub fn agent_of_pid(&self, pid: u32) -> Option<usize> {
         self.spawned

@@ -166,7 +166,9 @@ impl Driver<'_, '_> {
         why: &str,
     ) -> anyhow::Result<()> {
         tracing::warn!("step {step}: agent {agent} failed to start: {why}");
-        let pid = self.procs.pid(agent);
+        // Its process, even if it exited already (and was reaped: an intruder that took
+        // its channel may be why).
+        let pid = self.procs.pid(agent).or_else(|| self.procs.last_pid(agent));
         self.procs.kill_now(agent);
         // Whoever sat on its channel is named before the channel goes.
         if let Some(pid) = pid {
