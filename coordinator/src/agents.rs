@@ -576,4 +576,28 @@ mod tests {
             assert!(child.wait().expect("wait").success());
         }
     }
+
+    /// Once an agent's process has exited and been reaped it has no process any more,
+    /// but the newest one started for it is still known (a failed start looks for
+    /// intruders on its channel with it); another agent's processes are not its.
+    #[test]
+    fn the_newest_process_of_an_agent_is_known_after_it_is_reaped() {
+        let mut procs = AgentProcesses::new("/bin/true".into(), "fc0x0test_", 2);
+        let first = procs.spawn(0, &[]).expect("spawned");
+        let second = loop {
+            if procs.poll(0) == Exit::Exited {
+                assert_eq!(procs.pid(0), None);
+                assert_eq!(procs.last_pid(0), Some(first));
+                break procs.spawn(0, &[]).expect("spawned again");
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        assert_ne!(first, second);
+        assert_eq!(procs.last_pid(0), Some(second));
+        assert_eq!(procs.last_pid(1), None);
+        assert_eq!(procs.agent_of_pid(first), Some(0));
+        while procs.poll(0) != Exit::Exited {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
 }
