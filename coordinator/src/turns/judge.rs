@@ -78,12 +78,14 @@ pub(super) fn judge_move(
 /// moves meet if they come close at the same time, and each move is also checked
 /// against every body that does not move this step (a mate whose answer was refused or
 /// missing stands where it is), again after each refusal
-/// ([`shared::groups::simultaneous_meetings`]).
+/// ([`shared::groups::simultaneous_meetings`]). `judged_passing` are the agents taken as
+/// moving when each move was judged alone ([`judge_move`]).
 pub(super) fn settle_group(
     monitor: &SafetyMonitor,
     recorder: &mut Recorder,
     step: usize,
     moves: Vec<(usize, Move)>,
+    judged_passing: &[bool],
 ) {
     let simultaneous = recorder.scenario().turns == TurnMode::Simultaneous;
     // Moving at once, a move was judged alone against the bodies of the agents not
@@ -91,7 +93,8 @@ pub(super) fn settle_group(
     // each move is judged alone against it now, as the reference judges a move alone
     // against an agent frozen before the turns (a live mate whose move is refused, or
     // who gave none, stands too: the rounds below look at it, as the reference does).
-    let moves = if simultaneous {
+    // If none died, each move was judged alone against these very bodies already.
+    let moves = if simultaneous && recorder.alive() != judged_passing {
         let movers = recorder.alive().to_vec();
         let mut kept = Vec::with_capacity(moves.len());
         for (agent, mv) in moves {

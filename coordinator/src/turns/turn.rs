@@ -43,7 +43,14 @@ impl Driver<'_, '_> {
         let size = turns.len();
         self.hand_over
             .tell_next(self.ipc, self.procs, self.recorder.alive(), group, next);
-        let Some(mut moves) = self.collect_group(monitor, step, turns, centre)? else {
+        // Agents moving at once are checked against each other in time, when the group
+        // is settled: each move alone is checked against the bodies that stand.
+        let passing: Vec<bool> = if self.scenario.turns == TurnMode::Simultaneous {
+            self.recorder.alive().to_vec()
+        } else {
+            Vec::new()
+        };
+        let Some(mut moves) = self.collect_group(monitor, step, turns, centre, &passing)? else {
             self.progress.interrupted = true;
             return Ok(true);
         };
@@ -55,7 +62,7 @@ impl Driver<'_, '_> {
         }
         // A mate frozen after its move was judged does not move.
         moves.retain(|(agent, _)| self.recorder.alive()[*agent]);
-        settle_group(monitor, self.recorder, step, moves);
+        settle_group(monitor, self.recorder, step, moves, &passing);
         Ok(false)
     }
 
@@ -127,7 +134,8 @@ impl Driver<'_, '_> {
         Ok(turns)
     }
 
-    /// Wait for the answer to each of `turns`, in order, and judge it: the moves that
+    /// Wait for the answer to each of `turns`, in order, and judge it alone, the agents
+    /// `passing` marks taken as moving (simultaneous turns; none otherwise): the moves that
     /// passed the monitor on their own, or `None` if the run was interrupted.
     fn collect_group(
         &mut self,
@@ -135,15 +143,9 @@ impl Driver<'_, '_> {
         step: usize,
         turns: Vec<Turn>,
         centre: &Pose,
+        passing: &[bool],
     ) -> anyhow::Result<Option<Vec<(usize, Move)>>> {
         let mut moves = Vec::with_capacity(turns.len());
-        // Agents moving at once are checked against each other in time, when the group
-        // is settled: each move alone is checked against the bodies that stand.
-        let passing: Vec<bool> = if self.scenario.turns == TurnMode::Simultaneous {
-            self.recorder.alive().to_vec()
-        } else {
-            Vec::new()
-        };
         for turn in turns {
             let agent = turn.agent;
             // Handled already while a group mate's answer was awaited (killed for
@@ -164,7 +166,7 @@ impl Driver<'_, '_> {
                     if self.on_late_answer(step, agent, slot, latency)? {
                         continue;
                     }
-                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg, &passing) {
+                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg, passing) {
                         moves.push((agent, mv));
                     }
                 }

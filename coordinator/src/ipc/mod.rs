@@ -3,11 +3,11 @@
 //! goes to the agents as a file, [`wire::write_mission`]), rings turns, and takes the agents' states in, each checked and tagged with the
 //! process that published it.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::Context;
 use iceoryx2::node::NodeView;
-use iceoryx2::port::listener::{Listener, ListenerWaitError};
+use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -21,12 +21,12 @@ use rand_chacha::ChaCha20Rng;
 use shared::geometry::{Pose, Vector};
 use shared::scenario::Scenario;
 use shared::vocabulary::Body;
-use wire::{
-    AgentServiceNames, AgentState, EVENT_ECHO, EVENT_PREPARE, EVENT_QUIT, EVENT_TURN,
-    MalformedState, Role, StateKind, StateMsg, World,
-};
+use wire::{AgentServiceNames, AgentState, EVENT_TURN, MalformedState, Role, StateMsg, World};
 
 use crate::turns::WakeMode;
+
+mod echo;
+mod rings;
 
 /// A turn's latency cut at the agent's timestamps (the machine's monotonic clock,
 /// [`wire::monotonic_ns`]), microseconds; the three parts add up to the latency.
@@ -149,36 +149,6 @@ pub struct CoordinatorIpc {
     doorbells: wire::Doorbells,
     /// With [`WakeMode::Event`]: the done service's listener.
     done_listener: Option<Box<Listener<ipc::Service>>>,
-}
-
-/// [`CoordinatorIpc::wait_done`] on iceoryx2 events: until `agent` rings the run's done
-/// service or `until` passes.
-fn wait_done_event(done_listener: &Listener<ipc::Service>, agent: usize, until: Instant) -> bool {
-    let now = Instant::now();
-    if now >= until {
-        return false;
-    }
-    // Every agent rings the one done service with its own index; a ring for another
-    // agent is taken off and waited past (that agent's state is looked at directly
-    // before anyone waits for it, so nothing is lost).
-    loop {
-        let mut done = false;
-        let now = Instant::now();
-        if now >= until {
-            return false;
-        }
-        match done_listener.timed_wait(|event| done |= event.id.as_value() == agent, until - now) {
-            Ok(_) if done => return true,
-            Ok(0) => return Instant::now() < until,
-            Ok(_) => continue,
-            Err(ListenerWaitError::InterruptSignal) => return false,
-            Err(e) => {
-                tracing::debug!("waiting for agent {agent}: {e:?}");
-                std::thread::sleep(until.saturating_duration_since(Instant::now()));
-                return false;
-            }
-        }
-    }
 }
 
 fn service_name(s: &str) -> anyhow::Result<ServiceName> {
@@ -446,116 +416,6 @@ impl CoordinatorIpc {
         Ok(grant)
     }
 
-    /// Ring `agent`'s turn event.
-    pub fn notify_turn(&self, agent: usize) -> anyhow::Result<()> {
-        self.ring(agent, EVENT_TURN)
-            .with_context(|| format!("ringing agent {agent}'s turn"))
-    }
-
-    /// Ring `event` for `agent`, if its channel is open.
-    fn ring(&self, agent: usize, event: usize) -> anyhow::Result<()> {
-        let channel = self.channel(agent)?;
-        match (self.wake, &channel.turn_notifier) {
-            (WakeMode::Doorbell, _) => self.doorbells.ring(agent, event)?,
-            (WakeMode::Event, Some(notifier)) => {
-                notifier.notify_with_custom_event_id(EventId::new(event))?;
-            }
-            // A channel of a run rung by events is made with its notifier.
-            (WakeMode::Event, None) => {
-                anyhow::bail!("agent {agent}'s channel has no turn notifier")
-            }
-        }
-        Ok(())
-    }
-
-    /// Tell `agent` its turn comes next, so it spins on its world instead of sleeping
-    /// (`--wait spin`).
-    pub fn notify_prepare(&self, agent: usize) -> anyhow::Result<()> {
-        self.ring(agent, EVENT_PREPARE)
-            .with_context(|| format!("ringing agent {agent}'s prepare"))
-    }
-
-    /// Take every pending ring off the run's done service without waiting: when the
-    /// coordinator spins on the states instead of waiting on the rings, they would pile
-    /// up in the listener's buffer.
-    pub fn drain_done(&self) {
-        if let Some(done_listener) = &self.done_listener {
-            let _ = done_listener.try_wait(|_| {});
-        }
-    }
-
-    /// Ring `agent`'s echo and wait until `deadline` for its empty answer from process
-    /// `pid`: the round trip of a turn without world, planning or move (benchmarks).
-    /// `None` if no answer came in time or the agent did not stamp it.
-    pub fn echo(
-        &self,
-        agent: usize,
-        pid: u32,
-        deadline: Instant,
-    ) -> anyhow::Result<Option<TurnSplit>> {
-        let rung_ns = self.ring_echo(agent)?;
-        Ok(self.await_echo(agent, pid, rung_ns, deadline))
-    }
-
-    /// Ring the echo of every agent of `group` (agent, process) at once, then wait until
-    /// `deadline` for each answer in turn: a group's turns without world, planning or
-    /// move (benchmarks). How many answered in time.
-    pub fn echo_group(&self, group: &[(usize, u32)], deadline: Instant) -> anyhow::Result<usize> {
-        let mut rung = Vec::with_capacity(group.len());
-        for &(agent, pid) in group {
-            rung.push((agent, pid, self.ring_echo(agent)?));
-        }
-        Ok(rung
-            .into_iter()
-            .filter(|&(agent, pid, rung_ns)| {
-                self.await_echo(agent, pid, rung_ns, deadline).is_some()
-            })
-            .count())
-    }
-
-    /// Ring `agent`'s echo: the moment it was rung ([`wire::monotonic_ns`]).
-    fn ring_echo(&self, agent: usize) -> anyhow::Result<u64> {
-        let rung_ns = wire::monotonic_ns();
-        self.ring(agent, EVENT_ECHO)
-            .with_context(|| format!("ringing agent {agent}'s echo"))?;
-        Ok(rung_ns)
-    }
-
-    /// Wait until `deadline` for `agent`'s answer, from process `pid`, to the echo rung
-    /// at `rung_ns`: its split, or `None` if none came in time or it was not stamped.
-    fn await_echo(
-        &self,
-        agent: usize,
-        pid: u32,
-        rung_ns: u64,
-        deadline: Instant,
-    ) -> Option<TurnSplit> {
-        loop {
-            while let Some(incoming) = self.receive(agent) {
-                // An answer sent before the ring is a late one from an earlier echo.
-                if let Ok(msg) = &incoming.msg
-                    && incoming.publisher_pid == Some(pid)
-                    && msg.kind == StateKind::Echo
-                    && msg.sent_ns >= rung_ns
-                {
-                    let held_ns = wire::monotonic_ns();
-                    return TurnSplit::of(rung_ns, msg, held_ns);
-                }
-                // A sample that could not be received at all ends the wait.
-                incoming.publisher_pid?;
-            }
-            if !self.wait_done(agent, deadline) {
-                return None;
-            }
-        }
-    }
-
-    /// Ask `agent` to leave cleanly.
-    pub fn notify_quit(&self, agent: usize) -> anyhow::Result<()> {
-        self.ring(agent, EVENT_QUIT)
-            .with_context(|| format!("asking agent {agent} to quit"))
-    }
-
     /// Take the next state sample from `agent`'s channel, copied out of shared memory and
     /// checked ([`AgentState::read_checked`]); `None` when there is none (or the channel
     /// is closed). A sample that cannot be received at all comes back as
@@ -573,41 +433,6 @@ impl CoordinatorIpc {
                 publisher_pid: None,
                 msg: Err(MalformedState::Unreadable(format!("{e:?}"))),
             }),
-        }
-    }
-
-    /// Block (no polling) until `agent` signals a published state (rung by events) or any
-    /// agent counts an answer (rung by doorbells: the caller looks at `agent`'s channel
-    /// again), or `until` passes; false at the deadline or when a signal interrupted the
-    /// wait (look at [`Self::termination_requested`]). A wait that fails (a closed
-    /// channel) sleeps until `until` instead, so callers poll at their own pace.
-    pub fn wait_done(&self, agent: usize, until: Instant) -> bool {
-        match &self.done_listener {
-            Some(done_listener) => wait_done_event(done_listener, agent, until),
-            None => self.wait_doorbell(agent, until),
-        }
-    }
-
-    /// [`Self::wait_done`] on the doorbells: until any answer is counted (the caller
-    /// looks at `agent`'s channel again) or `until` passes.
-    fn wait_doorbell(&self, agent: usize, until: Instant) -> bool {
-        let doorbells = &self.doorbells;
-        // The counter first: an answer counted after this read ends the sleep at once,
-        // one counted before it is on the channel already.
-        let seen = doorbells.answers();
-        if self
-            .channel(agent)
-            .is_ok_and(|c| c.state_sub.has_samples().unwrap_or(true))
-        {
-            return true;
-        }
-        let now = Instant::now();
-        if now >= until {
-            return false;
-        }
-        match doorbells.wait_answer(seen, until - now) {
-            wire::Woken::Interrupted => false,
-            wire::Woken::Look => Instant::now() < until,
         }
     }
 
