@@ -28,6 +28,11 @@ impl SensedAgents {
         }
     }
 
+    /// The grid over the bodies (a disk each, in agent order).
+    pub fn grid(&self) -> &DiskGrid {
+        &self.grid
+    }
+
     /// The agents agent `agent` (of spec `spec`) senses, itself included, in increasing
     /// order: every agent without a sensing radius. The test is
     /// [`AgentSpec::senses`], the one the controller applies, so the controller finds in this

@@ -9,7 +9,9 @@ use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use parry2d_f64::query;
 use parry2d_f64::shape::{Ball, Polyline, Segment};
 use parry2d_f64::utils::point_in_poly2d;
-use shared::geometry::{Disk, Field, Point, Polygon};
+use std::ops::ControlFlow;
+
+use shared::geometry::{Disk, DiskGrid, Field, Point, Polygon};
 use shared::safety::SAFETY_TOLERANCE_M;
 use shared::vocabulary::Body;
 
@@ -126,6 +128,48 @@ pub enum Refusal {
 /// rounding, far less than any spacing.
 const PREFILTER_SLACK_M: f64 = 1e-3;
 
+/// A published move as the monitor checks it ([`SafetyMonitor::check`]).
+#[derive(Clone, Copy, Debug)]
+pub struct MoveUnderCheck<'a> {
+    /// The moving agent, an index into [`Standing::bodies`].
+    pub agent: usize,
+    /// Where the agent stands.
+    pub from: &'a Point,
+    /// The path it published, starting where it stands.
+    pub waypoints: &'a [Point],
+    /// The best point it published.
+    pub best: &'a Point,
+    /// The agent says it stops short of `best` (top speed): the path need not end there.
+    pub under_way: bool,
+    /// For a car, how far each segment's arc bulges from it ([`check_kinematics`]); each
+    /// segment is checked with the agent's radius grown by it (empty: straight segments).
+    pub chord_errors_m: &'a [f64],
+}
+
+/// The bodies a move is checked against, where they stand.
+#[derive(Clone, Copy, Debug)]
+pub struct Standing<'a> {
+    /// Every agent's body, by index (the mover's own among them).
+    pub bodies: &'a [Body],
+    /// The agents that move at the same time (`simultaneous` turns): not checked here,
+    /// but against the move in time when the group is settled (empty: none).
+    pub passing: &'a [bool],
+    /// A grid over exactly `bodies` (same order, same disks), so a move is checked
+    /// against the bodies near it only; `None`: against each body in turn. Same result.
+    pub grid: Option<&'a DiskGrid>,
+}
+
+impl<'a> Standing<'a> {
+    /// `bodies`, none passing, no grid.
+    pub fn still(bodies: &'a [Body]) -> Self {
+        Self {
+            bodies,
+            passing: &[],
+            grid: None,
+        }
+    }
+}
+
 /// Static obstacles in a parry BVH, the moving ones where they stand, and the field.
 pub struct SafetyMonitor {
     field: Field,
@@ -214,27 +258,33 @@ impl SafetyMonitor {
         struck
     }
 
-    /// Check that agent `agent` (radius `radius_m`, standing at `from`) may follow
-    /// `waypoints` to `best` while every body of `bodies` (all agents, by index) stands
-    /// still, but each body `j` with `passing[j]`: it moves at the same time
-    /// (`simultaneous` turns), and the two moves are checked against each other in time
-    /// when the group is settled (empty: none). `under_way`: the agent says it stops
-    /// short of `best` (top speed), so the move need not end there. `chord_errors_m`:
-    /// for a car, how far each segment's arc bulges from it ([`check_kinematics`]); each
-    /// segment is checked with the agent's radius grown by it (empty: straight segments).
-    #[allow(clippy::too_many_arguments)]
+    /// Check that agent `mv.agent` (standing at `mv.from`) may follow `mv.waypoints` to
+    /// `mv.best` while the bodies of `standing` stand still (all agents, by index; those
+    /// it marks passing move at the same time and are checked against this move in time
+    /// when the group is settled). At most `max_waypoints` waypoints.
     pub fn check(
         &self,
-        agent: usize,
-        from: &Point,
-        waypoints: &[Point],
-        best: &Point,
-        under_way: bool,
-        bodies: &[Body],
-        passing: &[bool],
-        chord_errors_m: &[f64],
+        mv: &MoveUnderCheck<'_>,
+        standing: &Standing<'_>,
         max_waypoints: usize,
     ) -> Result<(), Refusal> {
+        let MoveUnderCheck {
+            agent,
+            from,
+            waypoints,
+            best,
+            under_way,
+            chord_errors_m,
+        } = *mv;
+        let bodies = standing.bodies;
+        // A grid over other bodies than these would miss some: never used then.
+        let grid = standing.grid.filter(|g| g.disks().len() == bodies.len());
+        debug_assert!(standing.grid.is_none_or(|g| {
+            g.disks()
+                .iter()
+                .zip(bodies)
+                .all(|(d, b)| d.centre == b.position && d.radius_m == b.radius_m)
+        }));
         if waypoints.is_empty() || waypoints.len() > max_waypoints {
             return Err(Refusal::Length(waypoints.len()));
         }
@@ -269,6 +319,10 @@ impl SafetyMonitor {
             return Err(Refusal::OutsideField(i));
         }
         let identity = Isometry2::identity();
+        // The bodies near a segment, when a grid indexes them; the margin is far above
+        // any rounding, so the grid finds every body the prefilter below lets through.
+        let mut near: Vec<usize> = Vec::new();
+        let grown = Vector2::new(2.0 * PREFILTER_SLACK_M, 2.0 * PREFILTER_SLACK_M);
         let pairs: Vec<[Point; 2]> = if waypoints.len() == 1 {
             vec![[waypoints[0], waypoints[0]]]
         } else {
@@ -333,10 +387,10 @@ impl SafetyMonitor {
                     }
                 }
             }
-            for (other, body) in bodies.iter().enumerate() {
+            let meets = |other: usize, body: &Body| -> Option<Refusal> {
                 // Moving at the same time: checked against this move in time, later.
-                if passing.get(other).copied().unwrap_or(false) {
-                    continue;
+                if standing.passing.get(other).copied().unwrap_or(false) {
+                    return None;
                 }
                 // A body whose centre lies farther than the radii sum outside the
                 // segment's box cannot meet it: skipped without the parry query (with
@@ -348,13 +402,36 @@ impl SafetyMonitor {
                     || c.y < a.y.min(b.y) - out
                     || c.y > a.y.max(b.y) + out
                 {
-                    continue;
+                    return None;
                 }
-                if other != agent && hits(&body.position, body.radius_m) {
-                    return Err(Refusal::Agent {
-                        segment,
-                        agent: other,
-                    });
+                (other != agent && hits(&body.position, body.radius_m)).then_some(Refusal::Agent {
+                    segment,
+                    agent: other,
+                })
+            };
+            match grid {
+                // Only the bodies the grid finds near the segment, in index order: the
+                // same bodies the prefilter lets through, so the same first refusal.
+                Some(grid) => {
+                    near.clear();
+                    let _ =
+                        grid.visit_box(&(sweep.mins - grown), &(sweep.maxs + grown), |other, _| {
+                            near.push(other);
+                            ControlFlow::<()>::Continue(())
+                        });
+                    near.sort_unstable();
+                    for &other in &near {
+                        if let Some(refusal) = meets(other, &bodies[other]) {
+                            return Err(refusal);
+                        }
+                    }
+                }
+                None => {
+                    for (other, body) in bodies.iter().enumerate() {
+                        if let Some(refusal) = meets(other, body) {
+                            return Err(refusal);
+                        }
+                    }
                 }
             }
         }

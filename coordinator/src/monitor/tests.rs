@@ -86,14 +86,36 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
     let from = Point::new(5.0, 9.5);
     let into = [from, Point::new(5.0, 3.3)];
     assert_eq!(
-        m.check(0, &from, &into, &into[1], false, &lone(from), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &into,
+                best: &into[1],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&lone(from)),
+            8
+        ),
         Ok(())
     );
     // 0.1 m too deep, or through a wall, or standing inside: refused.
     for end in [Point::new(5.0, 3.2), Point::new(8.5, 5.0)] {
         let mv = [from, end];
         assert_eq!(
-            m.check(0, &from, &mv, &end, false, &lone(from), &[], &[], 8),
+            m.check(
+                &MoveUnderCheck {
+                    agent: 0,
+                    from: &from,
+                    waypoints: &mv,
+                    best: &end,
+                    under_way: false,
+                    chord_errors_m: &[]
+                },
+                &Standing::still(&lone(from)),
+                8
+            ),
             Err(Refusal::Polygon {
                 segment: 0,
                 polygon: 0
@@ -104,14 +126,15 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
     let inside = Point::new(3.5, 5.0);
     assert!(matches!(
         m.check(
-            0,
-            &inside,
-            &[inside],
-            &inside,
-            false,
-            &lone(inside),
-            &[],
-            &[],
+            &MoveUnderCheck {
+                agent: 0,
+                from: &inside,
+                waypoints: &[inside],
+                best: &inside,
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&lone(inside)),
             8
         ),
         Err(Refusal::Polygon { .. })
@@ -124,20 +147,32 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     let from = Point::new(1.0, 5.0);
     let clear = [from, Point::new(3.0, 3.0)];
     assert_eq!(
-        m.check(0, &from, &clear, &clear[1], false, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &clear,
+                best: &clear[1],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Ok(())
     );
     let through = [from, Point::new(9.0, 5.0)];
     assert!(matches!(
         m.check(
-            0,
-            &from,
-            &through,
-            &through[1],
-            false,
-            &bodies(),
-            &[],
-            &[],
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &through,
+                best: &through[1],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
             8
         ),
         Err(Refusal::Obstacle { obstacle: 0, .. })
@@ -150,20 +185,32 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     ];
     assert_eq!(
         m.check(
-            0,
-            &from,
-            &around,
-            &around[3],
-            false,
-            &bodies()[..1],
-            &[],
-            &[],
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &around,
+                best: &around[3],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()[..1]),
             8
         ),
         Ok(())
     );
     assert!(matches!(
-        m.check(0, &from, &around, &around[3], false, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &around,
+                best: &around[3],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Err(Refusal::Agent { agent: 1, .. })
     ));
     // A mate that moves at the same time is not in the way here: the two moves are
@@ -171,56 +218,160 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     let passing = vec![false, true];
     assert_eq!(
         m.check(
-            0,
-            &from,
-            &around,
-            &around[3],
-            false,
-            &bodies(),
-            &passing,
-            &[],
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &around,
+                best: &around[3],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing {
+                bodies: &bodies(),
+                passing: &passing,
+                grid: None
+            },
             8
         ),
         Ok(())
     );
     let nan = [from, Point::new(f64::NAN, 0.0)];
     assert!(matches!(
-        m.check(0, &from, &nan, &nan[1], false, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &nan,
+                best: &nan[1],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Err(Refusal::NotFinite(1))
     ));
     let jump = [Point::new(2.0, 2.0)];
     assert!(matches!(
-        m.check(0, &from, &jump, &jump[0], false, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &jump,
+                best: &jump[0],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Err(Refusal::Teleport(_))
     ));
     let out = [from, Point::new(0.2, 5.0)];
     assert!(matches!(
-        m.check(0, &from, &out, &out[1], false, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &out,
+                best: &out[1],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Err(Refusal::OutsideField(1))
     ));
     assert!(matches!(
-        m.check(0, &from, &clear, &from, false, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &clear,
+                best: &from,
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Err(Refusal::WrongEnd)
     ));
     // Under way, a move may stop short of its best point.
     assert_eq!(
-        m.check(0, &from, &clear, &from, true, &bodies(), &[], &[], 8),
+        m.check(
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &clear,
+                best: &from,
+                under_way: true,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()),
+            8
+        ),
         Ok(())
     );
     // Touching is allowed: exactly the radii sum away.
     let touch = [from, Point::new(3.7, 5.0)];
     assert_eq!(
         m.check(
-            0,
-            &from,
-            &touch,
-            &touch[1],
-            false,
-            &bodies()[..1],
-            &[],
-            &[],
+            &MoveUnderCheck {
+                agent: 0,
+                from: &from,
+                waypoints: &touch,
+                best: &touch[1],
+                under_way: false,
+                chord_errors_m: &[]
+            },
+            &Standing::still(&bodies()[..1]),
             8
         ),
         Ok(())
     );
+}
+
+proptest::proptest! {
+    /// With a grid over the bodies the monitor checks a move against the bodies near it
+    /// only: it must refuse exactly what the check against every body refuses, naming the
+    /// same segment and the same agent.
+    #[test]
+    fn a_grid_over_the_bodies_changes_no_verdict(
+        spots in proptest::collection::vec((1.0f64..19.0, 1.0f64..19.0, 0.1f64..0.6), 2..60),
+        path in proptest::collection::vec((1.0f64..19.0, 1.0f64..19.0), 0..4),
+        passing_bits in proptest::collection::vec(proptest::bool::weighted(0.2), 60),
+        mover_pick in 0usize..60,
+    ) {
+        let bodies: Vec<Body> = spots
+            .iter()
+            .map(|&(x, y, r)| Body { position: Point::new(x, y), radius_m: r })
+            .collect();
+        let agent = mover_pick % bodies.len();
+        let from = bodies[agent].position;
+        let waypoints: Vec<Point> = std::iter::once(from)
+            .chain(path.iter().map(|&(x, y)| Point::new(x, y)))
+            .collect();
+        let best = *waypoints.last().expect("one at least");
+        let grid = DiskGrid::new(
+            bodies
+                .iter()
+                .map(|b| Disk { centre: b.position, radius_m: b.radius_m })
+                .collect(),
+        );
+        let passing = &passing_bits[..bodies.len()];
+        let m = SafetyMonitor::new(Field::new(20.0, 20.0), &[]);
+        let mv = MoveUnderCheck {
+            agent,
+            from: &from,
+            waypoints: &waypoints,
+            best: &best,
+            under_way: false,
+            chord_errors_m: &[],
+        };
+        let scan = Standing { bodies: &bodies, passing, grid: None };
+        let indexed = Standing { grid: Some(&grid), ..scan };
+        proptest::prop_assert_eq!(m.check(&mv, &scan, 8), m.check(&mv, &indexed, 8));
+    }
 }

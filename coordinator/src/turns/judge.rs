@@ -1,17 +1,28 @@
 //! Judging a move's safety: each move alone with the monitor (parry), then a group's
 //! moves against each other, then the recorder's own checks (plain geometry).
 
-use shared::geometry::Point;
+use shared::geometry::{DiskGrid, Point};
 use shared::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
 use shared::record::{FaultKind, Recorder};
 use shared::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
 use wire::StateMsg;
 
-use crate::monitor::{self, Refusal, SafetyMonitor};
+use crate::monitor::{self, MoveUnderCheck, Refusal, SafetyMonitor, Standing};
+
+/// What the moves of one group are judged against, besides the bodies where they stand.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Judging<'a> {
+    /// The agents taken as moving at the same time (`simultaneous` turns: the group's
+    /// agents; empty otherwise).
+    pub(super) passing: &'a [bool],
+    /// A grid over the bodies where they stand, built when the group's turns were
+    /// granted (no body moves before the group is settled); `None`: none was built.
+    pub(super) grid: Option<&'a DiskGrid>,
+}
 
 /// Check a published move with the monitor (parry) alone, against the bodies where they
-/// stand (but those `passing` marks: in `simultaneous` turns, the group's agents, which
-/// move at the same time): the move if it passes, else `None` with the refusal recorded
+/// stand (but those `judging.passing` marks: in `simultaneous` turns, the group's agents,
+/// which move at the same time): the move if it passes, else `None` with the refusal recorded
 /// (the agent stays). The moves against each other, and the recorder's own checks, come
 /// when the group is settled ([`settle_group`]).
 pub(super) fn judge_move(
@@ -21,7 +32,7 @@ pub(super) fn judge_move(
     agent: usize,
     slot: Point,
     msg: StateMsg,
-    passing: &[bool],
+    judging: Judging<'_>,
 ) -> Option<Move> {
     let from = recorder.bodies()[agent].position;
     let max_step_m = recorder.scenario().agents[agent].max_step_m;
@@ -38,17 +49,20 @@ pub(super) fn judge_move(
             max_step_m,
         )
         .and_then(|chord_errors_m| {
-            monitor.check(
+            let mv = MoveUnderCheck {
                 agent,
-                &from,
-                &msg.waypoints,
-                &msg.best,
-                status == MoveStatus::UnderWay,
-                recorder.bodies(),
-                passing,
-                &chord_errors_m,
-                MAX_WAYPOINTS,
-            )
+                from: &from,
+                waypoints: &msg.waypoints,
+                best: &msg.best,
+                under_way: status == MoveStatus::UnderWay,
+                chord_errors_m: &chord_errors_m,
+            };
+            let standing = Standing {
+                bodies: recorder.bodies(),
+                passing: judging.passing,
+                grid: judging.grid,
+            };
+            monitor.check(&mv, &standing, MAX_WAYPOINTS)
         })
         .and_then(|()| monitor::check_length(&msg.waypoints, max_step_m))
         .map(|()| status)
@@ -98,17 +112,20 @@ pub(super) fn settle_group(
         let movers = recorder.alive().to_vec();
         let mut kept = Vec::with_capacity(moves.len());
         for (agent, mv) in moves {
-            let verdict = monitor.check(
+            let under_check = MoveUnderCheck {
                 agent,
-                &recorder.bodies()[agent].position,
-                &mv.waypoints,
-                &mv.best,
-                mv.status == MoveStatus::UnderWay,
-                recorder.bodies(),
-                &movers,
-                &[],
-                MAX_WAYPOINTS,
-            );
+                from: &recorder.bodies()[agent].position,
+                waypoints: &mv.waypoints,
+                best: &mv.best,
+                under_way: mv.status == MoveStatus::UnderWay,
+                chord_errors_m: &[],
+            };
+            let standing = Standing {
+                bodies: recorder.bodies(),
+                passing: &movers,
+                grid: None,
+            };
+            let verdict = monitor.check(&under_check, &standing, MAX_WAYPOINTS);
             match verdict {
                 Ok(()) => kept.push((agent, mv)),
                 Err(r) => {

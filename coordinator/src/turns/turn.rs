@@ -14,7 +14,7 @@ use wire::{StateMsg, monotonic_ns};
 
 use super::answer::{Answer, Turn};
 use super::driver::Driver;
-use super::judge::{judge_move, settle_group};
+use super::judge::{Judging, judge_move, settle_group};
 use super::lateness::Lateness;
 use super::outcome::{GroupSample, TurnSample};
 use crate::ipc::{TurnSplit, TurnWorld};
@@ -34,12 +34,15 @@ impl Driver<'_, '_> {
         centre: &Pose,
         ahead: &[Pose],
     ) -> anyhow::Result<bool> {
-        let sensing = self
-            .senses
-            .then(|| SensedAgents::new(self.recorder.bodies()));
+        // The bodies where they stand, in a grid: for sensing, and for the monitor's
+        // checks (no body moves before the group is settled). A lone agent without
+        // sensing is checked against each body in turn: the grid would cost as much.
+        let standing =
+            (self.senses || group.len() > 1).then(|| SensedAgents::new(self.recorder.bodies()));
+        let sensing = standing.as_ref().filter(|_| self.senses);
         self.kill_before_turns(step, group);
         let began = Instant::now();
-        let turns = self.grant_group(step, group, centre, ahead, sensing.as_ref())?;
+        let turns = self.grant_group(step, group, centre, ahead, sensing)?;
         let size = turns.len();
         self.hand_over
             .tell_next(self.ipc, self.procs, self.recorder.alive(), group, next);
@@ -50,7 +53,11 @@ impl Driver<'_, '_> {
         } else {
             Vec::new()
         };
-        let Some(mut moves) = self.collect_group(monitor, step, turns, centre, &passing)? else {
+        let judging = Judging {
+            passing: &passing,
+            grid: standing.as_ref().map(SensedAgents::grid),
+        };
+        let Some(mut moves) = self.collect_group(monitor, step, turns, centre, judging)? else {
             self.progress.interrupted = true;
             return Ok(true);
         };
@@ -143,7 +150,7 @@ impl Driver<'_, '_> {
         step: usize,
         turns: Vec<Turn>,
         centre: &Pose,
-        passing: &[bool],
+        judging: Judging<'_>,
     ) -> anyhow::Result<Option<Vec<(usize, Move)>>> {
         let mut moves = Vec::with_capacity(turns.len());
         for turn in turns {
@@ -166,7 +173,7 @@ impl Driver<'_, '_> {
                     if self.on_late_answer(step, agent, slot, latency)? {
                         continue;
                     }
-                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg, passing) {
+                    if let Some(mv) = self.take_move(monitor, step, &turn, slot, *msg, judging) {
                         moves.push((agent, mv));
                     }
                 }
@@ -196,7 +203,7 @@ impl Driver<'_, '_> {
         turn: &Turn,
         slot: Point,
         msg: StateMsg,
-        passing: &[bool],
+        judging: Judging<'_>,
     ) -> Option<Move> {
         let held_ns = monotonic_ns();
         let agent = turn.agent;
@@ -224,6 +231,6 @@ impl Driver<'_, '_> {
         self.progress.latency_us.push(sample.latency_us);
         self.progress.compute_us.push(sample.compute_us);
         self.progress.turn_samples.push(sample);
-        judge_move(monitor, self.recorder, step, agent, slot, msg, passing)
+        judge_move(monitor, self.recorder, step, agent, slot, msg, judging)
     }
 }
