@@ -159,17 +159,6 @@ pub struct Standing<'a> {
     pub grid: Option<&'a DiskGrid>,
 }
 
-impl<'a> Standing<'a> {
-    /// `bodies`, none passing, no grid.
-    pub fn still(bodies: &'a [Body]) -> Self {
-        Self {
-            bodies,
-            passing: &[],
-            grid: None,
-        }
-    }
-}
-
 /// Static obstacles in a parry BVH, the moving ones where they stand, and the field.
 pub struct SafetyMonitor {
     field: Field,

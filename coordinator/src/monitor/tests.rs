@@ -2,6 +2,15 @@
 
 use super::*;
 
+/// `bodies` standing, none passing, no grid.
+fn still(bodies: &[Body]) -> Standing<'_> {
+    Standing {
+        bodies,
+        passing: &[],
+        grid: None,
+    }
+}
+
 fn bodies() -> Vec<Body> {
     vec![
         Body {
@@ -95,7 +104,7 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&lone(from)),
+            &still(&lone(from)),
             8
         ),
         Ok(())
@@ -113,7 +122,7 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
                     under_way: false,
                     chord_errors_m: &[]
                 },
-                &Standing::still(&lone(from)),
+                &still(&lone(from)),
                 8
             ),
             Err(Refusal::Polygon {
@@ -134,7 +143,7 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&lone(inside)),
+            &still(&lone(inside)),
             8
         ),
         Err(Refusal::Polygon { .. })
@@ -156,7 +165,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Ok(())
@@ -172,7 +181,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Err(Refusal::Obstacle { obstacle: 0, .. })
@@ -193,7 +202,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()[..1]),
+            &still(&bodies()[..1]),
             8
         ),
         Ok(())
@@ -208,7 +217,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Err(Refusal::Agent { agent: 1, .. })
@@ -246,7 +255,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Err(Refusal::NotFinite(1))
@@ -262,7 +271,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Err(Refusal::Teleport(_))
@@ -278,7 +287,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Err(Refusal::OutsideField(1))
@@ -293,7 +302,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Err(Refusal::WrongEnd)
@@ -309,7 +318,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: true,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()),
+            &still(&bodies()),
             8
         ),
         Ok(())
@@ -326,7 +335,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
                 under_way: false,
                 chord_errors_m: &[]
             },
-            &Standing::still(&bodies()[..1]),
+            &still(&bodies()[..1]),
             8
         ),
         Ok(())
