@@ -137,6 +137,7 @@ pub fn check_move(
         obstacles,
         others,
         None,
+        None,
         &[],
         radius_m,
         from,
@@ -164,12 +165,16 @@ pub fn check_move_of(
     chord_errors_m: &[f64],
     max_waypoints: usize,
 ) -> Result<(), Violation> {
+    let others = Others {
+        bodies,
+        passing: &[],
+        grid: None,
+    };
     check_move_among(
         field,
         obstacles,
-        bodies,
+        &others,
         agent,
-        &[],
         from,
         waypoints,
         chord_errors_m,
@@ -177,29 +182,45 @@ pub fn check_move_of(
     )
 }
 
-/// [`check_move_of`] against the bodies that stand still: a body `j` with
-/// `passing[j]` moves at the same time as `agent` (simultaneous turns) and is not
-/// looked at here; the two moves are checked against each other in time
-/// ([`crate::groups::simultaneous_meetings`]). An empty `passing` passes no one.
+/// The bodies a move is checked against in [`check_move_among`].
+#[derive(Clone, Copy, Debug)]
+pub struct Others<'a> {
+    /// Every agent's body, by index (the mover's own is skipped).
+    pub bodies: &'a [Body],
+    /// A body `j` with `passing[j]` moves at the same time as the mover (simultaneous
+    /// turns) and is not looked at here; the two moves are checked against each other in
+    /// time ([`crate::groups::simultaneous_meetings`]). Empty: none passes.
+    pub passing: &'a [bool],
+    /// A grid over exactly `bodies` (same order, same disks), so that a move is checked
+    /// against the bodies near it only; `None`: against each body in turn. The verdict is
+    /// the same.
+    pub grid: Option<&'a DiskGrid>,
+}
+
+/// [`check_move_of`] against `others` (see [`Others`]): the bodies that stand still.
 #[allow(clippy::too_many_arguments)]
 pub fn check_move_among(
     field: &Field,
     obstacles: &DiskGrid,
-    bodies: &[Body],
+    others: &Others<'_>,
     agent: usize,
-    passing: &[bool],
     from: &Point,
     waypoints: &[Point],
     chord_errors_m: &[f64],
     max_waypoints: usize,
 ) -> Result<(), Violation> {
+    // A grid over other bodies than these would miss some: never used then.
+    let grid = others
+        .grid
+        .filter(|g| g.disks().len() == others.bodies.len());
     check_move_skipping(
         field,
         obstacles,
-        bodies,
+        others.bodies,
+        grid,
         Some(agent),
-        passing,
-        bodies[agent].radius_m,
+        others.passing,
+        others.bodies[agent].radius_m,
         from,
         waypoints,
         chord_errors_m,
@@ -214,6 +235,7 @@ fn check_move_skipping(
     field: &Field,
     obstacles: &DiskGrid,
     bodies: &[Body],
+    grid: Option<&DiskGrid>,
     skip: Option<usize>,
     passing: &[bool],
     radius_m: f64,
@@ -252,6 +274,8 @@ fn check_move_skipping(
     } else {
         waypoints
     };
+    // The bodies a grid finds near a segment.
+    let mut near: Vec<usize> = Vec::new();
     for (segment, w) in segments.windows(2).enumerate() {
         let (a, b) = (&w[0], &w[1]);
         let radius_m = radius_m + error_m(segment);
@@ -273,9 +297,9 @@ fn check_move_skipping(
         if let ControlFlow::Break(v) = hit {
             return Err(v);
         }
-        for (j, o) in bodies.iter().enumerate() {
+        let meets = |j: usize, o: &Body| -> Option<Violation> {
             if Some(j) == skip || passing.get(j).copied().unwrap_or(false) {
-                continue;
+                return None;
             }
             // A body whose centre lies farther than the radii sum outside the segment's
             // box is farther than that from the segment: it cannot overlap, and is
@@ -288,20 +312,40 @@ fn check_move_skipping(
                 || c.y < a.y.min(b.y) - out_m
                 || c.y > a.y.max(b.y) + out_m
             {
-                continue;
+                return None;
             }
             let overlap_m = o.radius_m + radius_m - distance_point_segment(&o.position, a, b);
-            if overlap_m > SAFETY_TOLERANCE_M {
-                // Numbered as in the list of the others (`bodies` without `skip`).
-                let body = match skip {
-                    Some(s) if j > s => j - 1,
-                    _ => j,
-                };
-                return Err(Violation::HitsBody {
-                    segment,
-                    body,
-                    overlap_m,
+            // Numbered as in the list of the others (`bodies` without `skip`).
+            let body = match skip {
+                Some(s) if j > s => j - 1,
+                _ => j,
+            };
+            (overlap_m > SAFETY_TOLERANCE_M).then_some(Violation::HitsBody {
+                segment,
+                body,
+                overlap_m,
+            })
+        };
+        match grid {
+            // The bodies the grid finds near the segment (a margin far above rounding, so
+            // every one the box test above lets through), in index order: the same first
+            // violation as the scan.
+            Some(grid) => {
+                near.clear();
+                let margin = Vector::new(1e-6, 1e-6);
+                let _ = grid.visit_box(&(min - margin), &(max + margin), |j, _| {
+                    near.push(j);
+                    ControlFlow::<()>::Continue(())
                 });
+                near.sort_unstable();
+                if let Some(v) = near.iter().find_map(|&j| meets(j, &bodies[j])) {
+                    return Err(v);
+                }
+            }
+            None => {
+                if let Some(v) = bodies.iter().enumerate().find_map(|(j, o)| meets(j, o)) {
+                    return Err(v);
+                }
             }
         }
     }
@@ -329,6 +373,69 @@ pub fn clearances_of_m(
     reach_m: f64,
 ) -> (f64, f64) {
     clearances_skipping_m(&bodies[agent], obstacles, bodies, Some(agent), reach_m)
+}
+
+/// The clearance of body `agent` of `bodies` to the nearest other one (distance minus
+/// radii; `f64::INFINITY` if there is none): [`clearances_of_m`]'s second value, to the
+/// bit, found with `grid`, a grid over exactly `bodies` (same order, same disks), among
+/// the bodies near it. The search widens until the nearest found is surely the nearest.
+pub fn clearance_to_others_m(bodies: &[Body], agent: usize, grid: &DiskGrid) -> f64 {
+    let body = &bodies[agent];
+    let clearance_to = |o: &Body| (body.position - o.position).norm() - o.radius_m - body.radius_m;
+    let scan = || {
+        bodies
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != agent)
+            .map(|(_, o)| clearance_to(o))
+            .fold(f64::INFINITY, f64::min)
+    };
+    // Not a grid over these bodies: each in turn.
+    if grid.disks().len() != bodies.len() {
+        return scan();
+    }
+    // A body of clearance c has its disk within c + the body's radius of its centre: its
+    // box meets the query's once the reach is that far.
+    let mut look_m = 1.0_f64;
+    let mut span_m = None;
+    loop {
+        let mut nearest = f64::INFINITY;
+        let _ = grid.visit_near(&body.position, look_m + body.radius_m, |j, _| {
+            if j != agent {
+                nearest = nearest.min(clearance_to(&bodies[j]));
+            }
+            ControlFlow::<()>::Continue(())
+        });
+        // Every body within `look_m` (a nanometre to spare for rounding) was seen.
+        if nearest <= look_m - 1e-9 {
+            return nearest;
+        }
+        let span_m = *span_m.get_or_insert_with(|| grid_span_m(grid));
+        if !span_m.is_finite() {
+            // Bodies at no finite place: each in turn.
+            return scan();
+        }
+        if look_m > span_m {
+            // The query covers the whole grid: what was seen is all there is.
+            return nearest;
+        }
+        look_m *= 4.0;
+    }
+}
+
+/// The longest side of the box round `grid`'s disks (0 when empty).
+fn grid_span_m(grid: &DiskGrid) -> f64 {
+    let (mut min, mut max) = (
+        Point::new(f64::INFINITY, f64::INFINITY),
+        Point::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
+    for d in grid.disks() {
+        min.x = min.x.min(d.centre.x - d.radius_m);
+        min.y = min.y.min(d.centre.y - d.radius_m);
+        max.x = max.x.max(d.centre.x + d.radius_m);
+        max.y = max.y.max(d.centre.y + d.radius_m);
+    }
+    (max.x - min.x).max(max.y - min.y).max(0.0)
 }
 
 fn clearances_skipping_m(
@@ -494,17 +601,12 @@ mod tests {
         let from = bodies[1].position;
         let ahead = [from, Point::new(6.0, 5.0)];
         let check = |passing: &[bool]| {
-            check_move_among(
-                &field,
-                &obstacles,
-                &bodies,
-                1,
+            let others = Others {
+                bodies: &bodies,
                 passing,
-                &from,
-                &ahead,
-                &[],
-                8,
-            )
+                grid: None,
+            };
+            check_move_among(&field, &obstacles, &others, 1, &from, &ahead, &[], 8)
         };
         assert!(matches!(
             check(&[]),

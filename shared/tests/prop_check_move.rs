@@ -2,11 +2,15 @@
 //! same first overlap as the plain definition: every segment against every body, the
 //! distance from the body's centre to the segment against the radii sum. It skips bodies
 //! it can rule out by their box; this checks that it never skips one it should not. The
-//! clearance to the nearest other body likewise equals the plain minimum.
+//! clearance to the nearest other body likewise equals the plain minimum. Both again with
+//! a grid over the bodies, which finds the bodies near the move or the body only.
 
 use proptest::prelude::*;
-use shared::geometry::{DiskGrid, Field, Point, distance_point_segment};
-use shared::safety::{SAFETY_TOLERANCE_M, Violation, check_move, clearances_of_m};
+use shared::geometry::{Disk, DiskGrid, Field, Point, distance_point_segment};
+use shared::safety::{
+    Others, SAFETY_TOLERANCE_M, Violation, check_move, check_move_among, clearance_to_others_m,
+    clearances_of_m,
+};
 use shared::vocabulary::{Body, MAX_WAYPOINTS};
 
 /// The first (segment, body, overlap) by the plain definition, segment by segment.
@@ -33,6 +37,19 @@ fn first_overlap(
     None
 }
 
+/// A grid over `bodies`, a disk each, in order.
+fn grid_of(bodies: &[Body]) -> DiskGrid {
+    DiskGrid::new(
+        bodies
+            .iter()
+            .map(|b| Disk {
+                centre: b.position,
+                radius_m: b.radius_m,
+            })
+            .collect(),
+    )
+}
+
 fn point() -> impl Strategy<Value = Point> {
     (1.0..19.0_f64, 1.0..19.0_f64).prop_map(|(x, y)| Point::new(x, y))
 }
@@ -56,6 +73,15 @@ proptest! {
         // Moves that stay inside the field, as the field check would refuse them first.
         let waypoints: Vec<Point> = std::iter::once(from).chain(rest).collect();
         let got = check_move(&field, &obstacles, &others, radius_m, &from, &waypoints, MAX_WAYPOINTS);
+        // The same move as the last of all the bodies, the others found with a grid.
+        let mut all = others.clone();
+        all.push(Body { position: from, radius_m });
+        let grid = grid_of(&all);
+        let among = Others { bodies: &all, passing: &[], grid: Some(&grid) };
+        let with_grid = check_move_among(
+            &field, &obstacles, &among, others.len(), &from, &waypoints, &[], MAX_WAYPOINTS,
+        );
+        prop_assert_eq!(&with_grid, &got);
         match first_overlap(&others, radius_m, &waypoints) {
             None => prop_assert!(got.is_ok(), "{got:?}"),
             Some((segment, body, overlap_m)) => prop_assert_eq!(
@@ -91,5 +117,7 @@ proptest! {
         let obstacles = DiskGrid::new(Vec::new());
         let (_, got) = clearances_of_m(&bodies, agent, &obstacles, 1.0);
         prop_assert_eq!(got.to_bits(), want.to_bits());
+        let with_grid = clearance_to_others_m(&bodies, agent, &grid_of(&bodies));
+        prop_assert_eq!(with_grid.to_bits(), want.to_bits());
     }
 }

@@ -3,6 +3,7 @@
 
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
+use crate::geometry::Disk;
 use crate::geometry::{
     DiskGrid, Point, Pose, Vector, distance_at_the_same_time_m, distance_polyline_polyline,
     polyline_length_m, wrap_angle_rad,
@@ -284,9 +285,17 @@ impl<'a> Recorder<'a> {
                 passing[*agent] = true;
             }
         }
+        // Each move against the bodies near it, found with a grid over them, when there
+        // are enough moves to pay for building it (the verdicts are the same).
+        let grid = (moves.len() > 1).then(|| bodies_grid(&self.bodies));
+        let others = safety::Others {
+            bodies: &self.bodies,
+            passing: &passing,
+            grid: grid.as_ref(),
+        };
         let mut verdicts: Vec<Result<(), Violation>> = moves
             .iter()
-            .map(|(agent, mv)| self.check_alone(*agent, mv, &passing))
+            .map(|(agent, mv)| self.check_alone(*agent, mv, &others))
             .collect();
         // A move refused on its own leaves its agent where it stands.
         let starts: Vec<[Point; 1]> = moves
@@ -338,9 +347,15 @@ impl<'a> Recorder<'a> {
         verdicts
     }
 
-    /// Check one move against the bodies where they stand (but those `passing` marks:
-    /// they move at the same time), the field, the agent's top speed and its best point.
-    fn check_alone(&self, agent: usize, mv: &Move, passing: &[bool]) -> Result<(), Violation> {
+    /// Check one move against the bodies where they stand (`others`: but those it marks
+    /// passing, which move at the same time), the field, the agent's top speed and its
+    /// best point.
+    fn check_alone(
+        &self,
+        agent: usize,
+        mv: &Move,
+        others: &safety::Others<'_>,
+    ) -> Result<(), Violation> {
         let body = self.bodies[agent];
         let spec = &self.scenario.agents[agent];
         // A car's chords stand for arcs: read them back, and grow each by its bulge.
@@ -365,9 +380,8 @@ impl<'a> Recorder<'a> {
         safety::check_move_among(
             &self.scenario.field,
             &self.obstacles,
-            &self.bodies,
+            others,
             agent,
-            passing,
             &body.position,
             &mv.waypoints,
             &chord_errors_m,
@@ -520,6 +534,7 @@ impl<'a> Recorder<'a> {
             .max(self.moving_now.max_radius_m())
             + self.bodies.iter().map(|b| b.radius_m).fold(0.0, f64::max);
         let mut agents = Vec::with_capacity(self.bodies.len());
+        let grid = bodies_grid(&self.bodies);
         for i in 0..self.bodies.len() {
             let body = self.bodies[i];
             let slot = self.scenario.agents[i].slot.ideal_position(&centre);
@@ -536,8 +551,8 @@ impl<'a> Recorder<'a> {
             });
             // Obstacles farther than the largest radii sum cannot be the nearest overlap;
             // look a little farther so clearance is reported for near misses too.
-            let (to_static, to_other) =
-                safety::clearances_of_m(&self.bodies, i, &self.obstacles, reach_m + 10.0);
+            let (to_static, _) = safety::clearances_m(&body, &self.obstacles, &[], reach_m + 10.0);
+            let to_other = safety::clearance_to_others_m(&self.bodies, i, &grid);
             let to_static = to_static.min(safety::clearance_to_polygons_m(
                 &body,
                 &self.scenario.polygons,
@@ -588,4 +603,17 @@ impl<'a> Recorder<'a> {
         run.completed = false;
         run
     }
+}
+
+/// A grid over `bodies` (a disk each, in agent order).
+fn bodies_grid(bodies: &[Body]) -> DiskGrid {
+    DiskGrid::new(
+        bodies
+            .iter()
+            .map(|b| Disk {
+                centre: b.position,
+                radius_m: b.radius_m,
+            })
+            .collect(),
+    )
 }
