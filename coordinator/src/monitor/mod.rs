@@ -3,14 +3,14 @@
 //! its margins and arcs, is not consulted). Its check of a move against the agent's
 //! kinematic model is in `kinematics.rs`.
 
+use std::ops::ControlFlow;
+
 use nalgebra::{Isometry2, Vector2};
 use parry2d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use parry2d_f64::query;
 use parry2d_f64::shape::{Ball, Polyline, Segment};
 use parry2d_f64::utils::point_in_poly2d;
-use std::ops::ControlFlow;
-
 use shared::geometry::{Disk, DiskGrid, Field, Point, Polygon};
 use shared::safety::SAFETY_TOLERANCE_M;
 use shared::vocabulary::Body;
