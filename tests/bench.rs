@@ -98,6 +98,8 @@ fn bench_reports_consistent_figures_and_leaves_nothing_behind() {
     assert_eq!(run["turn_us"]["count"], 57);
     assert_eq!(run["ipc_overhead_us"]["count"], 57);
     assert_eq!(run["floor_us"]["count"], 2000);
+    // The floor is rung as the run's turns are: by the doorbells, the default.
+    assert_eq!(run["floor_rung_by"], "doorbell");
     assert_eq!(run["uds_us"]["count"], 2000);
     // Spread between the 20 steps of the same run.
     assert_eq!(run["floor_blocks"], 20);
@@ -286,13 +288,15 @@ fn bench_times_the_step_loop_against_simulate_blocking_and_spinning() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let out_file = dir.path().join("loops.json");
     let scenario = support::repo_root().join("tests/data/swarm16-parallel.toml");
+    // Rung by iceoryx2's events, the floor too (the first test has both by doorbells).
     let report = bench_report(
-        &["--loop-rounds", "1"],
+        &["--loop-rounds", "1", "--wake", "event"],
         Some(("--loop-scenario", &scenario)),
         &out_file,
     );
     assert_eq!(report["runs"].as_array().expect("runs").len(), 0);
     let l = &report["loops"];
+    assert_eq!(l["floor_rung_by"], "event");
     assert_eq!(l["agents"], 16);
     assert_eq!(l["simulate_s"].as_array().map(Vec::len), Some(1));
     assert!(l["simulate_median_s"].as_f64().expect("simulate") > 0.0);

@@ -3,12 +3,13 @@
 //! `coordinator/src/bin/bench-peer.rs`), in blocks that alternate between the mechanisms
 //! and can be spread over the run:
 //!
-//! - iceoryx2 floor: a small sample published, the ping event rung, then the same wait a
-//!   turn rung by iceoryx2 events uses (`--wake event`: take what arrived, else block in
-//!   `Listener::timed_wait`) until the pong
-//!   sample is in. The clock runs from just before the notify to the pong received, the
-//!   same span as a turn's latency (a turn's world is published before its clock starts
-//!   too).
+//! - iceoryx2 floor: a small sample published, the ping rung, then the same wait a turn
+//!   uses until the pong sample is in, rung as the run's turns are: by the session's
+//!   doorbells (`--wake doorbell`: a futex word rung, the answer counted, sleeping on the
+//!   counter while the pong is not in) or by iceoryx2 events (`--wake event`: take what
+//!   arrived, else block in `Listener::timed_wait`). The clock runs from just before the
+//!   ring to the pong received, the same span as a turn's latency (a turn's world is
+//!   published before its clock starts too).
 //! - Unix domain socket: the same process pair; a request the size of a serialized world
 //!   is written, a reply the size of a serialized move is read (blocking calls). The
 //!   clock runs from before the write to the whole reply read. No serialization cost is
@@ -26,12 +27,13 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use wire::{
-    BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
-    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE, BenchPing, EVENT_QUIT, EVENT_TURN,
-    Role,
+    BENCH_EVENT_DOORBELL, BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT,
+    BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE,
+    BenchPing, EVENT_QUIT, EVENT_TURN, Role,
 };
 
 use crate::agents::{AgentProcesses, Exit};
+use crate::turns::WakeMode;
 
 /// The bench's ping-pong program, beside the coordinator's executable.
 pub const PEER_BIN: &str = "bench-peer";
@@ -128,6 +130,31 @@ impl Ports {
         }
     }
 
+    /// Wait, as a turn rung by doorbells does, until pong `seq` has arrived or `deadline`
+    /// passes: the answer counter read before each look, then a sleep while it holds.
+    fn wait_pong_rung(
+        &self,
+        doorbells: &wire::Doorbells,
+        seq: u64,
+        deadline: Instant,
+    ) -> anyhow::Result<()> {
+        loop {
+            let seen = doorbells.answers();
+            while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
+                if s.seq == seq {
+                    return Ok(());
+                }
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                bail!("no pong {seq} from the ping-pong process in time");
+            }
+            if doorbells.wait_answer(seen, deadline - now) == wire::Woken::Interrupted {
+                bail!("interrupted");
+            }
+        }
+    }
+
     fn wait_pong(&self, seq: u64, deadline: Instant) -> anyhow::Result<()> {
         loop {
             while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
@@ -160,6 +187,8 @@ pub struct PingPongSession {
     stream: Option<UnixStream>,
     ports: Option<Ports>,
     node: Option<Node<ipc::Service>>,
+    /// The session's doorbells: one word, the ping-pong process's.
+    doorbells: wire::Doorbells,
     seq: u64,
     closed: bool,
     /// The session's private folder (last: removed after everything else).
@@ -179,8 +208,11 @@ impl PingPongSession {
             Some(folder) => folder.join("pingpong.sock"),
             None => std::env::temp_dir().join(format!("{prefix}pingpong.sock")),
         };
+        let doorbells = wire::Doorbells::create(&prefix, 1, wire::WakeBy::Doorbells)
+            .context("the ping-pong's doorbells")?;
         let mut session = Self {
             procs: AgentProcesses::new(bin, &prefix, 1),
+            doorbells,
             prefix,
             config,
             socket_path,
@@ -228,8 +260,58 @@ impl PingPongSession {
         Ok(())
     }
 
-    /// `count` iceoryx2 round trips after `warmup` unrecorded ones, microseconds.
-    pub fn iceoryx2(&mut self, warmup: usize, count: usize) -> anyhow::Result<Vec<f64>> {
+    /// `count` iceoryx2 round trips rung as `wake` says after `warmup` unrecorded ones,
+    /// microseconds: the floor of a turn rung that way.
+    pub fn rung(
+        &mut self,
+        wake: WakeMode,
+        warmup: usize,
+        count: usize,
+    ) -> anyhow::Result<Vec<f64>> {
+        match wake {
+            WakeMode::Doorbell => self.doorbell(warmup, count),
+            WakeMode::Event => self.iceoryx2(warmup, count),
+        }
+    }
+
+    /// `count` round trips rung by the session's doorbells after `warmup` unrecorded
+    /// ones, microseconds (the ping-pong process is switched to its doorbell and back).
+    fn doorbell(&mut self, warmup: usize, count: usize) -> anyhow::Result<Vec<f64>> {
+        let ports = self.ports.as_ref().context("the session is closed")?;
+        ports
+            .ping
+            .notify_with_custom_event_id(EventId::new(BENCH_EVENT_DOORBELL))
+            .context("switching the ping-pong to its doorbell")?;
+        let mut out = Vec::with_capacity(count);
+        for k in 0..warmup + count {
+            self.seq += 1;
+            let seq = self.seq;
+            ports
+                .ping_pub
+                .send_copy(BenchPing {
+                    seq,
+                    payload: [seq; 3],
+                })
+                .context("sending a ping")?;
+            let t0 = Instant::now();
+            self.doorbells
+                .ring(0, EVENT_TURN)
+                .context("ringing the ping")?;
+            ports.wait_pong_rung(&self.doorbells, seq, t0 + ROUND_TRIP_DEADLINE)?;
+            let us = t0.elapsed().as_secs_f64() * 1e6;
+            if k >= warmup {
+                out.push(us);
+            }
+        }
+        self.doorbells
+            .ring(0, BENCH_EVENT_DOORBELL)
+            .context("switching the ping-pong back to events")?;
+        Ok(out)
+    }
+
+    /// `count` iceoryx2 round trips rung by events after `warmup` unrecorded ones,
+    /// microseconds.
+    fn iceoryx2(&mut self, warmup: usize, count: usize) -> anyhow::Result<Vec<f64>> {
         let ports = self.ports.as_ref().context("the session is closed")?;
         let mut out = Vec::with_capacity(count);
         for k in 0..warmup + count {

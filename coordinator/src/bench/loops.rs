@@ -41,9 +41,11 @@ pub struct LoopsReport {
     /// Round trips between two processes over iceoryx2 publish-subscribe, both sides
     /// busy-polling (no event): the floor a spinning hand-over can reach, microseconds.
     pub floor_spin_us: Distribution,
-    /// The same round trips with an event each way (both sides sleep): the floor of the
-    /// blocking hand-over, microseconds.
+    /// The same round trips rung each way as the runs' turns are (both sides sleep):
+    /// the floor of the blocking hand-over, microseconds.
     pub floor_block_us: Distribution,
+    /// How those were rung: `doorbell` or `event` (`--wake`).
+    pub floor_rung_by: &'static str,
     /// The multi-process runs, turns handed over by sleeping.
     pub block: WaitReport,
     /// The multi-process runs, turns handed over by spinning.
@@ -130,7 +132,7 @@ pub fn measure(
         );
         floor_block.extend(
             session
-                .iceoryx2(FLOOR_WARMUP, FLOOR_ROUND_TRIPS)
+                .rung(wake, FLOOR_WARMUP, FLOOR_ROUND_TRIPS)
                 .map_err(CliError::Other)?,
         );
         let started = Instant::now();
@@ -171,6 +173,7 @@ pub fn measure(
     Ok(LoopsReport {
         floor_spin_us: Distribution::of(&floor_spin),
         floor_block_us: Distribution::of(&floor_block),
+        floor_rung_by: wake.name(),
         scenario: scenario.name.clone(),
         file: source,
         agents: scenario.agents.len(),
@@ -256,8 +259,12 @@ pub fn table(l: &LoopsReport) -> String {
     );
     let _ = writeln!(
         s,
-        "  floor between two processes: busy-polled publish-subscribe p50 {:.2} us p99 {:.2} us; with an event each way p50 {:.1} us p99 {:.1} us",
-        l.floor_spin_us.p50, l.floor_spin_us.p99, l.floor_block_us.p50, l.floor_block_us.p99
+        "  floor between two processes: busy-polled publish-subscribe p50 {:.2} us p99 {:.2} us; rung each way ({}) p50 {:.1} us p99 {:.1} us",
+        l.floor_spin_us.p50,
+        l.floor_spin_us.p99,
+        l.floor_rung_by,
+        l.floor_block_us.p50,
+        l.floor_block_us.p99
     );
     let _ = writeln!(
         s,

@@ -12,10 +12,9 @@
 //!    wakes the same warm process every time; the echo shows what waking N processes in
 //!    turn costs by itself, so the turn's overhead can be read against both.
 //! 3. one process of the bench's own ping-pong program ([`floor::PEER_BIN`], beside the
-//!    coordinator) answers an iceoryx2 event + publish-subscribe
-//!    ping-pong (the floor: the wake-up of a turn rung by iceoryx2 events, `--wake
-//!    event`; the runs are rung as `--wake` says, by default by the doorbells, whose turns
-//!    can come in under it) and a Unix socket ping-pong with
+//!    coordinator) answers an iceoryx2 publish-subscribe ping-pong rung each way as the
+//!    run's turns are (`--wake`: by the doorbells, by default, or by iceoryx2 events; the
+//!    floor of a turn's wake-up) and a Unix socket ping-pong with
 //!    turn-sized payloads ([`floor`]), in short alternating blocks spread between the
 //!    steps of that same run, so the floor sees the same (shared, noisy) machine as the
 //!    turns.
@@ -55,7 +54,7 @@ use crate::ipc::TurnSplit;
 use crate::output::write_atomically;
 use crate::procfs;
 use crate::stats::Distribution;
-use crate::turns::{BetweenSteps, RunOptions, run_scenario_with};
+use crate::turns::{BetweenSteps, RunOptions, WakeMode, run_scenario_with};
 
 pub use report::{Report, RunReport, Targets};
 pub use split::{EchoSplit, OverheadSplit};
@@ -334,6 +333,8 @@ impl Samples {
 
 /// The floor, socket and echo samples, gathered in blocks between the steps of a run.
 struct Floors {
+    /// How the floor's round trips are rung: as the run's turns are.
+    wake: WakeMode,
     iceoryx2_us: Vec<f64>,
     uds_us: Vec<f64>,
     echoes: Vec<TurnSplit>,
@@ -352,7 +353,7 @@ impl Floors {
     ) -> anyhow::Result<()> {
         let count = round_trips * (k + 1) / blocks - round_trips * k / blocks;
         self.iceoryx2_us
-            .extend(session.iceoryx2(BLOCK_WARMUP, count)?);
+            .extend(session.rung(self.wake, BLOCK_WARMUP, count)?);
         self.uds_us
             .extend(session.socket(BLOCK_WARMUP, count, request_bytes, reply_bytes)?);
         self.blocks += 1;
@@ -397,6 +398,7 @@ fn bench_one(
     let stride = (steps / blocks).max(1);
     let sizes = (request_bytes, reply_bytes);
     let mut pp = Floors {
+        wake: args.wake,
         iceoryx2_us: Vec::with_capacity(args.round_trips),
         uds_us: Vec::with_capacity(args.round_trips),
         echoes: Vec::with_capacity(args.round_trips.max(agents)),
@@ -457,6 +459,7 @@ fn bench_one(
         echo_us: echo,
         echo_split,
         floor_us: floor_d,
+        floor_rung_by: args.wake.name(),
         uds_us: uds,
         uds_request_bytes: request_bytes,
         uds_reply_bytes: reply_bytes,

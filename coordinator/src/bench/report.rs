@@ -63,8 +63,11 @@ pub struct RunReport {
     pub echo_us: Distribution,
     /// The echo's two wake-ups.
     pub echo_split: EchoSplit,
-    /// iceoryx2 event + publish-subscribe round trip between two processes, microseconds.
+    /// iceoryx2 publish-subscribe round trip between two processes, rung each way as the
+    /// run's turns are ([`Self::floor_rung_by`]), microseconds.
     pub floor_us: Distribution,
+    /// How the floor's round trips were rung: `doorbell` or `event` (`--wake`).
+    pub floor_rung_by: &'static str,
     /// Unix domain socket round trip with turn-sized payloads, microseconds.
     pub uds_us: Distribution,
     /// Socket request size (a serialized world), bytes.
@@ -196,7 +199,11 @@ pub fn table(report: &Report) -> String {
             "    waking the coordinator",
             &r.echo_split.to_coordinator_us,
         );
-        row(&mut s, "iceoryx2 floor (2 processes)", &r.floor_us);
+        row(
+            &mut s,
+            &format!("iceoryx2 floor (2 processes, {})", r.floor_rung_by),
+            &r.floor_us,
+        );
         row(
             &mut s,
             &format!(

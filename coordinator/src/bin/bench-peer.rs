@@ -15,6 +15,10 @@
 //! - iceoryx2 busy-polled (on [`BENCH_EVENT_SPIN`]): the process spins on the ping
 //!   subscriber and publishes each pong at once, no event either way, until the ping
 //!   [`BENCH_SPIN_DONE`]: the floor of publish-subscribe without any wake-up.
+//! - iceoryx2 rung by doorbells (on [`BENCH_EVENT_DOORBELL`]): the process sleeps on its
+//!   word of the session's doorbells, answers each ping rung there with a pong counted
+//!   on the answer counter, and goes back to events when its word rings
+//!   [`BENCH_EVENT_DOORBELL`]: the floor of a turn rung by doorbells.
 //!
 //! The coordinator alternates them in blocks, so all see the same machine.
 //! [`EVENT_QUIT`], a closed socket, SIGTERM or the coordinator's death end the process.
@@ -29,13 +33,15 @@ use anyhow::Context;
 use clap::Parser;
 use iceoryx2::node::NodeWaitFailure;
 use iceoryx2::port::listener::ListenerWaitError;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2_bb_posix::signal::SignalHandler;
 use nix::unistd::getppid;
 use wire::{
-    BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT, BENCH_PING_SERVICE, BENCH_PONG_EVENT,
-    BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE, BenchPing, EVENT_QUIT, EVENT_TURN,
-    Role,
+    BENCH_EVENT_DOORBELL, BENCH_EVENT_SOCKET, BENCH_EVENT_SPIN, BENCH_PING_EVENT,
+    BENCH_PING_SERVICE, BENCH_PONG_EVENT, BENCH_PONG_SERVICE, BENCH_SOCKET_DONE, BENCH_SPIN_DONE,
+    BenchPing, EVENT_QUIT, EVENT_TURN, Role,
 };
 
 /// Command line of the ping-pong process (started by `coordinator bench` as it starts an
@@ -144,18 +150,22 @@ fn serve(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result
         Ok(())
     };
     pong(0)?; // ready
+    // Opened when first asked for the doorbell ping-pong.
+    let mut doorbells: Option<wire::Doorbells> = None;
 
     loop {
         if SignalHandler::termination_requested() {
             return Ok(());
         }
         let waited = Instant::now();
-        let (mut ping, mut socket, mut quit, mut spin) = (false, false, false, false);
+        let (mut ping, mut socket, mut quit, mut spin, mut doorbell) =
+            (false, false, false, false, false);
         let woke = ping_listener.timed_wait(
             |event| match event.id.as_value() {
                 EVENT_TURN => ping = true,
                 BENCH_EVENT_SOCKET => socket = true,
                 BENCH_EVENT_SPIN => spin = true,
+                BENCH_EVENT_DOORBELL => doorbell = true,
                 EVENT_QUIT => quit = true,
                 _ => {}
             },
@@ -188,6 +198,16 @@ fn serve(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result
                     }
                 }
             }
+            Ok(_) if doorbell => {
+                let bells = match &doorbells {
+                    Some(bells) => bells,
+                    None => doorbells
+                        .insert(wire::Doorbells::open(prefix, 0).context("opening the doorbells")?),
+                };
+                if !serve_doorbell(bells, &ping_sub, &pong_pub, liveness)? {
+                    return Ok(());
+                }
+            }
             Ok(_) if socket => {
                 let stream = stream
                     .as_mut()
@@ -217,6 +237,43 @@ fn serve(prefix: &str, uds: Option<&Path>, liveness: Duration) -> anyhow::Result
                 }
             }
             Err(e) => return Err(e).context("waiting for a ping"),
+        }
+    }
+}
+
+/// Answer the pings rung on `bells` (agent 0's word) with a pong each, counted on the
+/// answer counter: true when rung back to the event ping-pong (or silent for `liveness`:
+/// the event loop then looks at the coordinator), false when SIGTERM came.
+fn serve_doorbell(
+    bells: &wire::Doorbells,
+    ping_sub: &Subscriber<ipc::Service, BenchPing, ()>,
+    pong_pub: &Publisher<ipc::Service, BenchPing, ()>,
+    liveness: Duration,
+) -> anyhow::Result<bool> {
+    let mut heard = Instant::now();
+    loop {
+        let (rung, woken) = bells.wait(0, liveness).context("waiting on the doorbell")?;
+        if rung & (1 << EVENT_TURN) != 0 {
+            let mut last = None;
+            while let Some(s) = ping_sub.receive().context("receiving a ping")? {
+                last = Some(s.seq);
+            }
+            if let Some(seq) = last {
+                pong_pub
+                    .send_copy(BenchPing {
+                        seq,
+                        payload: [seq; 3],
+                    })
+                    .context("sending a pong")?;
+                bells.answer();
+            }
+            heard = Instant::now();
+        }
+        if rung & (1 << BENCH_EVENT_DOORBELL) != 0 || heard.elapsed() >= liveness {
+            return Ok(true);
+        }
+        if woken == wire::Woken::Interrupted && SignalHandler::termination_requested() {
+            return Ok(false);
         }
     }
 }

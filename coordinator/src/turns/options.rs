@@ -55,6 +55,16 @@ pub enum WakeMode {
     Event,
 }
 
+impl WakeMode {
+    /// The mode's name on the command line (`doorbell`, `event`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Doorbell => "doorbell",
+            Self::Event => "event",
+        }
+    }
+}
+
 /// How long the coordinator spins on an agent's state before it sleeps (`--wait spin`):
 /// a turn computes in tens of microseconds; a longer one then sleeps on the `done` event like `--wait block`.
 pub const SPIN_BUDGET: Duration = Duration::from_millis(1);

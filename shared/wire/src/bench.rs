@@ -20,6 +20,12 @@ pub const BENCH_SOCKET_DONE: u32 = u32::MAX;
 /// at once, no event either way (the busy-poll publish-subscribe floor), until the ping
 /// [`BENCH_SPIN_DONE`] comes (answered, then back to the blocking ping-pong).
 pub const BENCH_EVENT_SPIN: usize = 4;
+/// Event id on [`BENCH_PING_EVENT`]: take the pings' rings from the session's doorbells
+/// (agent 0's word of [`crate::Doorbells`], rung with [`EVENT_TURN`](crate::EVENT_TURN))
+/// and count each pong on their answer counter, no iceoryx2 event either way (the floor
+/// of turns rung by doorbells), until the doorbell rings this id itself (then back to
+/// the event ping-pong).
+pub const BENCH_EVENT_DOORBELL: usize = 5;
 /// The `seq` of the ping that ends the busy-poll ping-pong.
 pub const BENCH_SPIN_DONE: u64 = u64::MAX;
 
