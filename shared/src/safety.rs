@@ -375,6 +375,20 @@ pub fn clearances_of_m(
     clearances_skipping_m(&bodies[agent], obstacles, bodies, Some(agent), reach_m)
 }
 
+/// A grid over `bodies`, a disk each in the same order: what [`Others::grid`] and
+/// [`clearance_to_others_m`] take.
+pub fn bodies_grid(bodies: &[Body]) -> DiskGrid {
+    DiskGrid::new(
+        bodies
+            .iter()
+            .map(|b| Disk {
+                centre: b.position,
+                radius_m: b.radius_m,
+            })
+            .collect(),
+    )
+}
+
 /// The clearance of body `agent` of `bodies` to the nearest other one (distance minus
 /// radii; `f64::INFINITY` if there is none): [`clearances_of_m`]'s second value, to the
 /// bit, found with `grid`, a grid over exactly `bodies` (same order, same disks), among

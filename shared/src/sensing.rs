@@ -3,7 +3,7 @@
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{Disk, DiskGrid};
+use crate::geometry::DiskGrid;
 use crate::vocabulary::{AgentSpec, Body};
 
 /// The agents' bodies at one moment, indexed for sensing queries.
@@ -16,15 +16,7 @@ impl SensedAgents {
     /// Index `bodies` (every agent, in agent order).
     pub fn new(bodies: &[Body]) -> Self {
         Self {
-            grid: DiskGrid::new(
-                bodies
-                    .iter()
-                    .map(|b| Disk {
-                        centre: b.position,
-                        radius_m: b.radius_m,
-                    })
-                    .collect(),
-            ),
+            grid: crate::safety::bodies_grid(bodies),
         }
     }
 

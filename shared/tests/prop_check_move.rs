@@ -6,10 +6,10 @@
 //! a grid over the bodies, which finds the bodies near the move or the body only.
 
 use proptest::prelude::*;
-use shared::geometry::{Disk, DiskGrid, Field, Point, distance_point_segment};
+use shared::geometry::{DiskGrid, Field, Point, distance_point_segment};
 use shared::safety::{
-    Others, SAFETY_TOLERANCE_M, Violation, check_move, check_move_among, clearance_to_others_m,
-    clearances_of_m,
+    Others, SAFETY_TOLERANCE_M, Violation, bodies_grid, check_move, check_move_among,
+    clearance_to_others_m, clearances_of_m,
 };
 use shared::vocabulary::{Body, MAX_WAYPOINTS};
 
@@ -35,19 +35,6 @@ fn first_overlap(
         }
     }
     None
-}
-
-/// A grid over `bodies`, a disk each, in order.
-fn grid_of(bodies: &[Body]) -> DiskGrid {
-    DiskGrid::new(
-        bodies
-            .iter()
-            .map(|b| Disk {
-                centre: b.position,
-                radius_m: b.radius_m,
-            })
-            .collect(),
-    )
 }
 
 fn point() -> impl Strategy<Value = Point> {
@@ -76,7 +63,7 @@ proptest! {
         // The same move as the last of all the bodies, the others found with a grid.
         let mut all = others.clone();
         all.push(Body { position: from, radius_m });
-        let grid = grid_of(&all);
+        let grid = bodies_grid(&all);
         let among = Others { bodies: &all, passing: &[], grid: Some(&grid) };
         let with_grid = check_move_among(
             &field, &obstacles, &among, others.len(), &from, &waypoints, &[], MAX_WAYPOINTS,
@@ -117,7 +104,7 @@ proptest! {
         let obstacles = DiskGrid::new(Vec::new());
         let (_, got) = clearances_of_m(&bodies, agent, &obstacles, 1.0);
         prop_assert_eq!(got.to_bits(), want.to_bits());
-        let with_grid = clearance_to_others_m(&bodies, agent, &grid_of(&bodies));
+        let with_grid = clearance_to_others_m(&bodies, agent, &bodies_grid(&bodies));
         prop_assert_eq!(with_grid.to_bits(), want.to_bits());
     }
 }

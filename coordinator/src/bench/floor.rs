@@ -114,14 +114,20 @@ impl Ports {
         })
     }
 
-    /// Wait, as a turn does, until pong `seq` has arrived or `deadline` passes.
+    /// Take every pong that arrived: whether pong `seq` was among them.
+    fn pong_arrived(&self, seq: u64) -> anyhow::Result<bool> {
+        let mut arrived = false;
+        while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
+            arrived |= s.seq == seq;
+        }
+        Ok(arrived)
+    }
+
     /// Busy-poll the pong subscriber for the pong `seq`.
     fn spin_pong(&self, seq: u64, deadline: Instant) -> anyhow::Result<()> {
         loop {
-            while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
-                if s.seq == seq {
-                    return Ok(());
-                }
+            if self.pong_arrived(seq)? {
+                return Ok(());
             }
             if Instant::now() >= deadline {
                 bail!("no pong {seq} from the ping-pong process in time");
@@ -140,10 +146,8 @@ impl Ports {
     ) -> anyhow::Result<()> {
         loop {
             let seen = doorbells.answers();
-            while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
-                if s.seq == seq {
-                    return Ok(());
-                }
+            if self.pong_arrived(seq)? {
+                return Ok(());
             }
             let now = Instant::now();
             if now >= deadline {
@@ -155,12 +159,12 @@ impl Ports {
         }
     }
 
+    /// Wait, as a turn rung by events does, until pong `seq` has arrived or `deadline`
+    /// passes.
     fn wait_pong(&self, seq: u64, deadline: Instant) -> anyhow::Result<()> {
         loop {
-            while let Some(s) = self.pong_sub.receive().context("receiving a pong")? {
-                if s.seq == seq {
-                    return Ok(());
-                }
+            if self.pong_arrived(seq)? {
+                return Ok(());
             }
             let now = Instant::now();
             if now >= deadline {
@@ -261,27 +265,21 @@ impl PingPongSession {
     }
 
     /// `count` iceoryx2 round trips rung as `wake` says after `warmup` unrecorded ones,
-    /// microseconds: the floor of a turn rung that way.
+    /// microseconds: the floor of a turn rung that way (the ping-pong process is
+    /// switched to its doorbell and back for `WakeMode::Doorbell`).
     pub fn rung(
         &mut self,
         wake: WakeMode,
         warmup: usize,
         count: usize,
     ) -> anyhow::Result<Vec<f64>> {
-        match wake {
-            WakeMode::Doorbell => self.doorbell(warmup, count),
-            WakeMode::Event => self.iceoryx2(warmup, count),
-        }
-    }
-
-    /// `count` round trips rung by the session's doorbells after `warmup` unrecorded
-    /// ones, microseconds (the ping-pong process is switched to its doorbell and back).
-    fn doorbell(&mut self, warmup: usize, count: usize) -> anyhow::Result<Vec<f64>> {
         let ports = self.ports.as_ref().context("the session is closed")?;
-        ports
-            .ping
-            .notify_with_custom_event_id(EventId::new(BENCH_EVENT_DOORBELL))
-            .context("switching the ping-pong to its doorbell")?;
+        if wake == WakeMode::Doorbell {
+            ports
+                .ping
+                .notify_with_custom_event_id(EventId::new(BENCH_EVENT_DOORBELL))
+                .context("switching the ping-pong to its doorbell")?;
+        }
         let mut out = Vec::with_capacity(count);
         for k in 0..warmup + count {
             self.seq += 1;
@@ -294,43 +292,28 @@ impl PingPongSession {
                 })
                 .context("sending a ping")?;
             let t0 = Instant::now();
+            let deadline = t0 + ROUND_TRIP_DEADLINE;
+            match wake {
+                WakeMode::Doorbell => {
+                    self.doorbells
+                        .ring(0, EVENT_TURN)
+                        .context("ringing the ping")?;
+                    ports.wait_pong_rung(&self.doorbells, seq, deadline)?;
+                }
+                WakeMode::Event => {
+                    ports.ping.notify().context("ringing the ping")?;
+                    ports.wait_pong(seq, deadline)?;
+                }
+            }
+            let us = t0.elapsed().as_secs_f64() * 1e6;
+            if k >= warmup {
+                out.push(us);
+            }
+        }
+        if wake == WakeMode::Doorbell {
             self.doorbells
-                .ring(0, EVENT_TURN)
-                .context("ringing the ping")?;
-            ports.wait_pong_rung(&self.doorbells, seq, t0 + ROUND_TRIP_DEADLINE)?;
-            let us = t0.elapsed().as_secs_f64() * 1e6;
-            if k >= warmup {
-                out.push(us);
-            }
-        }
-        self.doorbells
-            .ring(0, BENCH_EVENT_DOORBELL)
-            .context("switching the ping-pong back to events")?;
-        Ok(out)
-    }
-
-    /// `count` iceoryx2 round trips rung by events after `warmup` unrecorded ones,
-    /// microseconds.
-    fn iceoryx2(&mut self, warmup: usize, count: usize) -> anyhow::Result<Vec<f64>> {
-        let ports = self.ports.as_ref().context("the session is closed")?;
-        let mut out = Vec::with_capacity(count);
-        for k in 0..warmup + count {
-            self.seq += 1;
-            let seq = self.seq;
-            ports
-                .ping_pub
-                .send_copy(BenchPing {
-                    seq,
-                    payload: [seq; 3],
-                })
-                .context("sending a ping")?;
-            let t0 = Instant::now();
-            ports.ping.notify().context("ringing the ping")?;
-            ports.wait_pong(seq, t0 + ROUND_TRIP_DEADLINE)?;
-            let us = t0.elapsed().as_secs_f64() * 1e6;
-            if k >= warmup {
-                out.push(us);
-            }
+                .ring(0, BENCH_EVENT_DOORBELL)
+                .context("switching the ping-pong back to events")?;
         }
         Ok(out)
     }

@@ -3,7 +3,6 @@
 
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
-use crate::geometry::Disk;
 use crate::geometry::{
     DiskGrid, Point, Pose, Vector, distance_at_the_same_time_m, distance_polyline_polyline,
     polyline_length_m, wrap_angle_rad,
@@ -287,7 +286,7 @@ impl<'a> Recorder<'a> {
         }
         // Each move against the bodies near it, found with a grid over them, when there
         // are enough moves to pay for building it (the verdicts are the same).
-        let grid = (moves.len() > 1).then(|| bodies_grid(&self.bodies));
+        let grid = (moves.len() > 1).then(|| safety::bodies_grid(&self.bodies));
         let others = safety::Others {
             bodies: &self.bodies,
             passing: &passing,
@@ -534,7 +533,7 @@ impl<'a> Recorder<'a> {
             .max(self.moving_now.max_radius_m())
             + self.bodies.iter().map(|b| b.radius_m).fold(0.0, f64::max);
         let mut agents = Vec::with_capacity(self.bodies.len());
-        let grid = bodies_grid(&self.bodies);
+        let grid = safety::bodies_grid(&self.bodies);
         for i in 0..self.bodies.len() {
             let body = self.bodies[i];
             let slot = self.scenario.agents[i].slot.ideal_position(&centre);
@@ -603,17 +602,4 @@ impl<'a> Recorder<'a> {
         run.completed = false;
         run
     }
-}
-
-/// A grid over `bodies` (a disk each, in agent order).
-fn bodies_grid(bodies: &[Body]) -> DiskGrid {
-    DiskGrid::new(
-        bodies
-            .iter()
-            .map(|b| Disk {
-                centre: b.position,
-                radius_m: b.radius_m,
-            })
-            .collect(),
-    )
 }
