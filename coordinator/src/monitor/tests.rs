@@ -2,6 +2,19 @@
 
 use super::*;
 
+/// Agent 0's move from `from` along `waypoints` to `best`, straight segments, meant to
+/// end at `best`.
+fn move_of<'a>(from: &'a Point, waypoints: &'a [Point], best: &'a Point) -> MoveUnderCheck<'a> {
+    MoveUnderCheck {
+        agent: 0,
+        from,
+        waypoints,
+        best,
+        under_way: false,
+        chord_errors_m: &[],
+    }
+}
+
 /// `bodies` standing, none passing, no grid.
 fn still(bodies: &[Body]) -> Standing<'_> {
     Standing {
@@ -95,36 +108,14 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
     let from = Point::new(5.0, 9.5);
     let into = [from, Point::new(5.0, 3.3)];
     assert_eq!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &into,
-                best: &into[1],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&lone(from)),
-            8
-        ),
+        m.check(&move_of(&from, &into, &into[1]), &still(&lone(from)), 8),
         Ok(())
     );
     // 0.1 m too deep, or through a wall, or standing inside: refused.
     for end in [Point::new(5.0, 3.2), Point::new(8.5, 5.0)] {
         let mv = [from, end];
         assert_eq!(
-            m.check(
-                &MoveUnderCheck {
-                    agent: 0,
-                    from: &from,
-                    waypoints: &mv,
-                    best: &end,
-                    under_way: false,
-                    chord_errors_m: &[]
-                },
-                &still(&lone(from)),
-                8
-            ),
+            m.check(&move_of(&from, &mv, &end), &still(&lone(from)), 8),
             Err(Refusal::Polygon {
                 segment: 0,
                 polygon: 0
@@ -135,14 +126,7 @@ fn the_monitor_keeps_moves_clear_of_polygons_non_convex_ones_too() {
     let inside = Point::new(3.5, 5.0);
     assert!(matches!(
         m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &inside,
-                waypoints: &[inside],
-                best: &inside,
-                under_way: false,
-                chord_errors_m: &[]
-            },
+            &move_of(&inside, &[inside], &inside),
             &still(&lone(inside)),
             8
         ),
@@ -156,34 +140,12 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     let from = Point::new(1.0, 5.0);
     let clear = [from, Point::new(3.0, 3.0)];
     assert_eq!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &clear,
-                best: &clear[1],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &clear, &clear[1]), &still(&bodies()), 8),
         Ok(())
     );
     let through = [from, Point::new(9.0, 5.0)];
     assert!(matches!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &through,
-                best: &through[1],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &through, &through[1]), &still(&bodies()), 8),
         Err(Refusal::Obstacle { obstacle: 0, .. })
     ));
     let around = [
@@ -194,32 +156,14 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     ];
     assert_eq!(
         m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &around,
-                best: &around[3],
-                under_way: false,
-                chord_errors_m: &[]
-            },
+            &move_of(&from, &around, &around[3]),
             &still(&bodies()[..1]),
             8
         ),
         Ok(())
     );
     assert!(matches!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &around,
-                best: &around[3],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &around, &around[3]), &still(&bodies()), 8),
         Err(Refusal::Agent { agent: 1, .. })
     ));
     // A mate that moves at the same time is not in the way here: the two moves are
@@ -227,14 +171,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     let passing = vec![false, true];
     assert_eq!(
         m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &around,
-                best: &around[3],
-                under_way: false,
-                chord_errors_m: &[]
-            },
+            &move_of(&from, &around, &around[3]),
             &Standing {
                 bodies: &bodies(),
                 passing: &passing,
@@ -246,77 +183,29 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     );
     let nan = [from, Point::new(f64::NAN, 0.0)];
     assert!(matches!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &nan,
-                best: &nan[1],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &nan, &nan[1]), &still(&bodies()), 8),
         Err(Refusal::NotFinite(1))
     ));
     let jump = [Point::new(2.0, 2.0)];
     assert!(matches!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &jump,
-                best: &jump[0],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &jump, &jump[0]), &still(&bodies()), 8),
         Err(Refusal::Teleport(_))
     ));
     let out = [from, Point::new(0.2, 5.0)];
     assert!(matches!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &out,
-                best: &out[1],
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &out, &out[1]), &still(&bodies()), 8),
         Err(Refusal::OutsideField(1))
     ));
     assert!(matches!(
-        m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &clear,
-                best: &from,
-                under_way: false,
-                chord_errors_m: &[]
-            },
-            &still(&bodies()),
-            8
-        ),
+        m.check(&move_of(&from, &clear, &from), &still(&bodies()), 8),
         Err(Refusal::WrongEnd)
     ));
     // Under way, a move may stop short of its best point.
     assert_eq!(
         m.check(
             &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &clear,
-                best: &from,
                 under_way: true,
-                chord_errors_m: &[]
+                ..move_of(&from, &clear, &from)
             },
             &still(&bodies()),
             8
@@ -327,14 +216,7 @@ fn the_monitor_refuses_what_breaks_the_invariant_and_accepts_the_rest() {
     let touch = [from, Point::new(3.7, 5.0)];
     assert_eq!(
         m.check(
-            &MoveUnderCheck {
-                agent: 0,
-                from: &from,
-                waypoints: &touch,
-                best: &touch[1],
-                under_way: false,
-                chord_errors_m: &[]
-            },
+            &move_of(&from, &touch, &touch[1]),
             &still(&bodies()[..1]),
             8
         ),
