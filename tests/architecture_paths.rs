@@ -194,9 +194,9 @@ fn a_wrong_path_is_reported_with_its_line() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let table = format!(
         "{SECTION}\n\n| concept | file |\n|---|---|\n\
-         | exists | `shared/src/{{lib,safety}}.rs` |\n\
+         | exists | `shared/src/{{lib,sensing}}.rs` |\n\
          | a folder | `shared/src/vocabulary/` |\n\
-         | wrong | `shared/src/{{safety,no_such_module}}.rs` |\n\
+         | wrong | `shared/src/{{sensing,no_such_module}}.rs` |\n\
          | a file named as a folder | `shared/src/lib.rs/` |\n"
     );
     let paths: Vec<(usize, String)> = file_cells(&table)
