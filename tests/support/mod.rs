@@ -174,13 +174,34 @@ pub fn wait_until(timeout: Duration, what: &str, mut done: impl FnMut() -> bool)
     }
 }
 
-/// Waits until no process's command line mentions `needle` (at most `timeout`).
+/// Waits until no process's command line mentions `needle` (at most `timeout`); on
+/// failure, names what was left (state, parent and command line of each).
 pub fn wait_for_no_process_mentioning(needle: &str, timeout: Duration) {
-    wait_until(
-        timeout,
-        &format!("processes of {needle} left running"),
-        || processes_mentioning(needle).is_empty(),
-    );
+    let deadline = Instant::now() + timeout;
+    loop {
+        let left = processes_mentioning(needle);
+        if left.is_empty() {
+            return;
+        }
+        if Instant::now() >= deadline {
+            let described: Vec<String> = left.iter().map(|&pid| describe(pid)).collect();
+            panic!(
+                "processes of {needle} left running (after {timeout:?}): {}",
+                described.join("; ")
+            );
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// `pid (state S, parent P): command line`, for a failure message.
+fn describe(pid: u32) -> String {
+    let cmdline = std::fs::read(format!("/proc/{pid}/cmdline")).unwrap_or_default();
+    let cmdline = String::from_utf8_lossy(&cmdline).replace('\0', " ");
+    match state_and_parent(pid) {
+        Some((state, parent)) => format!("{pid} (state {state}, parent {parent}): {cmdline}"),
+        None => format!("{pid}: {cmdline}"),
+    }
 }
 
 /// Waits until at least `count` agent processes of coordinator `pid` run; their pids.
