@@ -427,9 +427,8 @@ fn agents_leave_when_the_coordinator_is_killed() {
         reap(&mut agent, net::LINK_LEASE * 2 + Duration::from_secs(3)),
         "agent 5 did not leave after the coordinator was killed"
     );
-    // The relays and their agents die with the coordinator (the kernel kills them); the
-    // same room for a loaded machine as above.
-    support::wait_for_no_process_mentioning(&listen, net::LINK_LEASE * 2 + Duration::from_secs(3));
+    // The relays and their agents die with the coordinator (the kernel kills them).
+    support::wait_for_no_process_mentioning(&listen, support::EXIT_ROOM);
     // The dead coordinator's files are cleaned by the next run.
     let (output, next) = support::run_to_end(&[], &dir.path().join("next"));
     assert!(output.status.success());

@@ -161,7 +161,7 @@ fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
         }
         support::assert_nothing_left(pid);
         let endpoint = Endpoint::parse(&listen).expect("endpoint");
-        support::wait_for_no_process_mentioning(&endpoint.to_string(), Duration::from_secs(2));
+        support::wait_for_no_process_mentioning(&endpoint.to_string(), support::EXIT_ROOM);
     }
 }
 

@@ -174,6 +174,11 @@ pub fn wait_until(timeout: Duration, what: &str, mut done: impl FnMut() -> bool)
     }
 }
 
+/// How long processes that must go (told to quit, or killed with their parent by the
+/// kernel) may take to be gone on a loaded machine. A test waits for the state, so only a
+/// failure waits this long.
+pub const EXIT_ROOM: Duration = Duration::from_secs(10);
+
 /// Waits until no process's command line mentions `needle` (at most `timeout`); on
 /// failure, names what was left (state, parent and command line of each).
 pub fn wait_for_no_process_mentioning(needle: &str, timeout: Duration) {
@@ -218,7 +223,7 @@ pub fn wait_for_agents(pid: u32, count: usize) -> Vec<u32> {
 /// Nothing of the coordinator process `pid` is left: no agent process, no iceoryx2 file.
 pub fn assert_nothing_left(pid: u32) {
     let stem = prefix_stem(pid);
-    wait_for_no_process_mentioning(&format!("--prefix {stem}"), Duration::from_secs(2));
+    wait_for_no_process_mentioning(&format!("--prefix {stem}"), EXIT_ROOM);
     let left = leftovers(&stem);
     assert!(left.is_empty(), "iceoryx2 files left: {left:?}");
 }

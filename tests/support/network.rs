@@ -70,7 +70,7 @@ pub fn assert_clean(prefix: &str, listen: &Endpoint) {
         "relays left running"
     );
     let endpoint = listen.local_connect().to_string();
-    support::wait_for_no_process_mentioning(&endpoint, Duration::from_secs(2));
+    support::wait_for_no_process_mentioning(&endpoint, support::EXIT_ROOM);
 }
 
 /// Wait for a process the test started, killing it if it has not left in `timeout`.
