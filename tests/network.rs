@@ -407,7 +407,9 @@ fn agents_leave_when_the_coordinator_is_killed() {
     let endpoint = Endpoint::parse(&listen).expect("endpoint");
     let watcher = Watcher::open(&endpoint, 5);
     let mut agent = std::process::Command::new(support::agent_bin())
-        .args(["--connect", &listen, "--agent", "5", "--liveness-ms", "100"])
+        // Its default settings: it looks at the coordinator's token more often than its
+        // `--liveness-ms` (10 s) while it waits.
+        .args(["--connect", &listen, "--agent", "5"])
         .arg("--allow-plain-tcp")
         .stdin(std::process::Stdio::null())
         .spawn()
@@ -422,7 +424,8 @@ fn agents_leave_when_the_coordinator_is_killed() {
     );
     coordinator.kill().expect("SIGKILL the coordinator");
     let _ = coordinator.wait();
-    // The liveness period, the rejoin grace (a lease) and room for a loaded machine.
+    // The rejoin grace (a lease), a look at the token and room for a loaded machine: less
+    // than the default liveness period.
     assert!(
         reap(&mut agent, net::LINK_LEASE * 2 + Duration::from_secs(3)),
         "agent 5 did not leave after the coordinator was killed"

@@ -59,7 +59,9 @@ pub struct Args {
     pub generation: u32,
     /// How often to check that the coordinator is still there while waiting, in ms. Only
     /// a backstop: on Linux the kernel sends SIGTERM the moment the coordinator dies, so
-    /// an idle agent sleeps without waking (zero CPU).
+    /// an idle agent sleeps without waking (zero CPU). Over Zenoh an agent looks at the
+    /// coordinator's token at least every 250 ms (a local look) and leaves once it has
+    /// been gone for a lease.
     #[arg(long, default_value_t = 10_000)]
     pub liveness_ms: u64,
     /// Test mode, only in an agent built with `--features misbehave`: misbehave or

@@ -2,7 +2,7 @@
 //! than the coordinator. It connects to the coordinator's router, announces itself with a
 //! liveliness token, answers its relay's probe, takes the mission and serves turns.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{Context, bail};
 use net::zenoh::Session;
@@ -17,6 +17,12 @@ use shared::scenario::Checks;
 use crate::link::{mission_view, net_move, turn_input};
 use crate::relay::Token;
 use crate::transport::{Command, MissionView, Reply, Transport};
+
+/// How long a waiting agent waits for a message before it looks at the coordinator's
+/// token again, at most. The look is local (the token's comings and goings are pushed
+/// to this process), so it is cheap; it bounds how late an agent leaves once the
+/// coordinator is gone ([`Token::gone`]), whatever `--liveness-ms` says.
+const TOKEN_LOOK: Duration = Duration::from_millis(250);
 
 /// The agent's Zenoh session and ports.
 pub struct NetTransport {
@@ -34,7 +40,7 @@ pub struct NetTransport {
 
 impl NetTransport {
     /// Connect agent `agent` to the router at `connect`. `liveness` is how often it looks
-    /// for the coordinator while it waits.
+    /// for the coordinator while it waits ([`TOKEN_LOOK`] at most).
     pub fn connect(
         connect: &Endpoint,
         security: &Security,
@@ -74,7 +80,7 @@ impl NetTransport {
             coordinator,
             coordinator_token: Token::Unseen,
             mission: None,
-            liveness,
+            liveness: liveness.min(TOKEN_LOOK),
         })
     }
 
@@ -145,7 +151,6 @@ impl Transport for NetTransport {
     }
 
     fn next_command(&mut self) -> anyhow::Result<Command> {
-        let waited = Instant::now();
         loop {
             match self.receive(self.liveness)? {
                 Some(Down::Turn(t)) => match turn_input(t) {
@@ -158,7 +163,7 @@ impl Transport for NetTransport {
                 }
                 None => {}
             }
-            if waited.elapsed() >= self.liveness && self.coordinator_gone() {
+            if self.coordinator_gone() {
                 tracing::warn!("agent {}: coordinator gone, leaving", self.agent);
                 return Ok(Command::Quit);
             }
