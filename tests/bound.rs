@@ -7,8 +7,12 @@ mod support;
 use std::process::Command;
 
 fn bound(scenario: Option<&str>) -> serde_json::Value {
+    bound_with(scenario, &[])
+}
+
+fn bound_with(scenario: Option<&str>, flags: &[&str]) -> serde_json::Value {
     let mut cmd = Command::new(support::coordinator_bin());
-    cmd.arg("bound");
+    cmd.arg("bound").args(flags);
     if let Some(s) = scenario {
         cmd.arg(support::repo_root().join(s));
     }
@@ -79,4 +83,39 @@ fn the_run_stays_above_the_bound_with_a_top_speed_among_obstacles() {
     assert!(f("bound_mean_deviation_m") >= f("obstacle_bound_mean_deviation_m"));
     assert!(f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-6));
     assert!(f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-6));
+}
+
+/// Each agent alone (`--alone`): the method alone and the best track the lattice search
+/// finds are both achievable, so neither is below the agent's bound; the mates' share is
+/// the formation's deviation less the agents' alone. Without the flag there is no such
+/// report.
+#[test]
+fn each_agent_alone_stays_above_its_bound_and_the_mates_make_the_difference() {
+    let plain = bound(Some("scenarios/paper-top-speed.toml"));
+    assert!(plain["alone"].is_null(), "{plain}");
+    let r = bound_with(Some("scenarios/paper-top-speed.toml"), &["--alone"]);
+    let alone = &r["alone"];
+    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k}: {v}"));
+    let agents = r["per_agent"].as_array().expect("per_agent");
+    let each = alone["per_agent"].as_array().expect("alone per_agent");
+    assert_eq!(each.len(), agents.len());
+    for (a, b) in each.iter().zip(agents) {
+        assert_eq!(a["agent"], b["agent"]);
+        let bound_m = f(b, "mean_deviation_m");
+        assert!(
+            f(a, "mean_deviation_m") >= bound_m * (1.0 - 1e-6),
+            "{a} {b}"
+        );
+        assert!(
+            f(a, "searched_mean_deviation_m") >= bound_m * (1.0 - 1e-6),
+            "{a} {b}"
+        );
+    }
+    let n = each.len() as f64;
+    let mean_alone = each.iter().map(|a| f(a, "mean_deviation_m")).sum::<f64>() / n;
+    assert!((f(alone, "mean_deviation_m") - mean_alone).abs() < 1e-12);
+    assert!((f(alone, "mates_m") - (f(&r, "mean_deviation_m") - mean_alone)).abs() < 1e-12);
+    // On this field the obstacles keep some agents off their slots: the best track found
+    // alone is above 0.
+    assert!(f(alone, "searched_mean_deviation_m") > 0.0, "{alone}");
 }

@@ -295,6 +295,11 @@ pub struct SimulateArgs {
 pub struct BoundArgs {
     /// The scenario file (TOML); the embedded paper example when omitted.
     pub scenario: Option<PathBuf>,
+    /// Also run each agent alone: the method with no mate, and the best track a search
+    /// over a lattice finds (an achievable track: the least deviation alone lies between
+    /// the bound and it). Slower: a simulation and a search per agent.
+    #[arg(long)]
+    pub alone: bool,
 }
 
 /// Arguments of `compare`.

@@ -31,12 +31,15 @@ use clarabel::solver::{
 };
 use serde::Serialize;
 use shared::best_point::nearest_free_point;
-use shared::geometry::{
-    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
-};
+use shared::geometry::{FreeSpace, Point, Pose, Vector};
 use shared::scenario::Scenario;
 use shared::simulate::simulate_along;
 use shared::vocabulary::AgentSpec;
+
+mod alone;
+mod lattice;
+
+pub use alone::{AgentAlone, StaticSpace, agent_alone};
 
 use crate::cli::BoundArgs;
 use crate::error::CliError;
@@ -159,53 +162,25 @@ pub fn optimal_track(
     Ok((sol.obj_val.min(sol.obj_val_dual).max(0.0), track))
 }
 
-/// How far `slot` lies from the nearest point where a disk of `radius_m` fits inside the
-/// field and clear of `obstacles` and `polygons` (true sizes): 0 where it fits there
-/// already, 0 too where it fits nowhere (no bound to give).
-pub fn obstacle_floor_m(
-    field: &Field,
-    obstacles: &DiskGrid,
-    polygons: &PolygonLayer,
-    offset: &Vector,
-    slot: &Point,
-) -> f64 {
-    let layers = [obstacles];
-    let space = FreeSpace::new(*field, &layers).with_polygons(polygons);
+/// How far `slot` (in the scenario's frame) lies from the nearest point where the agent
+/// fits, `space` being the free space of its centre in a frame offset by `offset` (the
+/// field inset by its radius, the obstacles grown by it): 0 where it fits there already,
+/// 0 too where it fits nowhere (no bound to give).
+fn floor_in_m(space: &FreeSpace, offset: &Vector, slot: &Point) -> f64 {
     let query = slot - offset;
-    nearest_free_point(&space, &query).map_or(0.0, |free| (free - query).norm())
+    nearest_free_point(space, &query).map_or(0.0, |free| (free - query).norm())
 }
 
 /// The floors of agent `spec` at `slots` in `scenario`'s static world
-/// ([`obstacle_floor_m`]).
+/// ([`floor_in_m`]).
 fn obstacle_floors_m(scenario: &Scenario, spec: &AgentSpec, slots: &[Point]) -> Vec<f64> {
-    let r = spec.radius_m;
-    // The frame the best point is found in: the field inset by the radius, from (0, 0).
-    let offset = Vector::new(r, r);
-    let field = Field::new(
-        (scenario.field.width_m - 2.0 * r).max(0.0),
-        (scenario.field.height_m - 2.0 * r).max(0.0),
-    );
-    let obstacles = DiskGrid::new(
-        scenario
-            .static_obstacles()
+    let world = StaticSpace::new(scenario, spec);
+    world.with_free_space(|space| {
+        slots
             .iter()
-            .map(|d| Disk {
-                centre: d.centre - offset,
-                radius_m: d.radius_m + r,
-            })
-            .collect(),
-    );
-    let polygons = PolygonLayer::new(
-        scenario
-            .polygons
-            .iter()
-            .map(|p| InflatedPolygon::from_polygon(p.translated(&-offset), r))
-            .collect(),
-    );
-    slots
-        .iter()
-        .map(|s| obstacle_floor_m(&field, &obstacles, &polygons, &offset, s))
-        .collect()
+            .map(|s| floor_in_m(space, &world.offset, s))
+            .collect()
+    })
 }
 
 /// One agent's bounds.
@@ -254,6 +229,23 @@ pub struct BoundReport {
     pub collisions: usize,
     /// Each agent's bounds.
     pub per_agent: Vec<AgentBound>,
+    /// With `--alone`: each agent alone; `null` without.
+    pub alone: Option<AloneReport>,
+}
+
+/// Each agent alone (`bound --alone`), over the agents.
+#[derive(Clone, Debug, Serialize)]
+pub struct AloneReport {
+    /// The method's mean deviation with each agent alone, in metres.
+    pub mean_deviation_m: f64,
+    /// The mean deviation of the best tracks found alone (an agent without a top speed
+    /// reaches its bound), in metres; `null` if the search found no track for an agent.
+    pub searched_mean_deviation_m: Option<f64>,
+    /// What the mates add: the formation's mean deviation minus the agents' alone, in
+    /// metres.
+    pub mates_m: f64,
+    /// Each agent alone.
+    pub per_agent: Vec<AgentAlone>,
 }
 
 /// The bounds of every agent of `scenario` along `centre_path`.
@@ -324,6 +316,16 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     let obstacle_mean = mean_of(|a| a.obstacle_mean_deviation_m);
     let run = simulate_along(scenario, &loaded.centre_path).context("the reference simulation")?;
     let summary = run.summary();
+    let alone = if args.alone {
+        Some(alone_report(
+            scenario,
+            &loaded.centre_path,
+            &per_agent,
+            summary.mean_deviation_m,
+        )?)
+    } else {
+        None
+    };
     let ratio = |ours: f64, bound: f64| (bound > 0.0).then(|| ours / bound);
     let report = BoundReport {
         scenario: summary.scenario.clone(),
@@ -339,6 +341,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         max_ratio: ratio(summary.max_deviation_m, bound_max),
         collisions: summary.collisions,
         per_agent,
+        alone,
     };
     let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.2}x"));
     // A bound of a few micrometres is shown as such, not as 0.0000.
@@ -361,14 +364,71 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         metres(report.bound_max_deviation_m),
         show(report.max_ratio)
     );
+    if let Some(alone) = &report.alone {
+        let searched = alone.searched_mean_deviation_m;
+        eprintln!(
+            "{}: each agent alone {:.4} m, the best track found alone {} m ({}), the mates add {:.4} m",
+            report.scenario,
+            alone.mean_deviation_m,
+            searched.map_or("-".to_string(), |m| format!("{m:.4}")),
+            show(searched.and_then(|m| ratio(alone.mean_deviation_m, m))),
+            alone.mates_m,
+        );
+    }
     let json = serde_json::to_string_pretty(&report).context("writing the report")?;
     println!("{json}");
     Ok(())
 }
 
+/// Each agent of `scenario` alone along `centre_path`, with a progress bar on stderr;
+/// `bounds` are the agents' bounds, `formation_mean_m` the whole formation's mean
+/// deviation.
+fn alone_report(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    bounds: &[AgentBound],
+    formation_mean_m: f64,
+) -> Result<AloneReport, CliError> {
+    let bar = indicatif::ProgressBar::new(scenario.agents.len() as u64).with_style(
+        indicatif::ProgressStyle::with_template("each agent alone {bar:30} {pos}/{len} {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let per_agent = bounds
+        .iter()
+        .map(|b| {
+            let agent = b.agent;
+            let alone = agent_alone(scenario, centre_path, agent, b.max_deviation_m)
+                .with_context(|| format!("agent {agent} alone"))
+                .map_err(CliError::Other);
+            bar.inc(1);
+            alone
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    bar.finish_and_clear();
+    let n = per_agent.len().max(1) as f64;
+    let mean_deviation_m = per_agent.iter().map(|a| a.mean_deviation_m).sum::<f64>() / n;
+    // Without a top speed an agent can stand at its slot's nearest free point every
+    // step: its bound is achieved.
+    let searched: Option<Vec<f64>> = per_agent
+        .iter()
+        .zip(bounds)
+        .map(|(a, b)| match b.max_step_m {
+            Some(_) => a.searched_mean_deviation_m,
+            None => Some(b.mean_deviation_m),
+        })
+        .collect();
+    Ok(AloneReport {
+        mean_deviation_m,
+        searched_mean_deviation_m: searched.map(|s| s.iter().sum::<f64>() / n),
+        mates_m: formation_mean_m - mean_deviation_m,
+        per_agent,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use shared::geometry::{Disk, DiskGrid, Field, PolygonLayer};
 
     /// A slot the agent can follow: both bounds are 0 and the track is the slots.
     #[test]
@@ -427,9 +487,9 @@ mod tests {
         let field = Field::new(20.0 - 2.0 * r, 10.0 - 2.0 * r);
         let obstacles = DiskGrid::new(vec![Disk::new(5.0 - r, 5.0 - r, 1.0 + r)]);
         let polygons = PolygonLayer::new(Vec::new());
-        let floor = |x: f64, y: f64| {
-            obstacle_floor_m(&field, &obstacles, &polygons, &offset, &Point::new(x, y))
-        };
+        let layers = [&obstacles];
+        let space = FreeSpace::new(field, &layers).with_polygons(&polygons);
+        let floor = |x: f64, y: f64| floor_in_m(&space, &offset, &Point::new(x, y));
         assert!((floor(5.0, 5.0) - 1.5).abs() < 1e-9);
         assert!((floor(5.9, 5.0) - 0.6).abs() < 1e-9);
         assert_eq!(floor(7.0, 5.0), 0.0);

@@ -1,0 +1,171 @@
+//! Each agent alone among the static obstacles (`coordinator bound --alone`): how the
+//! method does with no mate (the reference simulation of the scenario with that agent's
+//! slot only, along the same centre path), and the best track a search over a lattice
+//! finds ([`best_track_on_lattice`]). The least deviation alone lies between the cone
+//! bound and the best track found; the gap between the whole formation and the agents
+//! alone is what the mates cost.
+
+use serde::Serialize;
+use shared::best_point::nearest_free_point;
+use shared::geometry::{
+    Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
+};
+use shared::scenario::Scenario;
+use shared::simulate::{SimulateError, simulate_along};
+use shared::vocabulary::AgentSpec;
+
+use super::lattice::{Lattice, best_track_on_lattice};
+
+/// The lattice of the search for an agent with top speed `max_step_m` whose largest
+/// deviation is at least `max_bound_m` (its bound): points a fifth of the top speed
+/// apart, up to 3 m from the slot (more than any agent alone strays in the capped
+/// scenarios measured, 2.6 m at most) or half as far again as the bound where that is
+/// more.
+pub fn lattice_for(max_step_m: f64, max_bound_m: f64) -> Lattice {
+    Lattice {
+        spacing_m: max_step_m / 5.0,
+        window_m: (1.5 * max_bound_m).max(3.0),
+    }
+}
+
+/// The static world as one agent of radius `radius_m` sees it, in the frame the best
+/// point is found in (the field inset by the radius, from (0, 0); every obstacle grown by
+/// the radius).
+pub struct StaticSpace {
+    /// Where the frame's origin lies in the scenario's frame.
+    pub offset: Vector,
+    field: Field,
+    obstacles: DiskGrid,
+    polygons: PolygonLayer,
+}
+
+impl StaticSpace {
+    /// The static world of `scenario` for `spec`.
+    pub fn new(scenario: &Scenario, spec: &AgentSpec) -> Self {
+        let r = spec.radius_m;
+        let offset = Vector::new(r, r);
+        Self {
+            offset,
+            field: Field::new(
+                (scenario.field.width_m - 2.0 * r).max(0.0),
+                (scenario.field.height_m - 2.0 * r).max(0.0),
+            ),
+            obstacles: DiskGrid::new(
+                scenario
+                    .static_obstacles()
+                    .iter()
+                    .map(|d| Disk {
+                        centre: d.centre - offset,
+                        radius_m: d.radius_m + r,
+                    })
+                    .collect(),
+            ),
+            polygons: PolygonLayer::new(
+                scenario
+                    .polygons
+                    .iter()
+                    .map(|p| InflatedPolygon::from_polygon(p.translated(&-offset), r))
+                    .collect(),
+            ),
+        }
+    }
+
+    /// Call `with` on the free space of the agent's centre (in this frame).
+    pub fn with_free_space<T>(&self, with: impl FnOnce(&FreeSpace) -> T) -> T {
+        let layers = [&self.obstacles];
+        let space = FreeSpace::new(self.field, &layers).with_polygons(&self.polygons);
+        with(&space)
+    }
+}
+
+/// One agent alone.
+#[derive(Clone, Debug, Serialize)]
+pub struct AgentAlone {
+    /// The agent.
+    pub agent: usize,
+    /// The method's mean deviation with this agent alone, in metres.
+    pub mean_deviation_m: f64,
+    /// The mean deviation of the best track the lattice search found (`null`: without a
+    /// top speed, or no track found), in metres.
+    pub searched_mean_deviation_m: Option<f64>,
+}
+
+/// Agent `agent` of `scenario` alone along `centre_path`; `max_bound_m` is the bound of
+/// its largest deviation (it sizes the search's window, [`lattice_for`]).
+pub fn agent_alone(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    agent: usize,
+    max_bound_m: f64,
+) -> Result<AgentAlone, SimulateError> {
+    let spec = &scenario.agents[agent];
+    let mut one = scenario.clone();
+    one.agents = vec![*spec];
+    let mean_deviation_m = simulate_along(&one, centre_path)?
+        .summary()
+        .mean_deviation_m;
+    let searched_mean_deviation_m = spec.max_step_m.and_then(|cap| {
+        searched_track_m(
+            scenario,
+            spec,
+            centre_path,
+            lattice_for(cap, max_bound_m),
+            cap,
+        )
+    });
+    Ok(AgentAlone {
+        agent,
+        mean_deviation_m,
+        searched_mean_deviation_m,
+    })
+}
+
+/// The mean deviation of the best track the lattice search finds for `spec` alone.
+fn searched_track_m(
+    scenario: &Scenario,
+    spec: &AgentSpec,
+    centre_path: &[Pose],
+    lattice: Lattice,
+    max_step_m: f64,
+) -> Option<f64> {
+    let (first, rest) = centre_path.split_first()?;
+    if rest.is_empty() {
+        return Some(0.0);
+    }
+    let world = StaticSpace::new(scenario, spec);
+    // In the best point's frame.
+    let to_frame = |p: Point| p - world.offset;
+    let start = to_frame(spec.slot.ideal_position(first));
+    let slots: Vec<Point> = rest
+        .iter()
+        .map(|c| to_frame(spec.slot.ideal_position(c)))
+        .collect();
+    world.with_free_space(|space| {
+        // The slot and its nearest free point are candidates too: the lattice alone
+        // would round every position by up to half its spacing.
+        let anchors: Vec<Vec<Point>> = slots
+            .iter()
+            .map(|s| {
+                std::iter::once(*s)
+                    .chain(nearest_free_point(space, s).ok())
+                    .collect()
+            })
+            .collect();
+        let clearance_m = |p: &Point| {
+            space
+                .is_free(p, 0.0)
+                .then(|| space.clearance_m(p, max_step_m).max(0.0))
+        };
+        let segment_free = |a: &Point, b: &Point| space.is_segment_free(a, b, 0.0);
+        best_track_on_lattice(
+            &start,
+            &slots,
+            &anchors,
+            max_step_m,
+            lattice,
+            clearance_m,
+            segment_free,
+        )
+        .map(|(sum_m, _)| sum_m / slots.len() as f64)
+    })
+}

@@ -1,0 +1,297 @@
+//! The best track of one agent alone that a search over a lattice finds: an achievable
+//! track (every position free, every step a free straight segment within the top speed),
+//! so its deviation bounds the least deviation alone from above, as the cone programme of
+//! [`super::optimal_track`] bounds it from below.
+
+use std::collections::HashMap;
+
+use shared::geometry::Point;
+
+/// How much longer than the top speed a step between two lattice points may come out
+/// from rounding their coordinates (`i * spacing`), in metres.
+const STEP_ROUNDING_M: f64 = 1e-9;
+
+/// How the search lays its lattice.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lattice {
+    /// Distance between neighbouring lattice points, in metres.
+    pub spacing_m: f64,
+    /// How far from its slot the agent may be at a step, in metres: the lattice points
+    /// of a step are those within this distance of the slot.
+    pub window_m: f64,
+}
+
+/// A candidate position at one step: where, how far it is from every obstacle (capped),
+/// its lattice cell (none for an anchor), the least summed deviation of a track reaching
+/// it, and the candidate of the step before that track comes from.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    at: Point,
+    clearance_m: f64,
+    cell: Option<(i64, i64)>,
+    cost_m: f64,
+    from: usize,
+}
+
+/// The track of least summed deviation that an agent starting at `start` can follow with
+/// steps of at most `max_step_m` (straight segments), its slot at step `k + 1` being
+/// `slots[k]`, its positions at each step taken from `lattice` around the slot and from
+/// `anchors[k]` (extra candidates, such as the slot itself and its nearest free point).
+///
+/// - `clearance_m(p)`: `None` where the agent does not fit at `p`, else a distance within
+///   which every point is free of obstacles (it may be an underestimate, such as 0; the
+///   space is also assumed convex apart from the obstacles, like a rectangular field).
+/// - `segment_free(a, b)`: whether the straight segment from `a` to `b` is free; asked
+///   only when the two clearances do not already cover it.
+///
+/// A step is at most `max_step_m` up to the rounding of the lattice's coordinates
+/// (1e-9 m). Returns the summed deviation (metres) and the track `x_1 .. x_T`, or `None` when no
+/// track through the candidates exists (a step none of whose candidates can be reached).
+pub fn best_track_on_lattice(
+    start: &Point,
+    slots: &[Point],
+    anchors: &[Vec<Point>],
+    max_step_m: f64,
+    lattice: Lattice,
+    clearance_m: impl Fn(&Point) -> Option<f64>,
+    segment_free: impl Fn(&Point, &Point) -> bool,
+) -> Option<(f64, Vec<Point>)> {
+    let h = lattice.spacing_m;
+    if !(h > 0.0 && max_step_m > 0.0 && lattice.window_m >= 0.0) {
+        return None;
+    }
+    // Lattice offsets a step can take.
+    let reach = (max_step_m / h).floor() as i64;
+    let offsets: Vec<(i64, i64)> = (-reach..=reach)
+        .flat_map(|di| (-reach..=reach).map(move |dj| (di, dj)))
+        .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * h <= max_step_m)
+        .collect();
+    let point_of = |(i, j): (i64, i64)| Point::new(i as f64 * h, j as f64 * h);
+    let reachable = |from: &Node, to: &Node| {
+        let d = (to.at - from.at).norm();
+        d <= max_step_m + STEP_ROUNDING_M
+            && (from.clearance_m + to.clearance_m >= d || segment_free(&from.at, &to.at))
+    };
+    let mut steps: Vec<Vec<Node>> = Vec::with_capacity(slots.len() + 1);
+    steps.push(vec![Node {
+        at: *start,
+        clearance_m: clearance_m(start).map_or(0.0, |c| c.min(max_step_m).max(0.0)),
+        cell: None,
+        cost_m: 0.0,
+        from: 0,
+    }]);
+    for (k, slot) in slots.iter().enumerate() {
+        let previous = &steps[k];
+        let by_cell: HashMap<(i64, i64), usize> = previous
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| n.cell.map(|c| (c, i)))
+            .collect();
+        let loose: Vec<usize> = (0..previous.len())
+            .filter(|&i| previous[i].cell.is_none())
+            .collect();
+        let mut candidates = Vec::new();
+        let w = (lattice.window_m / h).ceil() as i64;
+        let (ci, cj) = ((slot.x / h).round() as i64, (slot.y / h).round() as i64);
+        for i in ci - w..=ci + w {
+            for j in cj - w..=cj + w {
+                let at = point_of((i, j));
+                if (at - slot).norm() <= lattice.window_m {
+                    candidates.push((at, Some((i, j))));
+                }
+            }
+        }
+        candidates.extend(anchors.get(k).into_iter().flatten().map(|a| (*a, None)));
+        let mut nodes = Vec::with_capacity(candidates.len());
+        for (at, cell) in candidates {
+            let Some(clear) = clearance_m(&at) else {
+                continue;
+            };
+            let mut node = Node {
+                at,
+                clearance_m: clear.min(max_step_m).max(0.0),
+                cell,
+                cost_m: f64::INFINITY,
+                from: 0,
+            };
+            let mut relax = |from: usize| {
+                let q = &previous[from];
+                if q.cost_m < node.cost_m && reachable(q, &node) {
+                    node.cost_m = q.cost_m;
+                    node.from = from;
+                }
+            };
+            match cell {
+                Some((i, j)) => {
+                    for (di, dj) in &offsets {
+                        if let Some(&from) = by_cell.get(&(i + di, j + dj)) {
+                            relax(from);
+                        }
+                    }
+                }
+                None => {
+                    let (lo_i, hi_i) = (
+                        ((at.x - max_step_m) / h).floor() as i64,
+                        ((at.x + max_step_m) / h).ceil() as i64,
+                    );
+                    let (lo_j, hi_j) = (
+                        ((at.y - max_step_m) / h).floor() as i64,
+                        ((at.y + max_step_m) / h).ceil() as i64,
+                    );
+                    for i in lo_i..=hi_i {
+                        for j in lo_j..=hi_j {
+                            if let Some(&from) = by_cell.get(&(i, j)) {
+                                relax(from);
+                            }
+                        }
+                    }
+                }
+            }
+            for &from in &loose {
+                relax(from);
+            }
+            if node.cost_m.is_finite() {
+                node.cost_m += (at - slot).norm();
+                nodes.push(node);
+            }
+        }
+        if nodes.is_empty() {
+            return None;
+        }
+        steps.push(nodes);
+    }
+    // The cheapest end, and the way back to it.
+    let last = steps.last()?;
+    let (mut at, end) = last
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.cost_m.total_cmp(&b.1.cost_m))?;
+    let total_m = end.cost_m;
+    let mut track = Vec::with_capacity(slots.len());
+    for k in (1..steps.len()).rev() {
+        let node = &steps[k][at];
+        track.push(node.at);
+        at = node.from;
+    }
+    track.reverse();
+    Some((total_m, track))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LATTICE: Lattice = Lattice {
+        spacing_m: 0.1,
+        window_m: 1.5,
+    };
+
+    /// A slot the agent can follow in open space, the slots as anchors: it tracks them
+    /// exactly.
+    #[test]
+    fn a_followable_slot_is_tracked_exactly() {
+        let start = Point::new(0.03, 0.01);
+        let slots: Vec<Point> = (1..=6)
+            .map(|k| Point::new(0.03 + 0.37 * k as f64, 0.01))
+            .collect();
+        let anchors: Vec<Vec<Point>> = slots.iter().map(|s| vec![*s]).collect();
+        let (sum, track) = best_track_on_lattice(
+            &start,
+            &slots,
+            &anchors,
+            0.5,
+            LATTICE,
+            |_| Some(f64::INFINITY),
+            |_, _| true,
+        )
+        .expect("a track");
+        assert!(sum < 1e-12, "{sum}");
+        assert_eq!(track, slots);
+    }
+
+    /// A slot running away at 1 m a step from an agent that makes 0.5 m, along a lattice
+    /// line: it falls behind by 0.5 m a step whatever it does, so the summed deviation
+    /// is 0.5 (1 + 2 + ... + T), as the cone programme's closed form says.
+    #[test]
+    fn a_runaway_slot_gives_the_closed_form() {
+        let t = 6;
+        let slots: Vec<Point> = (1..=t).map(|k| Point::new(k as f64, 0.0)).collect();
+        let lattice = Lattice {
+            spacing_m: 0.1,
+            window_m: 4.0,
+        };
+        let (sum, track) = best_track_on_lattice(
+            &Point::origin(),
+            &slots,
+            &[],
+            0.5,
+            lattice,
+            |_| Some(f64::INFINITY),
+            |_, _| true,
+        )
+        .expect("a track");
+        let exact = 0.5 * (t * (t + 1) / 2) as f64;
+        assert!((sum - exact).abs() < 1e-9, "{sum} vs {exact}");
+        for (k, p) in track.iter().enumerate() {
+            assert!((p.x - 0.5 * (k + 1) as f64).abs() < 1e-9, "{p:?}");
+        }
+    }
+
+    /// A wall across the slot's way with one gap: every step of the track is free and
+    /// within the top speed, and the track is never better than the cone bound (the
+    /// bound without the wall) nor worse than standing still.
+    #[test]
+    fn the_track_goes_round_a_wall_and_stays_between_the_bounds() {
+        // The wall: x in [1.0, 1.2], y outside [1.5, 2.0] is blocked.
+        let blocked = |p: &Point| p.x > 1.0 && p.x < 1.2 && !(p.y > 1.5 && p.y < 2.0);
+        let clearance = |p: &Point| (!blocked(p)).then_some(0.0);
+        let segment_free =
+            |a: &Point, b: &Point| (0..=200).all(|i| !blocked(&(a + (b - a) * (i as f64 / 200.0))));
+        // Long enough that staying behind the wall costs more than the way round.
+        let slots: Vec<Point> = (1..=16).map(|k| Point::new(0.3 * k as f64, 0.0)).collect();
+        let start = Point::origin();
+        let lattice = Lattice {
+            spacing_m: 0.1,
+            window_m: 2.5,
+        };
+        let (sum, track) =
+            best_track_on_lattice(&start, &slots, &[], 0.5, lattice, clearance, segment_free)
+                .expect("a track");
+        let mut from = start;
+        for p in &track {
+            assert!(!blocked(p), "{p:?}");
+            assert!((p - from).norm() <= 0.5 + 1e-12);
+            assert!(segment_free(&from, p), "{from:?} -> {p:?}");
+            from = *p;
+        }
+        let summed: f64 = track.iter().zip(&slots).map(|(p, s)| (p - s).norm()).sum();
+        assert!((summed - sum).abs() < 1e-9);
+        let standing: f64 = slots.iter().map(|s| (s - start).norm()).sum();
+        assert!(sum < standing, "{sum} vs {standing}");
+        // Without the wall the slot (0.3 m a step) is followed exactly from step 1 on,
+        // but for the lattice's rounding: going round costs more.
+        assert!(sum > 0.5, "{sum}");
+        // It crossed the wall through the gap.
+        assert!(track.iter().any(|p| p.x >= 1.2));
+    }
+
+    /// No candidate within reach: no track.
+    #[test]
+    fn an_unreachable_step_gives_none() {
+        let slots = vec![Point::new(10.0, 0.0)];
+        let lattice = Lattice {
+            spacing_m: 0.1,
+            window_m: 1.0,
+        };
+        let found = best_track_on_lattice(
+            &Point::origin(),
+            &slots,
+            &[],
+            0.5,
+            lattice,
+            |_| Some(f64::INFINITY),
+            |_, _| true,
+        );
+        assert!(found.is_none());
+    }
+}
