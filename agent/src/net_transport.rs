@@ -40,7 +40,7 @@ pub struct NetTransport {
 
 impl NetTransport {
     /// Connect agent `agent` to the router at `connect`. `liveness` is how often it looks
-    /// for the coordinator while it waits ([`TOKEN_LOOK`] at most).
+    /// for the coordinator while it waits (every 250 ms at most: the look is local).
     pub fn connect(
         connect: &Endpoint,
         security: &Security,
