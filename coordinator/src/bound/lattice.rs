@@ -186,6 +186,24 @@ mod tests {
         window_m: 1.5,
     };
 
+    /// The search in open space (every point free, every segment free), top speed 0.5 m.
+    fn in_open_space(
+        start: &Point,
+        slots: &[Point],
+        anchors: &[Vec<Point>],
+        lattice: Lattice,
+    ) -> Option<(f64, Vec<Point>)> {
+        best_track_on_lattice(
+            start,
+            slots,
+            anchors,
+            0.5,
+            lattice,
+            |_| Some(f64::INFINITY),
+            |_, _| true,
+        )
+    }
+
     /// A slot the agent can follow in open space, the slots as anchors: it tracks them
     /// exactly.
     #[test]
@@ -195,16 +213,7 @@ mod tests {
             .map(|k| Point::new(0.03 + 0.37 * k as f64, 0.01))
             .collect();
         let anchors: Vec<Vec<Point>> = slots.iter().map(|s| vec![*s]).collect();
-        let (sum, track) = best_track_on_lattice(
-            &start,
-            &slots,
-            &anchors,
-            0.5,
-            LATTICE,
-            |_| Some(f64::INFINITY),
-            |_, _| true,
-        )
-        .expect("a track");
+        let (sum, track) = in_open_space(&start, &slots, &anchors, LATTICE).expect("a track");
         assert!(sum < 1e-12, "{sum}");
         assert_eq!(track, slots);
     }
@@ -220,16 +229,7 @@ mod tests {
             spacing_m: 0.1,
             window_m: 4.0,
         };
-        let (sum, track) = best_track_on_lattice(
-            &Point::origin(),
-            &slots,
-            &[],
-            0.5,
-            lattice,
-            |_| Some(f64::INFINITY),
-            |_, _| true,
-        )
-        .expect("a track");
+        let (sum, track) = in_open_space(&Point::origin(), &slots, &[], lattice).expect("a track");
         let exact = 0.5 * (t * (t + 1) / 2) as f64;
         assert!((sum - exact).abs() < 1e-9, "{sum} vs {exact}");
         for (k, p) in track.iter().enumerate() {
@@ -283,15 +283,7 @@ mod tests {
             spacing_m: 0.1,
             window_m: 1.0,
         };
-        let found = best_track_on_lattice(
-            &Point::origin(),
-            &slots,
-            &[],
-            0.5,
-            lattice,
-            |_| Some(f64::INFINITY),
-            |_, _| true,
-        );
+        let found = in_open_space(&Point::origin(), &slots, &[], lattice);
         assert!(found.is_none());
     }
 }
