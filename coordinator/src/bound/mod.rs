@@ -23,6 +23,11 @@
 //! alone (no floor) and with the obstacles alone (the floors' mean) are reported too, to
 //! say which dominates. The reference simulation is run too, and its figures are reported
 //! against the bounds.
+//!
+//! With `--alone` each agent is also run alone (`alone.rs`: the method with no mate) and
+//! its best track searched on a lattice (`lattice.rs`): an achievable track, so the least
+//! deviation an agent alone can have lies between its bound and that track, and the
+//! formation's excess over the agents alone is what the mates cost.
 
 use anyhow::Context;
 use clarabel::algebra::CscMatrix;
