@@ -153,41 +153,6 @@ pub fn check_move(
     )
 }
 
-/// [`check_move`] for body `agent` of `bodies` against every other body of `bodies`
-/// (without copying them out): [`Violation::HitsBody`] numbers the bodies as
-/// [`check_move`] would number `bodies` without `agent`.
-///
-/// `chord_errors_m` holds, for a car's move, how far each segment's arc bulges from it
-/// ([`check_car_move`](crate::kinematics::check_car_move)): the segment is checked with
-/// the agent's radius grown by it, so the whole arc is (empty for straight segments).
-#[allow(clippy::too_many_arguments)]
-pub fn check_move_of(
-    field: &Field,
-    obstacles: &DiskGrid,
-    bodies: &[Body],
-    agent: usize,
-    from: &Point,
-    waypoints: &[Point],
-    chord_errors_m: &[f64],
-    max_waypoints: usize,
-) -> Result<(), Violation> {
-    let others = Others {
-        bodies,
-        passing: &[],
-        grid: None,
-    };
-    check_move_among(
-        field,
-        obstacles,
-        &others,
-        agent,
-        from,
-        waypoints,
-        chord_errors_m,
-        max_waypoints,
-    )
-}
-
 /// The bodies a move is checked against in [`check_move_among`].
 #[derive(Clone, Copy, Debug)]
 pub struct Others<'a> {
@@ -203,7 +168,13 @@ pub struct Others<'a> {
     pub grid: Option<&'a DiskGrid>,
 }
 
-/// [`check_move_of`] against `others` (see [`Others`]): the bodies that stand still.
+/// [`check_move`] for body `agent` of `others.bodies` against the other bodies that
+/// stand still (see [`Others`]), without copying them out: [`Violation::HitsBody`]
+/// numbers the bodies as [`check_move`] would number them without `agent`.
+///
+/// `chord_errors_m` holds, for a car's move, how far each segment's arc bulges from it
+/// ([`check_car_move`](crate::kinematics::check_car_move)): the segment is checked with
+/// the agent's radius grown by it, so the whole arc is (empty for straight segments).
 #[allow(clippy::too_many_arguments)]
 pub fn check_move_among(
     field: &Field,
@@ -389,7 +360,7 @@ pub fn check_move_against_moving(
 }
 
 /// Check that a body of radius `radius_m` following `waypoints` (already checked by
-/// [`check_move`] or [`check_move_of`]: finite, at least one) never overlaps one of
+/// [`check_move`] or [`check_move_among`]: finite, at least one) never overlaps one of
 /// `polygons` beyond [`SAFETY_TOLERANCE_M`]: the exact distance of every segment to
 /// every polygon, inside counting as overlap by at least the radius.
 pub fn check_move_against_polygons(
