@@ -3,8 +3,6 @@
 //! so its deviation bounds the least deviation alone from above, as the cone programme of
 //! [`super::optimal_track`] bounds it from below.
 
-use std::collections::HashMap;
-
 use shared::geometry::Point;
 
 /// How much longer than the top speed a step between two lattice points may come out
@@ -31,6 +29,57 @@ struct Node {
     cell: Option<(i64, i64)>,
     cost_m: f64,
     from: usize,
+}
+
+/// Which node of a step lies on each lattice cell: a dense table over the cells' bounding
+/// box (a step's cells fill the disk of its window, so little of it is empty).
+struct CellIndex {
+    first: (i64, i64),
+    columns: i64,
+    rows: i64,
+    node: Vec<Option<usize>>,
+}
+
+impl CellIndex {
+    /// The index of `nodes`' cells.
+    fn of(nodes: &[Node]) -> Self {
+        let cells = || nodes.iter().filter_map(|n| n.cell);
+        let (Some(lo_i), Some(hi_i), Some(lo_j), Some(hi_j)) = (
+            cells().map(|c| c.0).min(),
+            cells().map(|c| c.0).max(),
+            cells().map(|c| c.1).min(),
+            cells().map(|c| c.1).max(),
+        ) else {
+            return Self {
+                first: (0, 0),
+                columns: 0,
+                rows: 0,
+                node: Vec::new(),
+            };
+        };
+        let (columns, rows) = (hi_i - lo_i + 1, hi_j - lo_j + 1);
+        let mut node = vec![None; (columns * rows) as usize];
+        for (k, n) in nodes.iter().enumerate() {
+            if let Some((i, j)) = n.cell {
+                node[((i - lo_i) * rows + (j - lo_j)) as usize] = Some(k);
+            }
+        }
+        Self {
+            first: (lo_i, lo_j),
+            columns,
+            rows,
+            node,
+        }
+    }
+
+    /// The node on cell `(i, j)`, if any.
+    fn get(&self, i: i64, j: i64) -> Option<usize> {
+        let (di, dj) = (i - self.first.0, j - self.first.1);
+        if di < 0 || dj < 0 || di >= self.columns || dj >= self.rows {
+            return None;
+        }
+        self.node[(di * self.rows + dj) as usize]
+    }
 }
 
 /// The track of least summed deviation that an agent starting at `start` can follow with
@@ -82,11 +131,7 @@ pub fn best_track_on_lattice(
     }]);
     for (k, slot) in slots.iter().enumerate() {
         let previous = &steps[k];
-        let by_cell: HashMap<(i64, i64), usize> = previous
-            .iter()
-            .enumerate()
-            .filter_map(|(i, n)| n.cell.map(|c| (c, i)))
-            .collect();
+        let by_cell = CellIndex::of(previous);
         let loose: Vec<usize> = (0..previous.len())
             .filter(|&i| previous[i].cell.is_none())
             .collect();
@@ -124,7 +169,7 @@ pub fn best_track_on_lattice(
             match cell {
                 Some((i, j)) => {
                     for (di, dj) in &offsets {
-                        if let Some(&from) = by_cell.get(&(i + di, j + dj)) {
+                        if let Some(from) = by_cell.get(i + di, j + dj) {
                             relax(from);
                         }
                     }
@@ -140,7 +185,7 @@ pub fn best_track_on_lattice(
                     );
                     for i in lo_i..=hi_i {
                         for j in lo_j..=hi_j {
-                            if let Some(&from) = by_cell.get(&(i, j)) {
+                            if let Some(from) = by_cell.get(i, j) {
                                 relax(from);
                             }
                         }
