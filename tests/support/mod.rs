@@ -166,10 +166,22 @@ pub fn summary(out: &Path) -> Value {
 
 /// Polls `done` every few milliseconds until it holds; panics with `what` if it still
 /// does not after `timeout`. A test waits for a state this way, never for a fixed time.
-pub fn wait_until(timeout: Duration, what: &str, mut done: impl FnMut() -> bool) {
+pub fn wait_until(timeout: Duration, what: &str, done: impl FnMut() -> bool) {
+    wait_until_or_say(timeout, done, || what.to_string());
+}
+
+/// [`wait_until`], the failure's message made by `what` when it fails (it may say what
+/// the state was then).
+pub fn wait_until_or_say(
+    timeout: Duration,
+    mut done: impl FnMut() -> bool,
+    what: impl FnOnce() -> String,
+) {
     let deadline = Instant::now() + timeout;
     while !done() {
-        assert!(Instant::now() < deadline, "{what} (after {timeout:?})");
+        if Instant::now() >= deadline {
+            panic!("{} (after {timeout:?})", what());
+        }
         std::thread::sleep(Duration::from_millis(5));
     }
 }
@@ -182,21 +194,17 @@ pub const EXIT_ROOM: Duration = Duration::from_secs(10);
 /// Waits until no process's command line mentions `needle` (at most `timeout`); on
 /// failure, names what was left (state, parent and command line of each).
 pub fn wait_for_no_process_mentioning(needle: &str, timeout: Duration) {
-    let deadline = Instant::now() + timeout;
-    loop {
-        let left = processes_mentioning(needle);
-        if left.is_empty() {
-            return;
-        }
-        if Instant::now() >= deadline {
-            let described: Vec<String> = left.iter().map(|&pid| describe(pid)).collect();
-            panic!(
-                "processes of {needle} left running (after {timeout:?}): {}",
-                described.join("; ")
-            );
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    wait_until_or_say(
+        timeout,
+        || processes_mentioning(needle).is_empty(),
+        || {
+            let left: Vec<String> = processes_mentioning(needle)
+                .into_iter()
+                .map(describe)
+                .collect();
+            format!("processes of {needle} left running: {}", left.join("; "))
+        },
+    );
 }
 
 /// `pid (state S, parent P): command line`, for a failure message.
