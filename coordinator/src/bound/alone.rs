@@ -12,9 +12,8 @@ use shared::geometry::{
 };
 use shared::scenario::Scenario;
 use shared::simulate::{SimulateError, simulate_along};
+use shared::tracking::{Lattice, best_track_on_lattice};
 use shared::vocabulary::AgentSpec;
-
-use super::lattice::{Lattice, best_track_on_lattice};
 
 /// The lattice of the search for an agent with top speed `max_step_m` whose largest
 /// deviation is at least `max_bound_m` (its bound): points a fifth of the top speed
@@ -24,6 +23,7 @@ use super::lattice::{Lattice, best_track_on_lattice};
 pub fn lattice_for(max_step_m: f64, max_bound_m: f64) -> Lattice {
     Lattice {
         spacing_m: max_step_m / 5.0,
+        first_spacing_m: max_step_m / 5.0,
         window_m: (1.5 * max_bound_m).max(3.0),
     }
 }
@@ -151,12 +151,12 @@ fn searched_track_m(
                     .collect()
             })
             .collect();
-        let clearance_m = |p: &Point| {
+        let clearance_m = |_: usize, p: &Point| {
             space
                 .is_free(p, 0.0)
                 .then(|| space.clearance_m(p, max_step_m).max(0.0))
         };
-        let segment_free = |a: &Point, b: &Point| space.is_segment_free(a, b, 0.0);
+        let segment_free = |_: usize, a: &Point, b: &Point| space.is_segment_free(a, b, 0.0);
         best_track_on_lattice(
             &start,
             &slots,

@@ -25,7 +25,7 @@
 //! against the bounds.
 //!
 //! With `--alone` each agent is also run alone (`alone.rs`: the method with no mate) and
-//! its best track searched on a lattice (`lattice.rs`): an achievable track, so the least
+//! its best track searched on a lattice (`shared::tracking::best_track_on_lattice`): an achievable track, so the least
 //! deviation an agent alone can have lies between its bound and that track, and the
 //! formation's excess over the agents alone is what the mates cost.
 
@@ -42,7 +42,6 @@ use shared::simulate::simulate_along;
 use shared::vocabulary::AgentSpec;
 
 mod alone;
-mod lattice;
 
 pub use alone::{AgentAlone, StaticSpace, agent_alone};
 

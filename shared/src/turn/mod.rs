@@ -241,15 +241,16 @@ impl TurnController {
     /// end), and `heading_rad` where the agent faces when it has a heading.
     ///
     /// A holonomic agent with a top speed and a look-ahead (`AgentSpec::horizon_steps` >
-    /// 0) that cannot follow its slot exactly over the next steps aims this turn at the first
-    /// point of its least-deviation track over them ([`crate::tracking::lead_point`]):
-    /// its best point is taken for that aim instead of the slot, and everything else
-    /// (the path, the cut at the top speed, the kinematics, the escape from moving
-    /// obstacles) is as in [`Self::plan_turn_with_heading`]. Only the best-point
-    /// controller looks ahead; the others, an agent with a heading (not yet: see
-    /// `aim`), without a top speed or with a horizon of 0, and an agent that can follow
-    /// its slot, plan exactly as
-    /// [`Self::plan_turn_with_heading`] does, bit for bit.
+    /// 0) knows where its slot will be over the next steps ([`Aim`]): when that way
+    /// crosses a static obstacle it takes the first move of the best track round it, and
+    /// when it cannot follow its slot exactly it aims at the first point of its
+    /// least-deviation track ([`crate::tracking::lead_point`]); see
+    /// [`BestPointController::plan_move_aiming`]. Everything else (the path, the cut at
+    /// the top speed, the kinematics, the escape from moving obstacles) is as in
+    /// [`Self::plan_turn_with_heading`]. Only the best-point controller looks ahead; the
+    /// others, an agent with a heading (not yet: see `aim`), without a top speed or with
+    /// a horizon of 0, and an agent that can follow its slot along a way clear of
+    /// obstacles, plan exactly as [`Self::plan_turn_with_heading`] does, bit for bit.
     ///
     /// With `velocities` (every agent moves at once) the ORCA controller plans in its own
     /// model ([`OrcaController::plan_move_reciprocal`]); the other controllers ignore them.
@@ -281,8 +282,8 @@ impl TurnController {
         }
     }
 
-    /// Where this agent is heading this turn (`None`: it can follow its slot, or does
-    /// not look ahead): see [`Self::plan_turn_ahead`].
+    /// Where this agent is heading this turn (`None`: it does not look ahead): see
+    /// [`Self::plan_turn_ahead`].
     fn aim(&self, centre: &Pose, ahead: &[Pose], me: &Point) -> Option<Aim> {
         let (Controller::BestPoint(_), Some(max_step_m)) = (&self.controller, self.spec.max_step_m)
         else {
@@ -303,7 +304,7 @@ impl TurnController {
             .map(|c| self.spec.slot.ideal_position(c))
             .collect();
         let lead = tracking::lead_point(me, &slots, max_step_m);
-        (lead != slots[0]).then_some(Aim { lead })
+        Some(Aim { lead, slots })
     }
 
     /// [`Self::plan_turn`] with the best point taken for `aim` when given.

@@ -1,9 +1,14 @@
-//! The best track of one agent alone that a search over a lattice finds: an achievable
-//! track (every position free, every step a free straight segment within the top speed),
-//! so its deviation bounds the least deviation alone from above, as the cone programme of
-//! [`super::optimal_track`] bounds it from below.
+//! The best track through the obstacles that a search over a lattice finds: every
+//! position free, every step a free straight segment within the top speed, the summed
+//! deviation from the slots least among the tracks through the lattice's points, by
+//! dynamic programming over the steps.
+//!
+//! An agent with a look-ahead takes the first move of such a track when its slot's way
+//! ahead crosses an obstacle ([`super::first_move_round_obstacles`]); `coordinator bound
+//! --alone` searches a whole run's track with it (an achievable track, so its deviation
+//! bounds the least deviation of an agent alone from above).
 
-use shared::geometry::Point;
+use crate::geometry::Point;
 
 /// How much longer than the top speed a step between two lattice points may come out
 /// from rounding their coordinates (`i * spacing`), in metres.
@@ -14,8 +19,12 @@ const STEP_ROUNDING_M: f64 = 1e-9;
 pub struct Lattice {
     /// Distance between neighbouring lattice points, in metres.
     pub spacing_m: f64,
+    /// The same for the first move's end, in metres (finer, where it matters most: the
+    /// first move is the one an agent takes).
+    pub first_spacing_m: f64,
     /// How far from its slot the agent may be at a step, in metres: the lattice points
-    /// of a step are those within this distance of the slot.
+    /// of a step are those within this distance of the slot or of one of the step's
+    /// anchors.
     pub window_m: f64,
 }
 
@@ -84,14 +93,19 @@ impl CellIndex {
 
 /// The track of least summed deviation that an agent starting at `start` can follow with
 /// steps of at most `max_step_m` (straight segments), its slot at step `k + 1` being
-/// `slots[k]`, its positions at each step taken from `lattice` around the slot and from
-/// `anchors[k]` (extra candidates, such as the slot itself and its nearest free point).
+/// `slots[k]`, its positions at each step taken from `lattice` around the slot and the
+/// step's anchors (within `k + 1` top-speed steps of `start`) and from `anchors[k]`
+/// themselves (extra candidates, such as the slot itself and its nearest free point).
 ///
-/// - `clearance_m(p)`: `None` where the agent does not fit at `p`, else a distance within
-///   which every point is free of obstacles (it may be an underestimate, such as 0; the
-///   space is also assumed convex apart from the obstacles, like a rectangular field).
-/// - `segment_free(a, b)`: whether the straight segment from `a` to `b` is free; asked
-///   only when the two clearances do not already cover it.
+/// - `clearance_m(k, p)`: `None` where the agent does not fit at `p` at the end of move
+///   `k` (the move to `x_(k+1)`; `start` is asked with `k` = 0), else a distance within
+///   which every point is free of the obstacles of that move (it may be an
+///   underestimate, such as 0; the space is also assumed convex apart from the
+///   obstacles, like a rectangular field). The obstacles of a move must include those of
+///   the next (bodies that stand only for the first moves), as a node's clearance serves
+///   the move out of it too.
+/// - `segment_free(k, a, b)`: whether the straight segment from `a` to `b` is free for
+///   move `k`; asked only when the two clearances do not already cover it.
 ///
 /// A step is at most `max_step_m` up to the rounding of the lattice's coordinates
 /// (1e-9 m). Returns the summed deviation (metres) and the track `x_1 .. x_T`, or `None` when no
@@ -102,46 +116,66 @@ pub fn best_track_on_lattice(
     anchors: &[Vec<Point>],
     max_step_m: f64,
     lattice: Lattice,
-    clearance_m: impl Fn(&Point) -> Option<f64>,
-    segment_free: impl Fn(&Point, &Point) -> bool,
+    clearance_m: impl Fn(usize, &Point) -> Option<f64>,
+    segment_free: impl Fn(usize, &Point, &Point) -> bool,
 ) -> Option<(f64, Vec<Point>)> {
-    let h = lattice.spacing_m;
-    if !(h > 0.0 && max_step_m > 0.0 && lattice.window_m >= 0.0) {
+    let spacing_of = |k: usize| match k {
+        0 => lattice.first_spacing_m,
+        _ => lattice.spacing_m,
+    };
+    if !(lattice.spacing_m > 0.0
+        && lattice.first_spacing_m > 0.0
+        && max_step_m > 0.0
+        && lattice.window_m >= 0.0)
+    {
         return None;
     }
-    // Lattice offsets a step can take.
-    let reach = (max_step_m / h).floor() as i64;
+    // Lattice offsets a step between two points `spacing_m` apart can take.
+    let reach = (max_step_m / lattice.spacing_m).floor() as i64;
     let offsets: Vec<(i64, i64)> = (-reach..=reach)
         .flat_map(|di| (-reach..=reach).map(move |dj| (di, dj)))
-        .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * h <= max_step_m)
+        .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * lattice.spacing_m <= max_step_m)
         .collect();
-    let point_of = |(i, j): (i64, i64)| Point::new(i as f64 * h, j as f64 * h);
-    let reachable = |from: &Node, to: &Node| {
+    let reachable = |k: usize, from: &Node, to: &Node| {
         let d = (to.at - from.at).norm();
         d <= max_step_m + STEP_ROUNDING_M
-            && (from.clearance_m + to.clearance_m >= d || segment_free(&from.at, &to.at))
+            && (from.clearance_m + to.clearance_m >= d || segment_free(k, &from.at, &to.at))
     };
     let mut steps: Vec<Vec<Node>> = Vec::with_capacity(slots.len() + 1);
     steps.push(vec![Node {
         at: *start,
-        clearance_m: clearance_m(start).map_or(0.0, |c| c.min(max_step_m).max(0.0)),
+        clearance_m: clearance_m(0, start).map_or(0.0, |c| c.min(max_step_m).max(0.0)),
         cell: None,
         cost_m: 0.0,
         from: 0,
     }]);
     for (k, slot) in slots.iter().enumerate() {
+        let (h, h_before) = (spacing_of(k), spacing_of(k.saturating_sub(1)));
+        let point_of = |(i, j): (i64, i64)| Point::new(i as f64 * h, j as f64 * h);
         let previous = &steps[k];
         let by_cell = CellIndex::of(previous);
         let loose: Vec<usize> = (0..previous.len())
             .filter(|&i| previous[i].cell.is_none())
             .collect();
         let mut candidates = Vec::new();
-        let w = (lattice.window_m / h).ceil() as i64;
-        let (ci, cj) = ((slot.x / h).round() as i64, (slot.y / h).round() as i64);
-        for i in ci - w..=ci + w {
-            for j in cj - w..=cj + w {
+        // No point farther than k + 1 moves from the start can be reached.
+        let within_m = (k + 1) as f64 * (max_step_m + STEP_ROUNDING_M);
+        // Lattice points within the window of the slot or of one of the step's anchors.
+        let step_anchors = anchors.get(k).map_or(&[][..], Vec::as_slice);
+        let centres = || std::iter::once(slot).chain(step_anchors);
+        let w = lattice.window_m;
+        let lo = |c: fn(&Point) -> f64| {
+            let least = centres().map(c).fold(f64::INFINITY, f64::min);
+            ((least - w) / h).floor() as i64
+        };
+        let hi = |c: fn(&Point) -> f64| {
+            let most = centres().map(c).fold(f64::NEG_INFINITY, f64::max);
+            ((most + w) / h).ceil() as i64
+        };
+        for i in lo(|p| p.x)..=hi(|p| p.x) {
+            for j in lo(|p| p.y)..=hi(|p| p.y) {
                 let at = point_of((i, j));
-                if (at - slot).norm() <= lattice.window_m {
+                if (at - start).norm() <= within_m && centres().any(|c| (at - c).norm() <= w) {
                     candidates.push((at, Some((i, j))));
                 }
             }
@@ -149,7 +183,7 @@ pub fn best_track_on_lattice(
         candidates.extend(anchors.get(k).into_iter().flatten().map(|a| (*a, None)));
         let mut nodes = Vec::with_capacity(candidates.len());
         for (at, cell) in candidates {
-            let Some(clear) = clearance_m(&at) else {
+            let Some(clear) = clearance_m(k, &at) else {
                 continue;
             };
             let mut node = Node {
@@ -161,27 +195,28 @@ pub fn best_track_on_lattice(
             };
             let mut relax = |from: usize| {
                 let q = &previous[from];
-                if q.cost_m < node.cost_m && reachable(q, &node) {
+                if q.cost_m < node.cost_m && reachable(k, q, &node) {
                     node.cost_m = q.cost_m;
                     node.from = from;
                 }
             };
             match cell {
-                Some((i, j)) => {
+                // The step before on the same lattice: its cells within reach.
+                Some((i, j)) if k > 0 && h_before == h => {
                     for (di, dj) in &offsets {
                         if let Some(from) = by_cell.get(i + di, j + dj) {
                             relax(from);
                         }
                     }
                 }
-                None => {
+                _ => {
                     let (lo_i, hi_i) = (
-                        ((at.x - max_step_m) / h).floor() as i64,
-                        ((at.x + max_step_m) / h).ceil() as i64,
+                        ((at.x - max_step_m) / h_before).floor() as i64,
+                        ((at.x + max_step_m) / h_before).ceil() as i64,
                     );
                     let (lo_j, hi_j) = (
-                        ((at.y - max_step_m) / h).floor() as i64,
-                        ((at.y + max_step_m) / h).ceil() as i64,
+                        ((at.y - max_step_m) / h_before).floor() as i64,
+                        ((at.y + max_step_m) / h_before).ceil() as i64,
                     );
                     for i in lo_i..=hi_i {
                         for j in lo_j..=hi_j {
@@ -228,6 +263,7 @@ mod tests {
 
     const LATTICE: Lattice = Lattice {
         spacing_m: 0.1,
+        first_spacing_m: 0.1,
         window_m: 1.5,
     };
 
@@ -244,8 +280,8 @@ mod tests {
             anchors,
             0.5,
             lattice,
-            |_| Some(f64::INFINITY),
-            |_, _| true,
+            |_, _| Some(f64::INFINITY),
+            |_, _, _| true,
         )
     }
 
@@ -272,6 +308,7 @@ mod tests {
         let slots: Vec<Point> = (1..=t).map(|k| Point::new(k as f64, 0.0)).collect();
         let lattice = Lattice {
             spacing_m: 0.1,
+            first_spacing_m: 0.1,
             window_m: 4.0,
         };
         let (sum, track) = in_open_space(&Point::origin(), &slots, &[], lattice).expect("a track");
@@ -289,14 +326,16 @@ mod tests {
     fn the_track_goes_round_a_wall_and_stays_between_the_bounds() {
         // The wall: x in [1.0, 1.2], y outside [1.5, 2.0] is blocked.
         let blocked = |p: &Point| p.x > 1.0 && p.x < 1.2 && !(p.y > 1.5 && p.y < 2.0);
-        let clearance = |p: &Point| (!blocked(p)).then_some(0.0);
-        let segment_free =
-            |a: &Point, b: &Point| (0..=200).all(|i| !blocked(&(a + (b - a) * (i as f64 / 200.0))));
+        let clearance = |_: usize, p: &Point| (!blocked(p)).then_some(0.0);
+        let segment_free = |_: usize, a: &Point, b: &Point| {
+            (0..=200).all(|i| !blocked(&(a + (b - a) * (i as f64 / 200.0))))
+        };
         // Long enough that staying behind the wall costs more than the way round.
         let slots: Vec<Point> = (1..=16).map(|k| Point::new(0.3 * k as f64, 0.0)).collect();
         let start = Point::origin();
         let lattice = Lattice {
             spacing_m: 0.1,
+            first_spacing_m: 0.1,
             window_m: 2.5,
         };
         let (sum, track) =
@@ -306,7 +345,7 @@ mod tests {
         for p in &track {
             assert!(!blocked(p), "{p:?}");
             assert!((p - from).norm() <= 0.5 + 1e-12);
-            assert!(segment_free(&from, p), "{from:?} -> {p:?}");
+            assert!(segment_free(0, &from, p), "{from:?} -> {p:?}");
             from = *p;
         }
         let summed: f64 = track.iter().zip(&slots).map(|(p, s)| (p - s).norm()).sum();
@@ -326,6 +365,7 @@ mod tests {
         let slots = vec![Point::new(10.0, 0.0)];
         let lattice = Lattice {
             spacing_m: 0.1,
+            first_spacing_m: 0.1,
             window_m: 1.0,
         };
         let found = in_open_space(&Point::origin(), &slots, &[], lattice);

@@ -21,6 +21,15 @@
 
 use crate::geometry::{Point, Vector};
 
+mod lattice;
+mod round_obstacles;
+
+pub use lattice::{Lattice, best_track_on_lattice};
+pub use round_obstacles::{
+    ROUND_FIRST_SPACING_RADII, ROUND_SPACING_RADII, ROUND_WINDOW_RADII, first_move_round_obstacles,
+    round_lattice_for,
+};
+
 /// The largest look-ahead, in steps, a scenario may ask for (`[formation]
 /// horizon_steps`): the turn message carries this many future centre poses at most.
 pub const MAX_HORIZON_STEPS: usize = 32;
