@@ -44,26 +44,29 @@ fn looking_ahead_tracks_a_sweeping_slot_closer() {
         with_horizon("sweeping-turn.toml", 0),
         with_horizon("sweeping-turn.toml", 10),
     );
-    let (a, b) = (
-        simulate(&chase).expect("run"),
-        simulate(&ahead).expect("run"),
-    );
-    for (s, run) in [(&chase, &a), (&ahead, &b)] {
+    look_ahead_does_better("sweeping-turn", &chase, &ahead, 0.95);
+}
+
+/// Both scenarios run safely (complete, no collision, every move within its top speed),
+/// and `ahead` has a mean deviation below `ratio` times `chase`'s and a lower largest.
+fn look_ahead_does_better(name: &str, chase: &Scenario, ahead: &Scenario, ratio: f64) {
+    let (a, b) = (simulate(chase).expect("run"), simulate(ahead).expect("run"));
+    for (s, run) in [(chase, &a), (ahead, &b)] {
         let summary = run.summary();
-        assert!(summary.completed);
-        assert_eq!(summary.collisions, 0);
+        assert!(summary.completed, "{name}");
+        assert_eq!(summary.collisions, 0, "{name}");
         check_moves(s, run);
     }
     let (sa, sb) = (a.summary(), b.summary());
     assert!(
-        sb.mean_deviation_m < 0.95 * sa.mean_deviation_m,
-        "mean {} with the look-ahead, {} without",
+        sb.mean_deviation_m < ratio * sa.mean_deviation_m,
+        "{name}: mean {} with the look-ahead, {} without",
         sb.mean_deviation_m,
         sa.mean_deviation_m
     );
     assert!(
         sb.max_deviation_m < sa.max_deviation_m,
-        "max {} with the look-ahead, {} without",
+        "{name}: max {} with the look-ahead, {} without",
         sb.max_deviation_m,
         sa.max_deviation_m
     );
@@ -93,29 +96,7 @@ fn capped(name: &str, max_step_m: f64, horizon_steps: usize) -> Scenario {
 fn looking_ahead_goes_round_the_obstacles_on_the_slots_way() {
     for name in ["dense", "narrow"] {
         let (chase, ahead) = (capped(name, 0.5, 0), capped(name, 0.5, 10));
-        let (a, b) = (
-            simulate(&chase).expect("run"),
-            simulate(&ahead).expect("run"),
-        );
-        for (s, run) in [(&chase, &a), (&ahead, &b)] {
-            let summary = run.summary();
-            assert!(summary.completed, "{name}");
-            assert_eq!(summary.collisions, 0, "{name}");
-            check_moves(s, run);
-        }
-        let (sa, sb) = (a.summary(), b.summary());
-        assert!(
-            sb.mean_deviation_m < 0.9 * sa.mean_deviation_m,
-            "{name}: mean {} with the look-ahead, {} without",
-            sb.mean_deviation_m,
-            sa.mean_deviation_m
-        );
-        assert!(
-            sb.max_deviation_m < sa.max_deviation_m,
-            "{name}: max {} with the look-ahead, {} without",
-            sb.max_deviation_m,
-            sa.max_deviation_m
-        );
+        look_ahead_does_better(name, &chase, &ahead, 0.9);
     }
 }
 
