@@ -24,11 +24,13 @@ pub const ROUND_SPACING_RADII: f64 = 1.0;
 /// the search's lattice may lie.
 pub const ROUND_WINDOW_RADII: f64 = 10.0;
 
-/// The lattice an agent of radius `radius_m` searches round the obstacles
-/// ([`first_move_round_obstacles`]). Measured on the paper, dense, narrow and large
-/// scenarios capped at twice the centre's step: a coarser first lattice left agents
-/// further from their slots (mean deviation up to 1.3 times), a finer later one cost
-/// more time for no gain, a window of 6 radii left narrow's agents behind its walls.
+/// The lattice an agent of radius `radius_m` and top speed `max_step_m` searches round
+/// the obstacles ([`first_move_round_obstacles`]). Measured on the paper, dense, narrow
+/// and large scenarios capped at twice the centre's step (agents of radius 0.25 and 0.3
+/// m): a first lattice 0.2 m apart instead of 0.1 m left agents further from their slots
+/// (mean deviation up to 1.3 times); a later one 0.25 m apart instead of 0.35 m took
+/// twice the time and did no better; a window of 2 m instead of 3 m left narrow's agents
+/// behind its walls.
 pub fn round_lattice_for(radius_m: f64, max_step_m: f64) -> Lattice {
     Lattice {
         spacing_m: ROUND_SPACING_RADII * radius_m,
@@ -62,7 +64,8 @@ pub fn round_lattice_for(radius_m: f64, max_step_m: f64) -> Lattice {
 /// let space = FreeSpace::new(Field::new(10.0, 10.0), &layers);
 /// let slots: Vec<Point> = (1..=8).map(|j| Point::new(3.9 + 0.4 * j as f64, 5.0)).collect();
 /// let me = Point::new(3.9, 5.0);
-/// let first = first_move_round_obstacles(&space, &space, &me, &slots, &[], 0.5, round_lattice_for(0.3, 0.5))
+/// let lattice = round_lattice_for(0.3, 0.5);
+/// let first = first_move_round_obstacles(&space, &space, &me, &slots, &[], 0.5, lattice)
 ///     .expect("a move");
 /// assert!((first - me).norm() <= 0.5 + 1e-9);
 /// assert!(space.is_segment_free(&me, &first, 0.0));
