@@ -50,8 +50,8 @@ pub struct Aim {
     /// The first point of its least-deviation track, at most its top speed away
     /// ([`crate::tracking::lead_point`]); its slot now when it can follow its slot.
     pub lead: Point,
-    /// Its slot now and over the look-ahead (`slots[j]`: after `j` moves), world
-    /// coordinates.
+    /// Its slot over the look-ahead, world coordinates: `slots[0]` this turn's (where it
+    /// should stand after this move), `slots[j]` the one after `j + 1` moves.
     pub slots: Vec<Point>,
 }
 
@@ -312,27 +312,21 @@ impl BestPointController {
     ) -> Option<Move> {
         let slot = followed.slot;
         let me_p = me - self.offset;
-        let moved_to = |end_p: &Point| {
-            let best = if *end_p == me_p {
-                *me
+        // The straight move to `best` (world coordinates).
+        let straight_to = |best: Point| Move {
+            end_heading_rad: None,
+            slot,
+            best,
+            status: if (best - slot).norm() <= 1e-9 {
+                MoveStatus::AtSlot
             } else {
-                end_p + self.offset
-            };
-            Move {
-                end_heading_rad: None,
-                slot,
-                best,
-                status: if (best - slot).norm() <= 1e-9 {
-                    MoveStatus::AtSlot
-                } else {
-                    MoveStatus::UnderWay
-                },
-                waypoints: if best == *me {
-                    vec![*me]
-                } else {
-                    vec![*me, best]
-                },
-            }
+                MoveStatus::UnderWay
+            },
+            waypoints: if best == *me {
+                vec![*me]
+            } else {
+                vec![*me, best]
+            },
         };
         // The slot's way ahead crosses a static obstacle: the first move of the best
         // track round it.
@@ -357,7 +351,12 @@ impl BestPointController {
                 tracking::round_lattice_for(self.radius_m, max_step_m),
             )?;
             let follows = matches!(followed.waypoints[..], [_, end] if end - self.offset == end_p);
-            return (!follows).then(|| moved_to(&end_p));
+            let end = if end_p == me_p {
+                *me
+            } else {
+                end_p + self.offset
+            };
+            return (!follows).then(|| straight_to(end));
         }
         if aim.slots.first() == Some(&aim.lead) {
             return None;
@@ -367,15 +366,8 @@ impl BestPointController {
         // turn back and forth between the two.
         let lead_p = aim.lead - self.offset;
         let open = best_p.is_some_and(|b| statics.is_segment_free(&me_p, &b, 0.0));
-        (open && space.is_free(&lead_p, 0.0) && space.is_segment_free(&me_p, &lead_p, 0.0)).then(
-            || Move {
-                end_heading_rad: None,
-                slot,
-                best: aim.lead,
-                status: MoveStatus::UnderWay,
-                waypoints: vec![*me, aim.lead],
-            },
-        )
+        (open && space.is_free(&lead_p, 0.0) && space.is_segment_free(&me_p, &lead_p, 0.0))
+            .then(|| straight_to(aim.lead))
     }
 
     /// The best point for `goal` (world coordinates) seen from `me`, and the shortest path
