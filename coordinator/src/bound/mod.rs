@@ -12,11 +12,14 @@
 //! ```
 //!
 //! a second-order cone programme, solved by Clarabel (an interior-point solver, pure
-//! Rust). The floor `f_k` is the distance from the slot to the nearest point where the
-//! agent's disk lies inside the field and clear of every static obstacle (disks, known
-//! or found on the way, and polygons, true sizes): wherever the agent is at step `k`,
-//! its deviation is at least that. (Keeping `x_k` itself out of the obstacles would not
-//! be convex; the floor is its convex part.) The optimum over `T` and the agents is a
+//! Rust; `cone.rs`). The floor `f_k` is the distance from the slot to the nearest point
+//! where the agent's disk lies inside the field and clear of every static obstacle
+//! (disks, known or found on the way, and polygons, true sizes): wherever the agent is
+//! at step `k`, its deviation is at least that. (Keeping `x_k` itself out of the
+//! obstacles would not be convex; the floor is its convex part.) Where a slot enters an
+//! obstacle, a second bound keeps every `x_k` out of the obstacles, on a grid of cells
+//! (`grid.rs`: dynamic programming whose every relaxation only lowers it), and the
+//! greater of the two counts. The optimum over `T` and the agents is a
 //! lower bound of the mean deviation any controller can reach, mates (and moving
 //! obstacles) only adding to it. The same constraints with one `t` for every `k`,
 //! minimising `t`, bound the largest deviation from below. The bound with the top speed
@@ -30,10 +33,6 @@
 //! formation's excess over the agents alone is what the mates cost.
 
 use anyhow::Context;
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
 use serde::Serialize;
 use shared::best_point::nearest_free_point;
 use shared::geometry::{FreeSpace, Point, Pose, Vector};
@@ -42,8 +41,12 @@ use shared::simulate::simulate_along;
 use shared::vocabulary::AgentSpec;
 
 mod alone;
+mod cone;
+mod grid;
 
 pub use alone::{AgentAlone, StaticSpace, agent_alone};
+pub use cone::{Objective, optimal_track};
+pub use grid::{Grid, least_deviation_round_obstacles};
 
 use crate::cli::BoundArgs;
 use crate::error::CliError;
@@ -58,112 +61,6 @@ pub enum BoundError {
     /// The top speed is not a positive finite number.
     #[error("top speed {0} m is not a positive finite number")]
     BadSpeed(f64),
-}
-
-/// What is minimised.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Objective {
-    /// The summed deviation over the steps.
-    Sum,
-    /// The largest deviation of a step.
-    Max,
-}
-
-/// The optimal track of one agent that starts at `start` and moves at most `max_step_m`
-/// a step, its slot at step `k + 1` being `slots[k]` and its deviation there at least
-/// `floors_m[k]` (none where the slice ends): the optimal value of `objective` (metres:
-/// summed or largest deviation) and the track (`x_1 .. x_T`).
-pub fn optimal_track(
-    start: &Point,
-    slots: &[Point],
-    floors_m: &[f64],
-    max_step_m: f64,
-    objective: Objective,
-) -> Result<(f64, Vec<Point>), BoundError> {
-    if !(max_step_m.is_finite() && max_step_m > 0.0) {
-        return Err(BoundError::BadSpeed(max_step_m));
-    }
-    let t = slots.len();
-    if t == 0 {
-        return Ok((0.0, Vec::new()));
-    }
-    // Variables: x_1, y_1, ..., x_T, y_T, then the deviations (T of them for a sum, one
-    // for a maximum).
-    let deviations = match objective {
-        Objective::Sum => t,
-        Objective::Max => 1,
-    };
-    let n = 2 * t + deviations;
-    let dev_var = |k: usize| match objective {
-        Objective::Sum => 2 * t + k,
-        Objective::Max => 2 * t,
-    };
-    let mut q = vec![0.0; n];
-    for v in q.iter_mut().skip(2 * t) {
-        *v = 1.0;
-    }
-    // Rows: per step a deviation cone (t_k, x_k - s_k) and a speed cone
-    // (c, x_k - x_(k-1)), each s = b - A z in the second-order cone of dimension 3.
-    let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-    let mut b = Vec::with_capacity(6 * t);
-    let mut cones = Vec::with_capacity(2 * t);
-    let mut entry = |r: usize, c: usize, v: f64| {
-        rows.push(r);
-        cols.push(c);
-        vals.push(v);
-    };
-    for (k, s) in slots.iter().enumerate() {
-        let r = 6 * k;
-        entry(r, dev_var(k), -1.0);
-        entry(r + 1, 2 * k, -1.0);
-        entry(r + 2, 2 * k + 1, -1.0);
-        b.extend([0.0, -s.x, -s.y]);
-        entry(r + 4, 2 * k, -1.0);
-        entry(r + 5, 2 * k + 1, -1.0);
-        if k == 0 {
-            b.extend([max_step_m, -start.x, -start.y]);
-        } else {
-            entry(r + 4, 2 * (k - 1), 1.0);
-            entry(r + 5, 2 * (k - 1) + 1, 1.0);
-            b.extend([max_step_m, 0.0, 0.0]);
-        }
-        cones.push(SupportedConeT::SecondOrderConeT(3));
-        cones.push(SupportedConeT::SecondOrderConeT(3));
-    }
-    // Then the floors, t_k - f_k >= 0 (one row each, in the non-negative cone).
-    let floors: Vec<(usize, f64)> = floors_m
-        .iter()
-        .take(t)
-        .copied()
-        .enumerate()
-        .filter(|(_, f)| *f > 0.0)
-        .collect();
-    for (row, (k, floor_m)) in floors.iter().enumerate() {
-        entry(6 * t + row, dev_var(*k), -1.0);
-        b.push(-floor_m);
-    }
-    if !floors.is_empty() {
-        cones.push(SupportedConeT::NonnegativeConeT(floors.len()));
-    }
-    let a = CscMatrix::new_from_triplets(6 * t + floors.len(), n, rows, cols, vals);
-    let p = CscMatrix::zeros((n, n));
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .build()
-        .map_err(|e| BoundError::NotSolved(e.to_string()))?;
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings)
-        .map_err(|e| BoundError::NotSolved(format!("{e:?}")))?;
-    solver.solve();
-    let sol = &solver.solution;
-    if sol.status != SolverStatus::Solved {
-        return Err(BoundError::NotSolved(format!("{:?}", sol.status)));
-    }
-    let track = (0..t)
-        .map(|k| Point::new(sol.x[2 * k], sol.x[2 * k + 1]))
-        .collect();
-    // The dual objective bounds the optimum from below; at an optimum the two agree
-    // to the solver's tolerance, and the lower one is reported.
-    Ok((sol.obj_val.min(sol.obj_val_dual).max(0.0), track))
 }
 
 /// How far `slot` (in the scenario's frame) lies from the nearest point where the agent
@@ -187,6 +84,34 @@ fn obstacle_floors_m(scenario: &Scenario, spec: &AgentSpec, slots: &[Point]) -> 
     })
 }
 
+/// The least summed deviation (metres) of agent `spec` of `scenario` with every position
+/// out of the static obstacles, bounded on a grid ([`least_deviation_round_obstacles`]);
+/// the arguments as [`optimal_track`]'s. The grid's relaxations only lower it, and an
+/// agent that can follow no track (every cell in reach blocked) gives no bound: 0.
+fn way_round_m(
+    scenario: &Scenario,
+    spec: &AgentSpec,
+    start: &Point,
+    slots: &[Point],
+    floors_m: &[f64],
+    max_step_m: f64,
+) -> f64 {
+    let world = StaticSpace::new(scenario, spec);
+    let to_frame = |p: &Point| p - world.offset;
+    let slots: Vec<Point> = slots.iter().map(to_frame).collect();
+    let bound_m = world.with_free_space(|space| {
+        least_deviation_round_obstacles(
+            &to_frame(start),
+            &slots,
+            floors_m,
+            max_step_m,
+            Grid::for_speed(max_step_m),
+            |p, radius_m| space.is_free(p, radius_m),
+        )
+    });
+    if bound_m.is_finite() { bound_m } else { 0.0 }
+}
+
 /// One agent's bounds.
 #[derive(Clone, Debug, Serialize)]
 pub struct AgentBound {
@@ -202,6 +127,11 @@ pub struct AgentBound {
     pub speed_mean_deviation_m: f64,
     /// The least mean deviation the obstacles alone force (the floors' mean), in metres.
     pub obstacle_mean_deviation_m: f64,
+    /// The least mean deviation with every position kept out of the obstacles (the way
+    /// round them, bounded on a grid: [`least_deviation_on_grid`]), in metres; `null`
+    /// where it is not computed: without a top speed, or where the slot never enters an
+    /// obstacle.
+    pub way_round_mean_deviation_m: Option<f64>,
 }
 
 /// What `bound` prints.
@@ -252,54 +182,92 @@ pub struct AloneReport {
     pub per_agent: Vec<AgentAlone>,
 }
 
-/// The bounds of every agent of `scenario` along `centre_path`.
+/// The bounds of every agent of `scenario` along `centre_path`, the agents shared among
+/// the cores (round-robin: the costly ones, whose slots enter obstacles, often come
+/// together).
 pub fn agent_bounds(
     scenario: &Scenario,
     centre_path: &[Pose],
 ) -> Result<Vec<AgentBound>, BoundError> {
-    scenario
-        .agents
-        .iter()
-        .enumerate()
-        .map(|(agent, spec)| {
-            let (start, slots) = match centre_path.split_first() {
-                Some((first, rest)) => (
-                    spec.slot.ideal_position(first),
-                    rest.iter().map(|c| spec.slot.ideal_position(c)).collect(),
-                ),
-                None => (Point::origin(), Vec::new()),
-            };
-            let floors_m = obstacle_floors_m(scenario, spec, &slots);
-            let steps = slots.len().max(1) as f64;
-            let obstacle_mean_m = floors_m.iter().sum::<f64>() / steps;
-            let Some(cap) = spec.max_step_m else {
-                // It can be anywhere each step: the nearest point where it fits.
-                return Ok(AgentBound {
-                    agent,
-                    max_step_m: None,
-                    mean_deviation_m: obstacle_mean_m,
-                    max_deviation_m: floors_m.iter().copied().fold(0.0, f64::max),
-                    speed_mean_deviation_m: 0.0,
-                    obstacle_mean_deviation_m: obstacle_mean_m,
-                });
-            };
-            let (sum_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Sum)?;
-            let (max_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Max)?;
-            let (speed_sum_m, _) = optimal_track(&start, &slots, &[], cap, Objective::Sum)?;
-            // Each part is a lower bound too; the solver's answers are exact only to its
-            // tolerance, so the whole is never reported below a part.
-            let floors_sum_m: f64 = floors_m.iter().sum();
-            let largest_floor_m = floors_m.iter().copied().fold(0.0, f64::max);
-            Ok(AgentBound {
-                agent,
-                max_step_m: Some(cap),
-                mean_deviation_m: sum_m.max(speed_sum_m).max(floors_sum_m) / steps,
-                max_deviation_m: max_m.max(largest_floor_m),
-                speed_mean_deviation_m: speed_sum_m / steps,
-                obstacle_mean_deviation_m: obstacle_mean_m,
+    let agents = scenario.agents.len();
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .clamp(1, agents.max(1));
+    let mut bounds: Vec<(usize, Result<AgentBound, BoundError>)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..workers)
+            .map(|worker| {
+                s.spawn(move || {
+                    (worker..agents)
+                        .step_by(workers)
+                        .map(|agent| (agent, agent_bound(scenario, centre_path, agent)))
+                        .collect::<Vec<_>>()
+                })
             })
-        })
-        .collect()
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    });
+    bounds.sort_by_key(|(agent, _)| *agent);
+    bounds.into_iter().map(|(_, bound)| bound).collect()
+}
+
+/// The bounds of agent `agent` of `scenario` along `centre_path`.
+fn agent_bound(
+    scenario: &Scenario,
+    centre_path: &[Pose],
+    agent: usize,
+) -> Result<AgentBound, BoundError> {
+    let spec = &scenario.agents[agent];
+    let (start, slots) = match centre_path.split_first() {
+        Some((first, rest)) => (
+            spec.slot.ideal_position(first),
+            rest.iter().map(|c| spec.slot.ideal_position(c)).collect(),
+        ),
+        None => (Point::origin(), Vec::new()),
+    };
+    let floors_m = obstacle_floors_m(scenario, spec, &slots);
+    let steps = slots.len().max(1) as f64;
+    let obstacle_mean_m = floors_m.iter().sum::<f64>() / steps;
+    let Some(cap) = spec.max_step_m else {
+        // It can be anywhere each step: the nearest point where it fits.
+        return Ok(AgentBound {
+            agent,
+            max_step_m: None,
+            mean_deviation_m: obstacle_mean_m,
+            max_deviation_m: floors_m.iter().copied().fold(0.0, f64::max),
+            speed_mean_deviation_m: 0.0,
+            obstacle_mean_deviation_m: obstacle_mean_m,
+            way_round_mean_deviation_m: None,
+        });
+    };
+    let (sum_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Sum)?;
+    let (max_m, _) = optimal_track(&start, &slots, &floors_m, cap, Objective::Max)?;
+    let (speed_sum_m, _) = optimal_track(&start, &slots, &[], cap, Objective::Sum)?;
+    // The way round costs nothing more where the slot never enters an obstacle
+    // (and its grid is the costly part): only where it does.
+    let way_round_sum_m = floors_m
+        .iter()
+        .any(|f| *f > 0.0)
+        .then(|| way_round_m(scenario, spec, &start, &slots, &floors_m, cap));
+    // Each part is a lower bound too; the solver's answers are exact only to its
+    // tolerance, so the whole is never reported below a part.
+    let floors_sum_m: f64 = floors_m.iter().sum();
+    let largest_floor_m = floors_m.iter().copied().fold(0.0, f64::max);
+    let sum_m = sum_m
+        .max(speed_sum_m)
+        .max(floors_sum_m)
+        .max(way_round_sum_m.unwrap_or(0.0));
+    Ok(AgentBound {
+        agent,
+        max_step_m: Some(cap),
+        mean_deviation_m: sum_m / steps,
+        max_deviation_m: max_m.max(largest_floor_m),
+        speed_mean_deviation_m: speed_sum_m / steps,
+        obstacle_mean_deviation_m: obstacle_mean_m,
+        way_round_mean_deviation_m: way_round_sum_m.map(|m| m / steps),
+    })
 }
 
 /// Carry out `bound`: one JSON object on stdout, one line on stderr.
