@@ -34,14 +34,15 @@ pub struct Grid {
 
 impl Grid {
     /// The grid for an agent with top speed `max_step_m`: cells a tenth of it, a window of
-    /// 5 m. Out is one place, so a track could leave the window and come back anywhere
+    /// ten top-speed steps, at most 5 m (a hundred cells each way at most, whatever the
+    /// scale). Out is one place, so a track could leave the window and come back anywhere
     /// near its edge, on the far side of a wall too; with 5 m that costs more than 9 m of
     /// deviation in two steps, more than any agent alone strays in the capped scenarios
     /// measured (2.6 m at most, for ten steps).
     pub fn for_speed(max_step_m: f64) -> Self {
         Self {
             cell_m: max_step_m / 10.0,
-            window_m: 5.0,
+            window_m: (10.0 * max_step_m).min(5.0),
         }
     }
 }

@@ -274,7 +274,12 @@ fn agent_bound(
 pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     let loaded = load_and_plan(args.scenario.as_deref())?;
     let scenario = &loaded.scenario;
-    let per_agent = agent_bounds(scenario, &loaded.centre_path)
+    let run = simulate_along(scenario, &loaded.centre_path).context("the reference simulation")?;
+    let summary = run.summary();
+    // The centre the run followed: the plan, or in a changing world the plan as it was
+    // mended on the way (its deviation is measured from those slots).
+    let followed: Vec<Pose> = run.steps.iter().map(|s| s.centre).collect();
+    let per_agent = agent_bounds(scenario, &followed)
         .context("the tracking bound")
         .map_err(CliError::Other)?;
     let n = per_agent.len().max(1) as f64;
@@ -286,12 +291,10 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     let mean_of = |f: fn(&AgentBound) -> f64| per_agent.iter().map(f).sum::<f64>() / n;
     let speed_mean = mean_of(|a| a.speed_mean_deviation_m);
     let obstacle_mean = mean_of(|a| a.obstacle_mean_deviation_m);
-    let run = simulate_along(scenario, &loaded.centre_path).context("the reference simulation")?;
-    let summary = run.summary();
     let alone = if args.alone {
         Some(alone_report(
             scenario,
-            &loaded.centre_path,
+            &followed,
             &per_agent,
             summary.mean_deviation_m,
         )?)
@@ -302,7 +305,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     let report = BoundReport {
         scenario: summary.scenario.clone(),
         agents: summary.agents,
-        steps: loaded.centre_path.len().saturating_sub(1),
+        steps: followed.len().saturating_sub(1),
         bound_mean_deviation_m: bound_mean,
         bound_max_deviation_m: bound_max,
         speed_bound_mean_deviation_m: speed_mean,
