@@ -157,6 +157,12 @@ fn in_a_changing_world_the_bound_follows_the_mended_plan() {
     let r = bound(Some("scenarios/discovered-wall.toml"));
     let f = |k: &str| r[k].as_f64().unwrap_or_else(|| panic!("{k}: {r}"));
     assert!(f("bound_mean_deviation_m") > 0.0, "{r}");
-    assert!(f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-6), "{r}");
-    assert!(f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-6), "{r}");
+    assert!(
+        f("mean_deviation_m") >= f("bound_mean_deviation_m") * (1.0 - 1e-6),
+        "{r}"
+    );
+    assert!(
+        f("max_deviation_m") >= f("bound_max_deviation_m") * (1.0 - 1e-6),
+        "{r}"
+    );
 }

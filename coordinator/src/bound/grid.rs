@@ -76,7 +76,7 @@ pub fn least_deviation_on_grid(
     let side = (2 * half + 1) as usize;
     let cell_of = |p: &Point| ((p.x / h).floor() as i64, (p.y / h).floor() as i64);
     let reach = Reach::new(max_step_m / h);
-    let mut free_cells = FreeCells::new(start.into_iter().chain(slots).map(cell_of), half, h);
+    let mut free_cells = FreeCells::new(h);
     let mut scratch = (Vec::new(), Vec::new());
 
     // Step 0: the start's cell, nothing else (out is unreachable yet); or anywhere.
@@ -234,32 +234,26 @@ impl Reach {
     }
 }
 
-/// Which cells may hold a free point, asked once each: a table over the box of every
-/// window.
+/// Which cells may hold a free point, asked once each: tiles of 64 x 64 cells, made as
+/// the windows reach them (memory follows the ground the windows cover, not the box
+/// round the whole track).
 struct FreeCells {
-    /// The box's least cell.
-    low: (i64, i64),
-    /// The box's width in cells.
-    width: usize,
-    /// Per cell: 0 not asked yet, 1 may be free, 2 blocked.
-    known: Vec<u8>,
+    /// Per tile, per cell: 0 not asked yet, 1 may be free, 2 blocked.
+    tiles: std::collections::HashMap<(i64, i64), Vec<u8>>,
+    /// The tile asked last, and a copy of its key (most cells of a row share one).
+    last: Option<((i64, i64), Vec<u8>)>,
     cell_m: f64,
 }
 
+/// Cells along a tile's side.
+const TILE: i64 = 64;
+
 impl FreeCells {
-    /// The table for windows of `half` cells round `centres`, cells of `cell_m`.
-    fn new(centres: impl Iterator<Item = (i64, i64)>, half: i64, cell_m: f64) -> Self {
-        let (mut low, mut high) = ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN));
-        for (i, j) in centres {
-            low = (low.0.min(i - half), low.1.min(j - half));
-            high = (high.0.max(i + half), high.1.max(j + half));
-        }
-        let width = (high.0 - low.0 + 1).max(0) as usize;
-        let height = (high.1 - low.1 + 1).max(0) as usize;
+    /// No cell asked yet, cells of `cell_m`.
+    fn new(cell_m: f64) -> Self {
         Self {
-            low,
-            width,
-            known: vec![0; width * height],
+            tiles: std::collections::HashMap::new(),
+            last: None,
             cell_m,
         }
     }
@@ -270,14 +264,28 @@ impl FreeCells {
         cell: (i64, i64),
         may_be_free: &mut impl FnMut(&Point, f64) -> bool,
     ) -> bool {
-        let index = (cell.1 - self.low.1) as usize * self.width + (cell.0 - self.low.0) as usize;
-        if self.known[index] == 0 {
+        let key = (cell.0.div_euclid(TILE), cell.1.div_euclid(TILE));
+        let index = (cell.1.rem_euclid(TILE) * TILE + cell.0.rem_euclid(TILE)) as usize;
+        if self.last.as_ref().is_none_or(|(k, _)| *k != key) {
+            if let Some((k, tile)) = self.last.take() {
+                self.tiles.insert(k, tile);
+            }
+            let tile = self
+                .tiles
+                .remove(&key)
+                .unwrap_or_else(|| vec![0; (TILE * TILE) as usize]);
+            self.last = Some((key, tile));
+        }
+        let Some((_, tile)) = self.last.as_mut() else {
+            return true;
+        };
+        if tile[index] == 0 {
             let h = self.cell_m;
             let centre = Point::new((cell.0 as f64 + 0.5) * h, (cell.1 as f64 + 0.5) * h);
             let free = may_be_free(&centre, h * std::f64::consts::FRAC_1_SQRT_2);
-            self.known[index] = if free { 1 } else { 2 };
+            tile[index] = if free { 1 } else { 2 };
         }
-        self.known[index] == 1
+        tile[index] == 1
     }
 }
 
@@ -346,6 +354,28 @@ mod tests {
                         .copied()
                         .fold(f64::INFINITY, f64::min);
                     assert_eq!(*o, plain, "n {n} w {w} i {i}");
+                }
+            }
+        }
+    }
+
+    /// The table of free cells answers as the test it asks, once a cell, across tiles
+    /// and on both sides of zero.
+    #[test]
+    fn each_cell_is_asked_once() {
+        let mut cells = FreeCells::new(0.1);
+        let mut asked = std::collections::HashSet::new();
+        let mut test = |p: &Point, r: f64| {
+            assert!((r - 0.1 * std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12);
+            assert!(asked.insert(((p.x * 20.0).round() as i64, (p.y * 20.0).round() as i64)));
+            (p.x + p.y).sin() > 0.0
+        };
+        for _ in 0..2 {
+            for j in -70..70 {
+                for i in (-130..130).step_by(3) {
+                    let centre = Point::new((i as f64 + 0.5) * 0.1, (j as f64 + 0.5) * 0.1);
+                    let want = (centre.x + centre.y).sin() > 0.0;
+                    assert_eq!(cells.is_free((i, j), &mut test), want, "({i}, {j})");
                 }
             }
         }
