@@ -184,11 +184,13 @@ pub struct AloneReport {
 
 /// The bounds of every agent of `scenario` along `centre_path`, the agents shared among
 /// the cores (round-robin: the costly ones, whose slots enter obstacles, often come
-/// together).
+/// together); `done` is called as each agent's are ready (a progress bar).
 pub fn agent_bounds(
     scenario: &Scenario,
     centre_path: &[Pose],
+    done: impl Fn() + Sync,
 ) -> Result<Vec<AgentBound>, BoundError> {
+    let done = &done;
     let agents = scenario.agents.len();
     let workers = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
@@ -199,7 +201,11 @@ pub fn agent_bounds(
                 s.spawn(move || {
                     (worker..agents)
                         .step_by(workers)
-                        .map(|agent| (agent, agent_bound(scenario, centre_path, agent)))
+                        .map(|agent| {
+                            let bound = agent_bound(scenario, centre_path, agent);
+                            done();
+                            (agent, bound)
+                        })
                         .collect::<Vec<_>>()
                 })
             })
@@ -279,9 +285,11 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     // The centre the run followed: the plan, or in a changing world the plan as it was
     // mended on the way (its deviation is measured from those slots).
     let followed: Vec<Pose> = run.steps.iter().map(|s| s.centre).collect();
-    let per_agent = agent_bounds(scenario, &followed)
+    let bar = progress_bar(scenario.agents.len(), "bounding each agent");
+    let per_agent = agent_bounds(scenario, &followed, || bar.inc(1))
         .context("the tracking bound")
         .map_err(CliError::Other)?;
+    bar.finish_and_clear();
     let n = per_agent.len().max(1) as f64;
     let bound_mean = per_agent.iter().map(|a| a.mean_deviation_m).sum::<f64>() / n;
     let bound_max = per_agent
@@ -355,6 +363,16 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+/// A progress bar on stderr over `agents`, headed `what`.
+fn progress_bar(agents: usize, what: &str) -> indicatif::ProgressBar {
+    indicatif::ProgressBar::new(agents as u64).with_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{what} {{bar:30}} {{pos}}/{{len}} {{eta}}"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    )
+}
+
 /// Each agent of `scenario` alone along `centre_path`, with a progress bar on stderr;
 /// `bounds` are the agents' bounds, `formation_mean_m` the whole formation's mean
 /// deviation.
@@ -364,10 +382,7 @@ fn alone_report(
     bounds: &[AgentBound],
     formation_mean_m: f64,
 ) -> Result<AloneReport, CliError> {
-    let bar = indicatif::ProgressBar::new(scenario.agents.len() as u64).with_style(
-        indicatif::ProgressStyle::with_template("each agent alone {bar:30} {pos}/{len} {eta}")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = progress_bar(scenario.agents.len(), "each agent alone");
     let per_agent = bounds
         .iter()
         .map(|b| {
