@@ -33,8 +33,9 @@ pub enum Command {
     /// and time it: the yardstick of the multi-process run (JSON on stdout).
     Simulate(SimulateArgs),
     /// The least mean and largest deviation any controller can reach with the agents'
-    /// top speeds (each agent alone, along its known slot track: a cone programme), and
-    /// the reference simulation's against them (JSON on stdout)
+    /// top speeds (each agent alone, along its known slot track: a cone programme, and a
+    /// grid round the obstacles its slot enters), and the reference simulation's against
+    /// them (JSON on stdout)
     Bound(BoundArgs),
     /// Run every controller on every scenario and tabulate safety, deviation, deadlocks and
     /// compute time (CSV and Markdown).

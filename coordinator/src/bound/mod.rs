@@ -24,8 +24,10 @@
 //! obstacles) only adding to it. The same constraints with one `t` for every `k`,
 //! minimising `t`, bound the largest deviation from below. The bound with the top speed
 //! alone (no floor) and with the obstacles alone (the floors' mean) are reported too, to
-//! say which dominates. The reference simulation is run too, and its figures are reported
-//! against the bounds.
+//! say which dominates. The reference simulation is run first, and its figures are
+//! reported against the bounds; the bounds are taken along the centre it followed (the
+//! plan, or in a changing world the plan as it was mended on the way), whose slots its
+//! deviation is measured from.
 //!
 //! With `--alone` each agent is also run alone (`alone.rs`: the method with no mate) and
 //! its best track searched on a lattice (`shared::tracking::best_track_on_lattice`): an achievable track, so the least
