@@ -91,7 +91,7 @@ pub fn least_deviation_on_grid(
     let mut filtered = vec![vec![f64::INFINITY; side * side]; reach.widths.len()];
     let mut now = vec![f64::INFINITY; side * side];
     for (k, slot) in slots.iter().enumerate() {
-        let floor_m = floors_m.get(k).copied().unwrap_or(0.0).max(0.0);
+        let floor_m = floor_at(floors_m, k);
         // Each row of the last step, its least value within each width.
         for (w, rows) in reach.widths.iter().zip(filtered.iter_mut()) {
             for (row_in, row_out) in before.chunks(side).zip(rows.chunks_mut(side)) {
@@ -148,7 +148,7 @@ pub fn least_deviation_round_obstacles(
     grid: Grid,
     mut may_be_free: impl FnMut(&Point, f64) -> bool,
 ) -> f64 {
-    let floor = |k: usize| floors_m.get(k).copied().unwrap_or(0.0).max(0.0);
+    let floor = |k: usize| floor_at(floors_m, k);
     // The slot's way from step 0 to each step.
     let way_m: Vec<f64> = std::iter::once(start)
         .chain(slots)
@@ -188,6 +188,11 @@ pub fn least_deviation_round_obstacles(
         next = last + 1;
     }
     sum_m + (next..slots.len()).map(floor).sum::<f64>()
+}
+
+/// The floor of step `k` (none, 0, where the slice ends).
+fn floor_at(floors_m: &[f64], k: usize) -> f64 {
+    floors_m.get(k).copied().unwrap_or(0.0).max(0.0)
 }
 
 /// Which cells a step reaches, in cells: for each row offset `dj`, the column offsets

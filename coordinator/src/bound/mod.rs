@@ -40,7 +40,6 @@ use shared::best_point::nearest_free_point;
 use shared::geometry::{FreeSpace, Point, Pose, Vector};
 use shared::scenario::Scenario;
 use shared::simulate::simulate_along;
-use shared::vocabulary::AgentSpec;
 
 mod alone;
 mod cone;
@@ -74,10 +73,8 @@ fn floor_in_m(space: &FreeSpace, offset: &Vector, slot: &Point) -> f64 {
     nearest_free_point(space, &query).map_or(0.0, |free| (free - query).norm())
 }
 
-/// The floors of agent `spec` at `slots` in `scenario`'s static world
-/// ([`floor_in_m`]).
-fn obstacle_floors_m(scenario: &Scenario, spec: &AgentSpec, slots: &[Point]) -> Vec<f64> {
-    let world = StaticSpace::new(scenario, spec);
+/// The floors at `slots` in one agent's static `world` ([`floor_in_m`]).
+fn obstacle_floors_m(world: &StaticSpace, slots: &[Point]) -> Vec<f64> {
     world.with_free_space(|space| {
         slots
             .iter()
@@ -86,19 +83,17 @@ fn obstacle_floors_m(scenario: &Scenario, spec: &AgentSpec, slots: &[Point]) -> 
     })
 }
 
-/// The least summed deviation (metres) of agent `spec` of `scenario` with every position
-/// out of the static obstacles, bounded on a grid ([`least_deviation_round_obstacles`]);
-/// the arguments as [`optimal_track`]'s. The grid's relaxations only lower it, and an
-/// agent that can follow no track (every cell in reach blocked) gives no bound: 0.
+/// The least summed deviation (metres) of an agent in its static `world` with every
+/// position out of the obstacles, bounded on a grid ([`least_deviation_round_obstacles`]);
+/// the other arguments as [`optimal_track`]'s. The grid's relaxations only lower it, and
+/// an agent that can follow no track (every cell in reach blocked) gives no bound: 0.
 fn way_round_m(
-    scenario: &Scenario,
-    spec: &AgentSpec,
+    world: &StaticSpace,
     start: &Point,
     slots: &[Point],
     floors_m: &[f64],
     max_step_m: f64,
 ) -> f64 {
-    let world = StaticSpace::new(scenario, spec);
     let to_frame = |p: &Point| p - world.offset;
     let slots: Vec<Point> = slots.iter().map(to_frame).collect();
     let bound_m = world.with_free_space(|space| {
@@ -235,7 +230,8 @@ fn agent_bound(
         ),
         None => (Point::origin(), Vec::new()),
     };
-    let floors_m = obstacle_floors_m(scenario, spec, &slots);
+    let world = StaticSpace::new(scenario, spec);
+    let floors_m = obstacle_floors_m(&world, &slots);
     let steps = slots.len().max(1) as f64;
     let obstacle_mean_m = floors_m.iter().sum::<f64>() / steps;
     let Some(cap) = spec.max_step_m else {
@@ -258,7 +254,7 @@ fn agent_bound(
     let way_round_sum_m = floors_m
         .iter()
         .any(|f| *f > 0.0)
-        .then(|| way_round_m(scenario, spec, &start, &slots, &floors_m, cap));
+        .then(|| way_round_m(&world, &start, &slots, &floors_m, cap));
     // Each part is a lower bound too; the solver's answers are exact only to its
     // tolerance, so the whole is never reported below a part.
     let floors_sum_m: f64 = floors_m.iter().sum();
