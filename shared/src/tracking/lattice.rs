@@ -8,7 +8,7 @@
 //! --alone` searches a whole run's track with it (an achievable track, so its deviation
 //! bounds the least deviation of an agent alone from above).
 
-use crate::geometry::Point;
+use crate::geometry::{Point, Vector};
 
 /// How much longer than the top speed a step between two lattice points may come out
 /// from rounding their coordinates (`i * spacing`), in metres.
@@ -40,13 +40,17 @@ struct Node {
     from: usize,
 }
 
-/// Which node of a step lies on each lattice cell: a dense table over the cells' bounding
-/// box (a step's cells fill the disk of its window, so little of it is empty).
+/// Which node of a step lies on each lattice cell, and its cost: a dense table over the
+/// cells' bounding box (a step's cells fill the disk of its window, so little of it is
+/// empty). The costs sit apart from the nodes, so that the search's scan of a
+/// neighbourhood reads one small array.
 struct CellIndex {
     first: (i64, i64),
     columns: i64,
     rows: i64,
     node: Vec<Option<usize>>,
+    /// The cost of the node on each cell (infinite where none).
+    cost_m: Vec<f64>,
 }
 
 impl CellIndex {
@@ -64,13 +68,17 @@ impl CellIndex {
                 columns: 0,
                 rows: 0,
                 node: Vec::new(),
+                cost_m: Vec::new(),
             };
         };
         let (columns, rows) = (hi_i - lo_i + 1, hi_j - lo_j + 1);
         let mut node = vec![None; (columns * rows) as usize];
+        let mut cost_m = vec![f64::INFINITY; (columns * rows) as usize];
         for (k, n) in nodes.iter().enumerate() {
             if let Some((i, j)) = n.cell {
-                node[((i - lo_i) * rows + (j - lo_j)) as usize] = Some(k);
+                let at = ((i - lo_i) * rows + (j - lo_j)) as usize;
+                node[at] = Some(k);
+                cost_m[at] = n.cost_m;
             }
         }
         Self {
@@ -78,16 +86,28 @@ impl CellIndex {
             columns,
             rows,
             node,
+            cost_m,
         }
+    }
+
+    /// The places in the tables of the cells `(i, j_lo) ..= (i, j_hi)` inside them, in
+    /// order (`None`: none is).
+    fn chord(&self, i: i64, j_lo: i64, j_hi: i64) -> Option<std::ops::RangeInclusive<usize>> {
+        let di = i - self.first.0;
+        let (lo, hi) = (
+            (j_lo - self.first.1).max(0),
+            (j_hi - self.first.1).min(self.rows - 1),
+        );
+        if di < 0 || di >= self.columns || lo > hi {
+            return None;
+        }
+        let base = di * self.rows;
+        Some((base + lo) as usize..=(base + hi) as usize)
     }
 
     /// The node on cell `(i, j)`, if any.
     fn get(&self, i: i64, j: i64) -> Option<usize> {
-        let (di, dj) = (i - self.first.0, j - self.first.1);
-        if di < 0 || dj < 0 || di >= self.columns || dj >= self.rows {
-            return None;
-        }
-        self.node[(di * self.rows + dj) as usize]
+        self.node[self.chord(i, j, j)?.start().to_owned()]
     }
 }
 
@@ -130,16 +150,12 @@ pub fn best_track_on_lattice(
     {
         return None;
     }
-    // Lattice offsets a step between two points `spacing_m` apart can take.
-    let reach = (max_step_m / lattice.spacing_m).floor() as i64;
-    let offsets: Vec<(i64, i64)> = (-reach..=reach)
-        .flat_map(|di| (-reach..=reach).map(move |dj| (di, dj)))
-        .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * lattice.spacing_m <= max_step_m)
-        .collect();
+    let chords = reach_chords(max_step_m, lattice.spacing_m);
     let reachable = |k: usize, from: &Node, to: &Node| {
-        let d = (to.at - from.at).norm();
-        d <= max_step_m + STEP_ROUNDING_M
-            && (from.clearance_m + to.clearance_m >= d || segment_free(k, &from.at, &to.at))
+        let gap = to.at - from.at;
+        norm_within(&gap, max_step_m + STEP_ROUNDING_M)
+            && (norm_within(&gap, from.clearance_m + to.clearance_m)
+                || segment_free(k, &from.at, &to.at))
     };
     let mut steps: Vec<Vec<Node>> = Vec::with_capacity(slots.len() + 1);
     steps.push(vec![Node {
@@ -175,7 +191,9 @@ pub fn best_track_on_lattice(
         for i in lo(|p| p.x)..=hi(|p| p.x) {
             for j in lo(|p| p.y)..=hi(|p| p.y) {
                 let at = point_of((i, j));
-                if (at - start).norm() <= within_m && centres().any(|c| (at - c).norm() <= w) {
+                if norm_within(&(at - start), within_m)
+                    && centres().any(|c| norm_within(&(at - c), w))
+                {
                     candidates.push((at, Some((i, j))));
                 }
             }
@@ -193,9 +211,9 @@ pub fn best_track_on_lattice(
                 cost_m: f64::INFINITY,
                 from: 0,
             };
-            let mut relax = |from: usize| {
+            let relax = |node: &mut Node, from: usize| {
                 let q = &previous[from];
-                if q.cost_m < node.cost_m && reachable(k, q, &node) {
+                if q.cost_m < node.cost_m && reachable(k, q, node) {
                     node.cost_m = q.cost_m;
                     node.from = from;
                 }
@@ -203,9 +221,18 @@ pub fn best_track_on_lattice(
             match cell {
                 // The step before on the same lattice: its cells within reach.
                 Some((i, j)) if k > 0 && h_before == h => {
-                    for (di, dj) in &offsets {
-                        if let Some(from) = by_cell.get(i + di, j + dj) {
-                            relax(from);
+                    for &(di, m) in &chords {
+                        let Some(row) = by_cell.chord(i + di, j - m, j + m) else {
+                            continue;
+                        };
+                        let (costs, nodes) = (&by_cell.cost_m[row.clone()], &by_cell.node[row]);
+                        for (cost_m, from) in costs.iter().zip(nodes) {
+                            // Only a cheaper node can change the answer: its cost first.
+                            if *cost_m < node.cost_m
+                                && let Some(from) = *from
+                            {
+                                relax(&mut node, from);
+                            }
                         }
                     }
                 }
@@ -221,14 +248,14 @@ pub fn best_track_on_lattice(
                     for i in lo_i..=hi_i {
                         for j in lo_j..=hi_j {
                             if let Some(from) = by_cell.get(i, j) {
-                                relax(from);
+                                relax(&mut node, from);
                             }
                         }
                     }
                 }
             }
             for &from in &loose {
-                relax(from);
+                relax(&mut node, from);
             }
             if node.cost_m.is_finite() {
                 node.cost_m += (at - slot).norm();
@@ -257,6 +284,36 @@ pub fn best_track_on_lattice(
     Some((total_m, track))
 }
 
+/// The lattice offsets `(di, dj)` a step of at most `max_step_m` between two points
+/// `spacing_m` apart can take, as chords of the disk: for each column offset `di`
+/// (ascending), the row offsets `-m ..= m`, given as `(di, m)`.
+fn reach_chords(max_step_m: f64, spacing_m: f64) -> Vec<(i64, i64)> {
+    let reach = (max_step_m / spacing_m).floor() as i64;
+    let within = |di: i64, dj: i64| ((di * di + dj * dj) as f64).sqrt() * spacing_m <= max_step_m;
+    (-reach..=reach)
+        .filter_map(|di| {
+            let m = (0..=reach).take_while(|&dj| within(di, dj)).last()?;
+            Some((di, m))
+        })
+        .collect()
+}
+
+/// Whether `v.norm() <= r`, bit for bit, mostly without the square root: the squared
+/// length is compared with `r * r` and the root taken only within a relative 1e-12 of it
+/// (where rounding could decide).
+fn norm_within(v: &Vector, r: f64) -> bool {
+    let (squared, r_squared) = (v.norm_squared(), r * r);
+    if r < 0.0 {
+        false
+    } else if squared <= r_squared * (1.0 - 1e-12) {
+        true
+    } else if squared >= r_squared * (1.0 + 1e-12) {
+        false
+    } else {
+        squared.sqrt() <= r
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,6 +323,51 @@ mod tests {
         first_spacing_m: 0.1,
         window_m: 1.5,
     };
+
+    /// The chords hold exactly the offsets within a step, in column-then-row order.
+    #[test]
+    fn the_chords_are_the_offsets_within_a_step() {
+        let cases: [(f64, f64); 5] = [(0.5, 0.1), (1.0, 0.3), (0.5, 0.3), (0.6, 0.25), (0.2, 0.3)];
+        for (max_step_m, spacing_m) in cases {
+            let reach = (max_step_m / spacing_m).floor() as i64;
+            let plain: Vec<(i64, i64)> = (-reach..=reach)
+                .flat_map(|di| (-reach..=reach).map(move |dj| (di, dj)))
+                .filter(|&(di, dj)| ((di * di + dj * dj) as f64).sqrt() * spacing_m <= max_step_m)
+                .collect();
+            let chorded: Vec<(i64, i64)> = reach_chords(max_step_m, spacing_m)
+                .into_iter()
+                .flat_map(|(di, m)| (-m..=m).map(move |dj| (di, dj)))
+                .collect();
+            assert_eq!(chorded, plain, "step {max_step_m}, spacing {spacing_m}");
+        }
+    }
+
+    /// The test without the root answers as the root does, on random lengths and on
+    /// lengths a rounding away from the radius.
+    #[test]
+    fn norm_within_agrees_with_the_norm() {
+        let mut seed: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..20_000 {
+            let v = Vector::new(4.0 * next() - 2.0, 4.0 * next() - 2.0);
+            let exact = v.norm();
+            let nudged = [
+                exact,
+                f64::from_bits(exact.to_bits() + 1),
+                f64::from_bits(exact.to_bits() - 1),
+                3.0 * next(),
+                -next(),
+            ];
+            for r in nudged {
+                assert_eq!(norm_within(&v, r), v.norm() <= r, "{v} against {r}");
+            }
+        }
+    }
 
     /// The search in open space (every point free, every segment free), top speed 0.5 m.
     fn in_open_space(
