@@ -107,7 +107,7 @@ impl CellIndex {
 
     /// The node on cell `(i, j)`, if any.
     fn get(&self, i: i64, j: i64) -> Option<usize> {
-        self.node[self.chord(i, j, j)?.start().to_owned()]
+        self.node[*self.chord(i, j, j)?.start()]
     }
 }
 
@@ -359,7 +359,7 @@ mod tests {
             let nudged = [
                 exact,
                 f64::from_bits(exact.to_bits() + 1),
-                f64::from_bits(exact.to_bits() - 1),
+                f64::from_bits(exact.to_bits().saturating_sub(1)),
                 3.0 * next(),
                 -next(),
             ];
