@@ -324,7 +324,8 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         per_agent,
         alone,
     };
-    let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.2}x"));
+    // Three digits, so that a ratio just above a target (1.503x) does not read as 1.50x.
+    let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.3}x"));
     // A bound of a few micrometres is shown as such, not as 0.0000.
     let metres = |m: f64| {
         if m == 0.0 || m >= 1e-3 {
