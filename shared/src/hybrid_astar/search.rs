@@ -3,9 +3,8 @@
 //! schedule.
 
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::BinaryHeap;
 use std::f64::consts::TAU;
-use std::hash::{BuildHasherDefault, Hasher};
 
 use super::analytic::analytic_expansion;
 use super::collision::Checker;
@@ -18,6 +17,7 @@ use crate::dubins;
 use crate::geometry::{Field, Pose};
 use crate::ordered::TotalF64;
 use crate::reeds_shepp;
+use rustc_hash::FxHashMap;
 
 /// Figures of one successful search.
 #[derive(Clone, Debug, PartialEq)]
@@ -28,24 +28,6 @@ pub struct PlanStats {
     pub analytic_attempts: usize,
     /// Length of the returned path (sum of the distances between its poses), in metres.
     pub length_m: f64,
-}
-
-/// Hashes the u64 cell keys (a multiplicative mix; no iteration order is ever used).
-#[derive(Default)]
-struct KeyHasher(u64);
-
-impl Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 29)
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ b as u64).wrapping_mul(0x100_0000_01b3);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (v ^ (v >> 31)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
 }
 
 const NO_PARENT: u32 = u32::MAX;
@@ -108,7 +90,7 @@ pub(super) struct Search<'a> {
     primitives: Vec<Primitive>,
     rows: u64,
     nodes: Vec<Node>,
-    cells: HashMap<u64, u32, BuildHasherDefault<KeyHasher>>,
+    cells: FxHashMap<u64, u32>,
     open: BinaryHeap<Entry>,
 }
 
@@ -131,7 +113,7 @@ impl<'a> Search<'a> {
             primitives,
             rows: (field.height_m / settings.cell_m).ceil() as u64 + 1,
             nodes: Vec::new(),
-            cells: HashMap::default(),
+            cells: FxHashMap::default(),
             open: BinaryHeap::new(),
         }
     }

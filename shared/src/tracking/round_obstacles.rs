@@ -8,8 +8,8 @@
 //! slot comes out of, early.
 
 use std::cell::RefCell;
-use std::collections::HashMap;
-use std::hash::{BuildHasher, Hasher};
+
+use rustc_hash::FxHashMap;
 
 use crate::best_point::nearest_free_point;
 use crate::geometry::{FreeSpace, Point};
@@ -96,7 +96,9 @@ pub fn first_move_round_obstacles(
     };
     // The later moves share one free space, and the lattices of consecutive steps
     // overlap: each point is asked once.
-    let later_clearances: RefCell<HashMap<(u64, u64), Option<f64>, PointBits>> = RefCell::default();
+    // (A cheap hash: the default one, built against hostile keys, took about 5 % of a
+    // capped run; these keys are the search's own points.)
+    let later_clearances: RefCell<FxHashMap<(u64, u64), Option<f64>>> = RefCell::default();
     let clearance_m = |k: usize, p: &Point| match k {
         0 => clearance_in(now, p),
         _ => *later_clearances
@@ -127,40 +129,6 @@ pub fn first_move_round_obstacles(
         segment_free,
     )?;
     track.first().copied()
-}
-
-/// A cheap hash of a point's coordinate bits for the table of clearances (the default
-/// hasher, built against hostile keys, took about 5 % of a capped run; these keys are
-/// the search's own lattice points, not another process's input).
-#[derive(Clone, Copy, Debug, Default)]
-struct PointBits;
-
-impl BuildHasher for PointBits {
-    type Hasher = PointBitsHasher;
-
-    fn build_hasher(&self) -> PointBitsHasher {
-        PointBitsHasher(0)
-    }
-}
-
-/// The hasher of [`PointBits`]: a multiply and a rotation per word.
-#[derive(Clone, Copy, Debug)]
-struct PointBitsHasher(u64);
-
-impl Hasher for PointBitsHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(u64::from(b));
-        }
-    }
-
-    fn write_u64(&mut self, word: u64) {
-        self.0 = (self.0.rotate_left(26) ^ word).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
 }
 
 #[cfg(test)]
