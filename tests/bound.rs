@@ -166,3 +166,75 @@ fn in_a_changing_world_the_bound_follows_the_mended_plan() {
         "{r}"
     );
 }
+
+/// The formation searched together (`--together`): an achievable formation, mates
+/// included, so it is no better than the bound, nor (each agent) than the best track found
+/// for it alone; its tracks (`--together-csv`) keep the top speed, and at every step the
+/// bodies stand apart. Without the flag there is no such report.
+#[test]
+fn the_formation_searched_together_stays_above_the_bound_and_apart() {
+    let plain = bound(Some("scenarios/paper-top-speed.toml"));
+    assert!(plain["together"].is_null(), "{plain}");
+    let dir = tempfile::tempdir().expect("a scratch folder");
+    let csv_path = dir.path().join("together.csv");
+    let csv_arg = csv_path.to_str().expect("a UTF-8 path");
+    let r = bound_with(
+        Some("scenarios/paper-top-speed.toml"),
+        &["--alone", "--together", "--together-csv", csv_arg],
+    );
+    let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k}: {v}"));
+    let together = &r["together"];
+    assert!(
+        f(together, "mean_deviation_m") >= f(&r, "bound_mean_deviation_m") * (1.0 - 1e-6),
+        "{r}"
+    );
+    let each = together["per_agent_mean_deviation_m"]
+        .as_array()
+        .expect("per agent");
+    let alone = r["alone"]["per_agent"].as_array().expect("alone per agent");
+    assert_eq!(each.len(), alone.len());
+    for (t, a) in each.iter().zip(alone) {
+        let t = t.as_f64().expect("a number");
+        assert!(t >= f(a, "searched_mean_deviation_m") - 1e-12, "{t} {a}");
+    }
+    // The tracks: (step, agent, x, y), every agent at every step.
+    let text = std::fs::read_to_string(&csv_path).expect("the tracks' CSV");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("step,agent,x_m,y_m"));
+    let rows: Vec<(usize, usize, f64, f64)> = lines
+        .map(|l| {
+            let v: Vec<&str> = l.split(',').collect();
+            (
+                v[0].parse().expect("step"),
+                v[1].parse().expect("agent"),
+                v[2].parse().expect("x"),
+                v[3].parse().expect("y"),
+            )
+        })
+        .collect();
+    let agents = each.len();
+    let steps = r["steps"].as_u64().expect("steps") as usize;
+    assert_eq!(rows.len(), agents * (steps + 1));
+    let at = |step: usize, agent: usize| {
+        let (s, a, x, y) = rows[step * agents + agent];
+        assert_eq!((s, a), (step, agent));
+        (x, y)
+    };
+    // The scenario's top speed and agent radius: 0.5 m a step, 0.25 m.
+    for step in 1..=steps {
+        for a in 0..agents {
+            let ((x0, y0), (x1, y1)) = (at(step - 1, a), at(step, a));
+            assert!(
+                (x1 - x0).hypot(y1 - y0) <= 0.5 + 1e-9,
+                "agent {a} step {step}"
+            );
+            for b in a + 1..agents {
+                let (xb, yb) = at(step, b);
+                assert!(
+                    (x1 - xb).hypot(y1 - yb) >= 0.5,
+                    "agents {a} {b} step {step}"
+                );
+            }
+        }
+    }
+}

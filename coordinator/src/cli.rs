@@ -301,6 +301,17 @@ pub struct BoundArgs {
     /// the bound and it). Slower: a simulation and a search per agent.
     #[arg(long)]
     pub alone: bool,
+    /// Also search the formation's tracks together: each agent's best track on the
+    /// lattice in turn, kept clear of the tracks before it, in a few orders (an
+    /// achievable formation, mates included: the least deviation lies between the bound
+    /// and it). Slower: a search per agent and order.
+    #[arg(long)]
+    pub together: bool,
+    /// With `--together`: write the tracks found together to this CSV file (`step`,
+    /// `agent`, `x_m`, `y_m`: each agent's position at every step, step 0 its slot; the
+    /// agents move in the order the report names), to plot or replay them.
+    #[arg(long, value_name = "FILE", requires = "together")]
+    pub together_csv: Option<PathBuf>,
 }
 
 /// Arguments of `compare`.

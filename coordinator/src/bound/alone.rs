@@ -9,10 +9,12 @@ use serde::Serialize;
 use shared::best_point::nearest_free_point;
 use shared::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
+    distance_point_segment,
 };
 use shared::scenario::Scenario;
 use shared::simulate::{SimulateError, simulate_along};
 use shared::tracking::{Lattice, best_track_on_lattice};
+use shared::turn::PLANNING_MARGIN_M;
 use shared::vocabulary::AgentSpec;
 
 /// The lattice of the search for an agent with top speed `max_step_m` whose largest
@@ -128,10 +130,47 @@ fn searched_track_m(
     lattice: Lattice,
     max_step_m: f64,
 ) -> Option<f64> {
-    let (first, rest) = centre_path.split_first()?;
-    if rest.is_empty() {
+    let steps = centre_path.len().checked_sub(1)?;
+    if steps == 0 {
         return Some(0.0);
     }
+    searched_track(scenario, spec, centre_path, lattice, max_step_m, &[], &[])
+        .map(|(sum_m, _)| sum_m / steps as f64)
+}
+
+/// Where a mate goes: its body's radius and its position at each step of the centre path
+/// (`positions[k]` at step `k`, from 0; the scenario's frame).
+#[derive(Clone, Debug)]
+pub struct MateTrack {
+    /// The mate's body radius, in metres.
+    pub radius_m: f64,
+    /// Its position at each step.
+    pub positions: Vec<Point>,
+}
+
+/// The best track the lattice search finds for `spec` along `centre_path` among the
+/// static obstacles and its mates: its summed deviation and its positions at steps 1 ..= T
+/// (the scenario's frame); `None` when no track through the lattice exists. Alone: both
+/// lists of mates empty.
+///
+/// The agents take their turns in one order every step (the order they are searched in):
+/// - `before`: the mates that move before this agent in every step, with their tracks.
+///   Its move keeps `r + r_mate` (and the run's planning margin) from where each stands
+///   after its own move of that step, and each place it stands keeps as far from the
+///   mates' moves of the next step.
+/// - `after`: the mates that move after it, not searched yet (only their places at step
+///   0 count): its first move keeps as far from them. Each of them keeps clear of this
+///   agent when its turn comes (it has this agent among its `before`).
+pub fn searched_track(
+    scenario: &Scenario,
+    spec: &AgentSpec,
+    centre_path: &[Pose],
+    lattice: Lattice,
+    max_step_m: f64,
+    before: &[MateTrack],
+    after: &[MateTrack],
+) -> Option<(f64, Vec<Point>)> {
+    let (first, rest) = centre_path.split_first()?;
     let world = StaticSpace::new(scenario, spec);
     // In the best point's frame.
     let to_frame = |p: Point| p - world.offset;
@@ -140,6 +179,22 @@ fn searched_track_m(
         .iter()
         .map(|c| to_frame(spec.slot.ideal_position(c)))
         .collect();
+    let keep_m = |m: &MateTrack| m.radius_m + spec.radius_m + PLANNING_MARGIN_M;
+    // Where each mate stands during this agent's move k, and what it sweeps while this
+    // agent stands at the end of that move (a segment; a point when it does not move):
+    // (keep, the point, the sweep's ends). This frame.
+    let bodies_of_move = |k: usize| -> Vec<(f64, Point, Point, Point)> {
+        let moved = before.iter().filter_map(|m| {
+            let stands = to_frame(*m.positions.get(k + 1)?);
+            let next = m.positions.get(k + 2).map_or(stands, |p| to_frame(*p));
+            Some((keep_m(m), stands, stands, next))
+        });
+        let waiting = after.iter().filter(|_| k == 0).filter_map(|m| {
+            let at = to_frame(*m.positions.first()?);
+            Some((keep_m(m), at, at, at))
+        });
+        moved.chain(waiting).collect()
+    };
     world.with_free_space(|space| {
         // The slot and its nearest free point are candidates too: the lattice alone
         // would round every position by up to half its spacing.
@@ -151,12 +206,46 @@ fn searched_track_m(
                     .collect()
             })
             .collect();
-        let clearance_m = |_: usize, p: &Point| {
-            space
-                .is_free(p, 0.0)
-                .then(|| space.clearance_m(p, max_step_m).max(0.0))
+        // The mates that may come near a candidate of move k (every candidate lies
+        // within the window of the slot or an anchor, the start by the first slot) or
+        // within a top speed of it (the clearance is cut there).
+        let near: Vec<Vec<(f64, Point, Point, Point)>> = (0..slots.len())
+            .map(|k| {
+                let from_slot_m = |a: &Point| (a - slots[k]).norm();
+                let reach_m = max_step_m
+                    + lattice.window_m
+                    + anchors[k].iter().map(from_slot_m).fold(0.0, f64::max)
+                    + if k == 0 { from_slot_m(&start) } else { 0.0 };
+                bodies_of_move(k)
+                    .into_iter()
+                    .filter(|(keep_m, _, a, b)| {
+                        distance_point_segment(&slots[k], a, b) <= reach_m + keep_m
+                    })
+                    .collect()
+            })
+            .collect();
+        let clearance_m = |k: usize, p: &Point| {
+            if !space.is_free(p, 0.0) {
+                return None;
+            }
+            let mut clear_m = space.clearance_m(p, max_step_m).max(0.0);
+            for (keep_m, _, a, b) in near.get(k).into_iter().flatten() {
+                let d = distance_point_segment(p, a, b);
+                if d <= *keep_m {
+                    return None;
+                }
+                clear_m = clear_m.min(d - keep_m);
+            }
+            Some(clear_m)
         };
-        let segment_free = |_: usize, a: &Point, b: &Point| space.is_segment_free(a, b, 0.0);
+        let segment_free = |k: usize, a: &Point, b: &Point| {
+            space.is_segment_free(a, b, 0.0)
+                && near
+                    .get(k)
+                    .into_iter()
+                    .flatten()
+                    .all(|(keep_m, stands, _, _)| distance_point_segment(stands, a, b) > *keep_m)
+        };
         best_track_on_lattice(
             &start,
             &slots,
@@ -166,6 +255,9 @@ fn searched_track_m(
             clearance_m,
             segment_free,
         )
-        .map(|(sum_m, _)| sum_m / slots.len() as f64)
+        .map(|(sum_m, track)| {
+            let track = track.iter().map(|p| p + world.offset).collect();
+            (sum_m, track)
+        })
     })
 }

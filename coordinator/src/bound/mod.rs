@@ -33,6 +33,11 @@
 //! its best track searched on a lattice (`shared::tracking::best_track_on_lattice`): an achievable track, so the least
 //! deviation an agent alone can have lies between its bound and that track, and the
 //! formation's excess over the agents alone is what the mates cost.
+//!
+//! With `--together` the formation's tracks are searched together (`together.rs`: each
+//! agent in turn on the same lattice, clear of the tracks before it): an achievable
+//! formation, mates included, so the least deviation any method can give the formation
+//! lies between the bound and it.
 
 use anyhow::Context;
 use serde::Serialize;
@@ -44,10 +49,12 @@ use shared::simulate::simulate_along;
 mod alone;
 mod cone;
 mod grid;
+mod together;
 
 pub use alone::{AgentAlone, StaticSpace, agent_alone};
 pub use cone::{Objective, optimal_track};
 pub use grid::{Grid, least_deviation_round_obstacles};
+pub use together::{ORDERS, Together, best_formation_together, tracks_csv};
 
 use crate::cli::BoundArgs;
 use crate::error::CliError;
@@ -162,6 +169,10 @@ pub struct BoundReport {
     pub per_agent: Vec<AgentBound>,
     /// With `--alone`: each agent alone; `null` without.
     pub alone: Option<AloneReport>,
+    /// With `--together`: the formation's tracks searched together (each agent in turn,
+    /// clear of those before it: achievable with the mates); `null` without, or when no
+    /// order of the search gave every agent a track (or an agent has no top speed).
+    pub together: Option<Together>,
 }
 
 /// Each agent alone (`bound --alone`), over the agents.
@@ -307,6 +318,23 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     } else {
         None
     };
+    let together = if args.together {
+        let bar = indicatif::ProgressBar::new_spinner().with_message(format!(
+            "searching the formation's tracks together, {} orders",
+            ORDERS.len()
+        ));
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        let found = best_formation_together(scenario, &followed, &per_agent);
+        bar.finish_and_clear();
+        if let (Some(path), Some(found)) = (&args.together_csv, &found) {
+            let bytes = tracks_csv(found).context("the tracks found together as CSV")?;
+            crate::output::write_atomically(path, &bytes)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        found
+    } else {
+        None
+    };
     let ratio = |ours: f64, bound: f64| (bound > 0.0).then(|| ours / bound);
     let report = BoundReport {
         scenario: summary.scenario.clone(),
@@ -323,6 +351,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         collisions: summary.collisions,
         per_agent,
         alone,
+        together,
     };
     // Three digits, so that a ratio just above a target (1.503x) does not read as 1.50x.
     let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.3}x"));
@@ -356,6 +385,21 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
             show(searched.and_then(|m| ratio(alone.mean_deviation_m, m))),
             alone.mates_m,
         );
+    }
+    if args.together {
+        match &report.together {
+            Some(t) => eprintln!(
+                "{}: the formation searched together {:.4} m (the bound's {}; ours is {} it)",
+                report.scenario,
+                t.mean_deviation_m,
+                show(ratio(t.mean_deviation_m, report.bound_mean_deviation_m)),
+                show(ratio(report.mean_deviation_m, t.mean_deviation_m)),
+            ),
+            None => eprintln!(
+                "{}: the formation searched together: no track for every agent in any order (or an agent without a top speed)",
+                report.scenario
+            ),
+        }
     }
     let json = serde_json::to_string_pretty(&report).context("writing the report")?;
     println!("{json}");
