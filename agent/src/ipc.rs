@@ -171,6 +171,12 @@ impl Channel for IpcPorts {
                     .iter()
                     .map(|b| shared::geometry::Vector::new(b.velocity.x_m, b.velocity.y_m))
                     .collect(),
+                frozen: w
+                    .bodies
+                    .iter()
+                    .filter(|b| b.alive == 0)
+                    .map(|b| b.agent as usize)
+                    .collect(),
             });
         }
         Ok(turn)

@@ -352,7 +352,8 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
                     .context("the mission's controller settings")?
                     .with_moving(&mission.moving, obstacles)
                     .with_polygons(&mission.polygons)
-                    .with_map(mission.map.as_ref()),
+                    .with_map(mission.map.as_ref())
+                    .with_formation(&mission.agents),
             );
             radii_m = mission.agents.iter().map(|a| a.radius_m).collect();
             simultaneous = mission.turns == TurnMode::Simultaneous;
@@ -364,6 +365,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let step = turn_step(&turn);
         let velocities = simultaneous.then(|| velocities_of(&turn, agent));
+        let mates = turn.mates(agent);
         let mv = controller.plan_turn_ahead(
             step,
             &turn.centre,
@@ -371,6 +373,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
             &me,
             turn.heading_rad,
             &others,
+            &mates,
             velocities.as_ref(),
         );
         let compute = started.elapsed();
@@ -441,6 +444,7 @@ mod tests {
                 ahead: path[step + 1..].iter().take(10).copied().collect(),
                 bodies: positions.iter().copied().enumerate().collect(),
                 velocities: Vec::new(),
+                frozen: Vec::new(),
             })
             .collect()
     }
@@ -472,6 +476,7 @@ mod tests {
                 &turn.bodies[agent].1,
                 None,
                 &others,
+                &turn.mates(agent),
                 None,
             );
             assert_eq!(*seq, turn.seq);

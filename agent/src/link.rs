@@ -47,6 +47,11 @@ pub fn net_turn(t: &TurnInput) -> NetTurn {
             .map(|&(j, p)| (u32::try_from(j).unwrap_or(u32::MAX), [p.x, p.y]))
             .collect(),
         velocities: t.velocities.iter().map(|v| [v.x, v.y]).collect(),
+        frozen: t
+            .frozen
+            .iter()
+            .map(|&j| u32::try_from(j).unwrap_or(u32::MAX))
+            .collect(),
     }
 }
 
@@ -59,6 +64,13 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
         bail!(
             "a turn with {} velocities for {} bodies",
             t.velocities.len(),
+            t.bodies.len()
+        );
+    }
+    if t.frozen.len() > t.bodies.len() {
+        bail!(
+            "a turn with {} frozen agents for {} bodies",
+            t.frozen.len(),
             t.bodies.len()
         );
     }
@@ -99,6 +111,7 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
             .iter()
             .map(|v| Vector::new(v[0], v[1]))
             .collect(),
+        frozen: t.frozen.into_iter().map(|j| j as usize).collect(),
     })
 }
 

@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Polygon, Pose, Vector};
 use shared::moving_obstacle::MovingObstacle;
+use shared::turn::MateView;
 use shared::vocabulary::{AgentSpec, ControllerSpec, Move, TurnMode};
 
 /// The static scenario as an agent sees it.
@@ -68,6 +69,24 @@ pub struct TurnInput {
     /// With simultaneous turns, how far each body of `bodies` moved over the last step
     /// (metres per step, same order); empty otherwise.
     pub velocities: Vec<Vector>,
+    /// The agents of `bodies` frozen as obstacles (dead), by index: they stand for good.
+    pub frozen: Vec<usize>,
+}
+
+impl TurnInput {
+    /// The mates this turn lists for agent `agent`: every body but its own, with whether
+    /// it is frozen.
+    pub fn mates(&self, agent: usize) -> Vec<MateView> {
+        self.bodies
+            .iter()
+            .filter(|(j, _)| *j != agent)
+            .map(|&(j, position)| MateView {
+                agent: j,
+                position,
+                alive: !self.frozen.contains(&j),
+            })
+            .collect()
+    }
 }
 
 /// What the coordinator asks.

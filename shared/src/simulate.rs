@@ -48,6 +48,7 @@ pub fn agent_controllers(scenario: &Scenario) -> Result<Vec<TurnController>, Cbf
                 p.with_moving(&scenario.moving, &obstacles)
                     .with_polygons(&scenario.polygons)
                     .with_map(scenario.map.as_ref())
+                    .with_formation(&scenario.agents)
             })
         })
         .collect()
@@ -165,6 +166,7 @@ pub fn simulate_along_with_deaths(
                 .map(|&agent| {
                     let me = recorder.bodies()[agent].position;
                     let others = recorder.others(agent);
+                    let mates = recorder.mates(agent);
                     let heading_rad = recorder.headings()[agent];
                     let velocities = velocities
                         .as_ref()
@@ -176,6 +178,7 @@ pub fn simulate_along_with_deaths(
                         &me,
                         heading_rad,
                         &others,
+                        &mates,
                         velocities.as_ref(),
                     );
                     (agent, mv)

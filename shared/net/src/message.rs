@@ -54,6 +54,8 @@ pub struct NetTurn {
     /// With simultaneous turns, how far each of `bodies` moved over the last step ([x,
     /// y] in m, same order); empty otherwise.
     pub velocities: Vec<[f64; 2]>,
+    /// The agents of `bodies` frozen as obstacles (dead), by index.
+    pub frozen: Vec<u32>,
 }
 
 /// From the agent to its relay.
@@ -181,6 +183,7 @@ mod tests {
             ahead: vec![[1.75, -0.25, 3.0], [2.0, 1e-300, -0.5]],
             bodies: vec![(0, [0.3, 0.1]), (7, [-1.0, 2.0])],
             velocities: vec![[0.25, 0.0], [-0.5, 1e-300]],
+            frozen: vec![7],
         });
         assert_eq!(decode::<Down>(&encode(&turn).unwrap()).unwrap(), turn);
         let up = a_move();

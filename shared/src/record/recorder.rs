@@ -10,6 +10,7 @@ use crate::geometry::{
 use crate::groups::{GroupMove, group_meetings, simultaneous_meetings};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
+use crate::turn::MateView;
 use crate::vocabulary::{Body, Move, MoveStatus, TurnMode};
 
 mod check;
@@ -205,6 +206,21 @@ impl<'a> Recorder<'a> {
             .enumerate()
             .filter(|(j, _)| *j != agent)
             .map(|(_, b)| *b)
+            .collect()
+    }
+
+    /// Every agent but `agent`, as the world shows it to `agent` ([`MateView`]).
+    pub fn mates(&self, agent: usize) -> Vec<MateView> {
+        self.bodies
+            .iter()
+            .zip(&self.alive)
+            .enumerate()
+            .filter(|(j, _)| *j != agent)
+            .map(|(j, (b, &alive))| MateView {
+                agent: j,
+                position: b.position,
+                alive,
+            })
             .collect()
     }
 

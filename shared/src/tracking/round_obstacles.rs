@@ -131,6 +131,56 @@ pub fn first_move_round_obstacles(
     track.first().copied()
 }
 
+/// The best track round the obstacles, as [`first_move_round_obstacles`] searches it, with
+/// a free space of its own for each later move: `later[k - 1]` for the move to
+/// `slots[k]` (bodies that stand only for some moves, such as a mate's predicted way).
+/// Returns the whole track (its first point the first move's end), or `None` when no track
+/// through the lattice exists or `later` is too short.
+///
+/// Each later space must hold every point the next one holds at the same place (a
+/// node's clearance serves the move out of it too): a body of move `k + 1` belongs to
+/// move `k`'s space as well.
+pub fn track_round_obstacles_per_step(
+    now: &FreeSpace<'_>,
+    later: &[FreeSpace<'_>],
+    me: &Point,
+    slots: &[Point],
+    firsts: &[Point],
+    max_step_m: f64,
+    lattice: Lattice,
+) -> Option<Vec<Point>> {
+    if !(max_step_m.is_finite() && max_step_m > 0.0) || later.len() + 1 < slots.len() {
+        return None;
+    }
+    let space = |k: usize| if k == 0 { now } else { &later[k - 1] };
+    let clearance_m = |k: usize, p: &Point| {
+        let s = space(k);
+        s.is_free(p, 0.0)
+            .then(|| s.clearance_m(p, max_step_m).max(0.0))
+    };
+    let segment_free = |k: usize, a: &Point, b: &Point| space(k).is_segment_free(a, b, 0.0);
+    let anchors: Vec<Vec<Point>> = slots
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            std::iter::once(*s)
+                .chain(nearest_free_point(space(k), s).ok())
+                .chain(firsts.iter().copied().filter(|_| k == 0))
+                .collect()
+        })
+        .collect();
+    best_track_on_lattice(
+        me,
+        slots,
+        &anchors,
+        max_step_m,
+        lattice,
+        clearance_m,
+        segment_free,
+    )
+    .map(|(_, track)| track)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

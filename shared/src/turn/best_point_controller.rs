@@ -15,6 +15,7 @@ use crate::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 use super::PLANNING_MARGIN_M;
 #[cfg(doc)]
 use super::TurnController;
+use super::give_way::{self, LaggingMate, Planning};
 
 /// The paper's controller for one agent (exact best point, then the shortest path to it):
 /// everything the agent needs to take its turns; built once, reused every step.
@@ -53,6 +54,10 @@ pub struct Aim {
     /// Its slot over the look-ahead, world coordinates: `slots[0]` this turn's (where it
     /// should stand after this move), `slots[j]` the one after `j + 1` moves.
     pub slots: Vec<Point>,
+    /// The mates near it that lag far behind their slots, which it gives way to: it
+    /// predicts the track each would search round the obstacles (the first move round
+    /// the bodies standing, this agent's included) and keeps its own later moves off it.
+    pub lagging: Vec<LaggingMate>,
 }
 
 /// The best point for a goal and the path there (`None`: the agent stands on it).
@@ -291,8 +296,19 @@ impl BestPointController {
             _ => None,
         };
         let followed = self.follow(slot, me, found, Some(max_step_m), max_chord_m);
-        self.aimed_move(aim, &space, &statics, best_p, &followed, me, max_step_m)
-            .unwrap_or(followed)
+        let mates = Planning {
+            field: self.field,
+            offset: self.offset,
+            radius_m: self.radius_m,
+            obstacles: layers[0],
+            polygons,
+            regions: self.polygons.regions.as_ref(),
+            others,
+        };
+        self.aimed_move(
+            aim, &space, &statics, &mates, best_p, &followed, me, max_step_m,
+        )
+        .unwrap_or(followed)
     }
 
     /// The move an agent with `aim` takes instead of `followed` (its path to the best
@@ -305,13 +321,13 @@ impl BestPointController {
         aim: &Aim,
         space: &FreeSpace<'_>,
         statics: &FreeSpace<'_>,
+        mates: &Planning<'_>,
         best_p: Option<Point>,
         followed: &Move,
         me: &Point,
         max_step_m: f64,
     ) -> Option<Move> {
         let slot = followed.slot;
-        let me_p = me - self.offset;
         // The straight move to `best` (world coordinates).
         let straight_to = |best: Point| Move {
             end_heading_rad: None,
@@ -328,6 +344,21 @@ impl BestPointController {
                 vec![*me, best]
             },
         };
+        let me_p = me - self.offset;
+        // Mates far behind whose way comes near: the agent keeps its later moves off
+        // their predicted tracks.
+        let yields = give_way::predicted_tracks(mates, &aim.lagging, statics, me);
+        if let Some(end_p) =
+            give_way::first_move_giving_way(mates, aim, space, &yields, followed, me, max_step_m)
+        {
+            let follows = matches!(followed.waypoints[..], [_, end] if end - self.offset == end_p);
+            let end = if end_p == me_p {
+                *me
+            } else {
+                end_p + self.offset
+            };
+            return (!follows).then(|| straight_to(end));
+        }
         // The slot's way ahead crosses a static obstacle: the first move of the best
         // track round it.
         if aim

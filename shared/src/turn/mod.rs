@@ -29,10 +29,12 @@ use crate::vocabulary::{
 mod best_point_controller;
 mod car;
 mod escape;
+mod give_way;
 mod look_ahead;
 
 pub use best_point_controller::{Aim, BestPointController};
 pub use car::{GOAL_HEADINGS, SEARCH_EXPANSIONS};
+pub use give_way::{GIVE_WAY_MARGIN_M, LaggingMate, MateView};
 pub use look_ahead::{
     LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_TURNS, LOOKAHEAD_TRIGGER_TURNS, LOOKAHEAD_TURNS,
     SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
@@ -90,6 +92,9 @@ pub struct TurnController {
     /// move cut inside a segment stops.
     obstacles: DiskGrid,
     field: Field,
+    /// Every agent of the formation, by index ([`Self::with_formation`]): the mates'
+    /// slots, to tell which lag far behind.
+    formation: Vec<AgentSpec>,
 }
 
 /// The controllers.
@@ -158,7 +163,15 @@ impl TurnController {
                 Vec::new()
             }),
             field,
+            formation: Vec::new(),
         })
+    }
+
+    /// This controller knowing every agent of the formation (`agents`, by index): an agent
+    /// that looks ahead gives way to a mate far behind its slot ([`Aim::lagging`]).
+    pub fn with_formation(mut self, agents: &[AgentSpec]) -> Self {
+        self.formation = agents.to_vec();
+        self
     }
 
     /// This controller in a world with `moving` obstacles: [`Self::plan_turn`] plans around
@@ -252,6 +265,10 @@ impl TurnController {
     /// a horizon of 0, and an agent that can follow its slot along a way clear of
     /// obstacles, plan exactly as [`Self::plan_turn_with_heading`] does, bit for bit.
     ///
+    /// `mates` are the other agents the world lists (any order; they may be the bodies of
+    /// `others` or more): with [`Self::with_formation`], an agent that looks ahead gives
+    /// way to a mate it senses far behind its slot ([`Aim::lagging`]).
+    ///
     /// With `velocities` (every agent moves at once) the ORCA controller plans in its own
     /// model ([`OrcaController::plan_move_reciprocal`]); the other controllers ignore them.
     #[allow(clippy::too_many_arguments)]
@@ -263,6 +280,7 @@ impl TurnController {
         me: &Point,
         heading_rad: Option<f64>,
         others: &[Body],
+        mates: &[MateView],
         velocities: Option<&Velocities>,
     ) -> Move {
         if let (Controller::Orca(p), Some(v)) = (&self.controller, velocities) {
@@ -274,7 +292,7 @@ impl TurnController {
                 .unzip();
             return p.plan_move_reciprocal(centre, me, &v.me, &sensed, &sensed_velocities);
         }
-        let aim = self.aim(centre, ahead, me);
+        let aim = self.aim(centre, ahead, me, mates);
         let aim = aim.as_ref();
         match heading_rad {
             Some(h) => self.plan_turn_with_heading_aiming(step, centre, aim, me, h, others),
@@ -284,7 +302,7 @@ impl TurnController {
 
     /// Where this agent is heading this turn (`None`: it does not look ahead): see
     /// [`Self::plan_turn_ahead`].
-    fn aim(&self, centre: &Pose, ahead: &[Pose], me: &Point) -> Option<Aim> {
+    fn aim(&self, centre: &Pose, ahead: &[Pose], me: &Point, mates: &[MateView]) -> Option<Aim> {
         let (Controller::BestPoint(_), Some(max_step_m)) = (&self.controller, self.spec.max_step_m)
         else {
             return None;
@@ -304,7 +322,12 @@ impl TurnController {
             .map(|c| self.spec.slot.ideal_position(c))
             .collect();
         let lead = tracking::lead_point(me, &slots, max_step_m);
-        Some(Aim { lead, slots })
+        let lagging = self.lagging_mates(centre, ahead, me, &slots, mates);
+        Some(Aim {
+            lead,
+            slots,
+            lagging,
+        })
     }
 
     /// [`Self::plan_turn`] with the best point taken for `aim` when given.
