@@ -348,9 +348,9 @@ impl BestPointController {
         // Mates far behind whose way comes near: the agent keeps its later moves off
         // their predicted tracks.
         let yields = give_way::predicted_tracks(mates, &aim.lagging, statics, me);
-        if let Some(end_p) =
-            give_way::first_move_giving_way(mates, aim, space, &yields, followed, me, max_step_m)
-        {
+        if let Some(end_p) = give_way::first_move_giving_way(
+            mates, &aim.slots, aim.lead, space, &yields, followed, me, max_step_m,
+        ) {
             let follows = matches!(followed.waypoints[..], [_, end] if end - self.offset == end_p);
             let end = if end_p == me_p {
                 *me

@@ -18,7 +18,6 @@ use crate::geometry::{
 use crate::tracking;
 use crate::vocabulary::{Body, Move};
 
-use super::best_point_controller::Aim;
 use super::{PLANNING_MARGIN_M, TurnController};
 
 /// How much farther behind its slot than this agent a mate must be for this agent to give
@@ -40,14 +39,14 @@ pub struct MateView {
 }
 
 /// A mate far behind its slot, which the agent whose turn it is gives way to
-/// ([`Aim::lagging`]). It has the agent's radius.
+/// ([`super::Aim::lagging`]). It has the agent's radius.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LaggingMate {
     /// Where it stands (world coordinates).
     pub position: Point,
     /// Its top speed, metres a step.
     pub max_step_m: f64,
-    /// Its slot over the look-ahead (world coordinates), as [`Aim::slots`].
+    /// Its slot over the look-ahead (world coordinates), as [`super::Aim::slots`].
     pub slots: Vec<Point>,
 }
 
@@ -82,12 +81,16 @@ impl TurnController {
                 {
                     return None;
                 }
+                // Its slot now first: most mates are near theirs.
+                let deviation_m = (m.position - spec.slot.ideal_position(centre)).norm();
+                if deviation_m <= my_deviation_m + GIVE_WAY_MARGIN_M {
+                    return None;
+                }
                 let slots: Vec<Point> = std::iter::once(centre)
                     .chain(&ahead[..horizon])
                     .map(|c| spec.slot.ideal_position(c))
                     .collect();
-                let deviation_m = (m.position - slots[0]).norm();
-                (deviation_m > my_deviation_m + GIVE_WAY_MARGIN_M).then_some(LaggingMate {
+                Some(LaggingMate {
                     position: m.position,
                     max_step_m,
                     slots,
@@ -175,14 +178,16 @@ pub(super) fn predicted_tracks(
         .collect()
 }
 
-/// The end (planning frame) of the first move of the best track round the obstacles
+/// The end (planning frame) of the first move of the best track round the obstacles over
+/// `slots` (world coordinates, as [`super::Aim::slots`]; `lead` the aim's lead point)
 /// that keeps the later moves off the mates' predicted tracks (`yields`): later move `k`
 /// keeps clear of where each mate is after its moves `k` and `k + 1`. `space` is this
 /// turn's free space (every body standing), `followed` the agent's usual move. `None`
 /// when no mate is to be given way to or no such track exists.
 pub(super) fn first_move_giving_way(
     planning: &Planning<'_>,
-    aim: &Aim,
+    slots: &[Point],
+    lead: Point,
     space: &FreeSpace<'_>,
     yields: &[Vec<Point>],
     followed: &Move,
@@ -193,11 +198,11 @@ pub(super) fn first_move_giving_way(
         return None;
     }
     let offset = planning.offset;
-    let slots_p: Vec<Point> = aim.slots.iter().map(|s| s - offset).collect();
+    let slots_p: Vec<Point> = slots.iter().map(|s| s - offset).collect();
     // The usual move and the lead are candidates too, when straight.
     let firsts: Vec<Point> = match followed.waypoints[..] {
-        [_, end] => vec![end - offset, aim.lead - offset],
-        _ => vec![aim.lead - offset],
+        [_, end] => vec![end - offset, lead - offset],
+        _ => vec![lead - offset],
     };
     let keep_m = 2.0 * planning.radius_m + PLANNING_MARGIN_M;
     let grids: Vec<DiskGrid> = (1..slots_p.len())
