@@ -184,6 +184,7 @@ pub(super) fn predicted_tracks(
 /// keeps clear of where each mate is after its moves `k` and `k + 1`. `space` is this
 /// turn's free space (every body standing), `followed` the agent's usual move. `None`
 /// when no mate is to be given way to or no such track exists.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn first_move_giving_way(
     planning: &Planning<'_>,
     slots: &[Point],
