@@ -109,16 +109,7 @@ pub fn first_move_round_obstacles(
     let segment_free = |k: usize, a: &Point, b: &Point| space(k).is_segment_free(a, b, 0.0);
     // The slots and their nearest free points are candidates too: the lattice alone
     // would round every position by up to half its spacing.
-    let anchors: Vec<Vec<Point>> = slots
-        .iter()
-        .enumerate()
-        .map(|(k, s)| {
-            std::iter::once(*s)
-                .chain(nearest_free_point(space(k), s).ok())
-                .chain(firsts.iter().copied().filter(|_| k == 0))
-                .collect()
-        })
-        .collect();
+    let anchors = anchors_of(space, slots, firsts);
     let (_, track) = best_track_on_lattice(
         me,
         slots,
@@ -159,16 +150,7 @@ pub fn track_round_obstacles_per_step(
             .then(|| s.clearance_m(p, max_step_m).max(0.0))
     };
     let segment_free = |k: usize, a: &Point, b: &Point| space(k).is_segment_free(a, b, 0.0);
-    let anchors: Vec<Vec<Point>> = slots
-        .iter()
-        .enumerate()
-        .map(|(k, s)| {
-            std::iter::once(*s)
-                .chain(nearest_free_point(space(k), s).ok())
-                .chain(firsts.iter().copied().filter(|_| k == 0))
-                .collect()
-        })
-        .collect();
+    let anchors = anchors_of(space, slots, firsts);
     best_track_on_lattice(
         me,
         slots,
@@ -179,6 +161,25 @@ pub fn track_round_obstacles_per_step(
         segment_free,
     )
     .map(|(_, track)| track)
+}
+
+/// The extra candidates of each step of the search: the slot `slots[k]` and its nearest
+/// free point in `space(k)`, and `firsts` for the first move.
+fn anchors_of<'s>(
+    space: impl Fn(usize) -> &'s FreeSpace<'s>,
+    slots: &[Point],
+    firsts: &[Point],
+) -> Vec<Vec<Point>> {
+    slots
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            std::iter::once(*s)
+                .chain(nearest_free_point(space(k), s).ok())
+                .chain(firsts.iter().copied().filter(|_| k == 0))
+                .collect()
+        })
+        .collect()
 }
 
 #[cfg(test)]
