@@ -224,7 +224,12 @@ impl BestPointController {
     /// [`Self::plan_move_with_chords`] for an agent that knows where its slot is going
     /// (`aim`: see [`Aim`]; `None`: it chases its slot as usual).
     ///
-    /// When one of the aim's slots lies where the agent does not fit among the static
+    /// When mates far behind their slots would pass where the agent goes
+    /// ([`Aim::lagging`]), it takes the first move of the best track round the obstacles
+    /// whose later moves keep off their predicted tracks: it gives way (`give_way.rs`;
+    /// the move is free of every body standing this turn and within the top speed).
+    ///
+    /// Else, when one of the aim's slots lies where the agent does not fit among the static
     /// obstacles (its slot's way ahead crosses an obstacle), the agent takes the first
     /// move of the best track round them that a lattice search over the aim's slots finds
     /// ([`tracking::first_move_round_obstacles`]; the mates stand where they are for that
@@ -296,7 +301,7 @@ impl BestPointController {
             _ => None,
         };
         let followed = self.follow(slot, me, found, Some(max_step_m), max_chord_m);
-        let mates = Planning {
+        let planning = Planning {
             field: self.field,
             offset: self.offset,
             radius_m: self.radius_m,
@@ -306,7 +311,7 @@ impl BestPointController {
             others,
         };
         self.aimed_move(
-            aim, &space, &statics, &mates, best_p, &followed, me, max_step_m,
+            aim, &space, &statics, &planning, best_p, &followed, me, max_step_m,
         )
         .unwrap_or(followed)
     }
@@ -321,7 +326,7 @@ impl BestPointController {
         aim: &Aim,
         space: &FreeSpace<'_>,
         statics: &FreeSpace<'_>,
-        mates: &Planning<'_>,
+        planning: &Planning<'_>,
         best_p: Option<Point>,
         followed: &Move,
         me: &Point,
@@ -347,9 +352,9 @@ impl BestPointController {
         let me_p = me - self.offset;
         // Mates far behind whose way comes near: the agent keeps its later moves off
         // their predicted tracks.
-        let yields = give_way::predicted_tracks(mates, &aim.lagging, statics, me);
+        let yields = give_way::predicted_tracks(planning, &aim.lagging, statics, me);
         if let Some(end_p) = give_way::first_move_giving_way(
-            mates, &aim.slots, aim.lead, space, &yields, followed, me, max_step_m,
+            planning, &aim.slots, aim.lead, space, &yields, followed, me, max_step_m,
         ) {
             let follows = matches!(followed.waypoints[..], [_, end] if end - self.offset == end_p);
             let end = if end_p == me_p {
