@@ -365,7 +365,7 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         let me = read_bodies(&turn, agent, &radii_m, &mut others)?;
         let step = turn_step(&turn);
         let velocities = simultaneous.then(|| velocities_of(&turn, agent));
-        let mates = turn.mates(agent);
+        let mates = turn.mates_for(agent, controller);
         let mv = controller.plan_turn_ahead(
             step,
             &turn.centre,
@@ -476,7 +476,7 @@ mod tests {
                 &turn.bodies[agent].1,
                 None,
                 &others,
-                &turn.mates(agent),
+                &turn.mates_for(agent, controller),
                 None,
             );
             assert_eq!(*seq, turn.seq);

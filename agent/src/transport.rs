@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Polygon, Pose, Vector};
 use shared::moving_obstacle::MovingObstacle;
-use shared::turn::MateView;
+use shared::turn::{MateView, TurnController};
 use shared::vocabulary::{AgentSpec, ControllerSpec, Move, TurnMode};
 
 /// The static scenario as an agent sees it.
@@ -74,9 +74,13 @@ pub struct TurnInput {
 }
 
 impl TurnInput {
-    /// The mates this turn lists for agent `agent`: every body but its own, with whether
-    /// it is frozen.
-    pub fn mates(&self, agent: usize) -> Vec<MateView> {
+    /// The mates this turn lists for agent `agent` as `controller` plans with them: every
+    /// body but its own, with whether it is frozen; none when the controller does not give
+    /// way ([`TurnController::gives_way`]: listing them is a turn's cost at 200 agents).
+    pub fn mates_for(&self, agent: usize, controller: &TurnController) -> Vec<MateView> {
+        if !controller.gives_way() {
+            return Vec::new();
+        }
         self.bodies
             .iter()
             .filter(|(j, _)| *j != agent)

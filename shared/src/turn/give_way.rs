@@ -18,7 +18,7 @@ use crate::geometry::{
 use crate::tracking;
 use crate::vocabulary::{Body, Move};
 
-use super::{PLANNING_MARGIN_M, TurnController};
+use super::{Controller, PLANNING_MARGIN_M, TurnController};
 
 /// How much farther behind its slot than this agent a mate must be for this agent to give
 /// way to it, in metres. Measured on the capped paper, dense, narrow and large scenarios
@@ -51,6 +51,18 @@ pub struct LaggingMate {
 }
 
 impl TurnController {
+    /// Whether this agent may give way to a mate: it looks ahead (the best-point
+    /// controller, a top speed, a look-ahead, no heading) and knows the formation
+    /// ([`Self::with_formation`]). Otherwise the mates given to
+    /// [`Self::plan_turn_ahead`] change nothing, and a caller need not list them.
+    pub fn gives_way(&self) -> bool {
+        matches!(self.controller, Controller::BestPoint(_))
+            && self.spec.max_step_m.is_some()
+            && self.spec.horizon_steps > 0
+            && !self.spec.kinematics.has_heading()
+            && !self.formation.is_empty()
+    }
+
     /// The mates of `mates` this agent (at `me`, its slots `slots`, the centre at
     /// `centre` then `ahead`) gives way to: alive, sensed, within the search's window
     /// ([`tracking::ROUND_WINDOW_RADII`] radii), of the same radius and with a top speed,
