@@ -78,18 +78,12 @@ impl TurnInput {
     /// body but its own, with whether it is frozen; none when the controller does not give
     /// way ([`TurnController::gives_way`]: listing them is a turn's cost at 200 agents).
     pub fn mates_for(&self, agent: usize, controller: &TurnController) -> Vec<MateView> {
-        if !controller.gives_way() {
-            return Vec::new();
-        }
-        self.bodies
-            .iter()
-            .filter(|(j, _)| *j != agent)
-            .map(|&(j, position)| MateView {
-                agent: j,
-                position,
-                alive: !self.frozen.contains(&j),
-            })
-            .collect()
+        let views = self.bodies.iter().map(|&(j, position)| MateView {
+            agent: j,
+            position,
+            alive: !self.frozen.contains(&j),
+        });
+        controller.mate_views(agent, views)
     }
 }
 

@@ -166,10 +166,7 @@ pub fn simulate_along_with_deaths(
                 .map(|&agent| {
                     let me = recorder.bodies()[agent].position;
                     let others = recorder.others(agent);
-                    let mates = match controllers[agent].gives_way() {
-                        true => recorder.mates(agent),
-                        false => Vec::new(),
-                    };
+                    let mates = controllers[agent].mate_views(agent, recorder.views());
                     let heading_rad = recorder.headings()[agent];
                     let velocities = velocities
                         .as_ref()

@@ -209,19 +209,18 @@ impl<'a> Recorder<'a> {
             .collect()
     }
 
-    /// Every agent but `agent`, as the world shows it to `agent` ([`MateView`]).
-    pub fn mates(&self, agent: usize) -> Vec<MateView> {
+    /// Every agent as the world shows it to its mates ([`MateView`]), in index order
+    /// (for [`crate::turn::TurnController::mate_views`]).
+    pub fn views(&self) -> impl Iterator<Item = MateView> + '_ {
         self.bodies
             .iter()
             .zip(&self.alive)
             .enumerate()
-            .filter(|(j, _)| *j != agent)
-            .map(|(j, (b, &alive))| MateView {
-                agent: j,
+            .map(|(agent, (b, &alive))| MateView {
+                agent,
                 position: b.position,
                 alive,
             })
-            .collect()
     }
 
     /// How far each agent moved over the last recorded step (metres per step: its

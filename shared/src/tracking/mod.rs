@@ -26,8 +26,8 @@ mod round_obstacles;
 
 pub use lattice::{Lattice, best_track_on_lattice};
 pub use round_obstacles::{
-    ROUND_FIRST_SPACING_RADII, ROUND_SPACING_RADII, ROUND_WINDOW_RADII, first_move_round_obstacles,
-    round_lattice_for, track_round_obstacles_per_step,
+    LaterSpaces, ROUND_FIRST_SPACING_RADII, ROUND_SPACING_RADII, ROUND_WINDOW_RADII,
+    first_move_round_obstacles, round_lattice_for, track_round_obstacles,
 };
 
 /// The largest look-ahead, in steps, a scenario may ask for (`[formation]

@@ -75,7 +75,6 @@ pub fn round_lattice_for(radius_m: f64, max_step_m: f64) -> Lattice {
 /// assert!(space.is_segment_free(&me, &first, 0.0));
 /// assert!((first.y - 5.0).abs() > 0.1, "it leaves the slot's line: {first}");
 /// ```
-#[allow(clippy::too_many_arguments)]
 pub fn first_move_round_obstacles(
     now: &FreeSpace<'_>,
     later: &FreeSpace<'_>,
@@ -85,71 +84,69 @@ pub fn first_move_round_obstacles(
     max_step_m: f64,
     lattice: Lattice,
 ) -> Option<Point> {
-    if !(max_step_m.is_finite() && max_step_m > 0.0) {
-        return None;
-    }
-    let space = |k: usize| if k == 0 { now } else { later };
-    let clearance_in = |space: &FreeSpace<'_>, p: &Point| {
-        space
-            .is_free(p, 0.0)
-            .then(|| space.clearance_m(p, max_step_m).max(0.0))
-    };
-    // The later moves share one free space, and the lattices of consecutive steps
-    // overlap: each point is asked once.
-    // (A cheap hash: the default one, built against hostile keys, took about 5 % of a
-    // capped run; these keys are the search's own points.)
-    let later_clearances: RefCell<FxHashMap<(u64, u64), Option<f64>>> = RefCell::default();
-    let clearance_m = |k: usize, p: &Point| match k {
-        0 => clearance_in(now, p),
-        _ => *later_clearances
-            .borrow_mut()
-            .entry((p.x.to_bits(), p.y.to_bits()))
-            .or_insert_with(|| clearance_in(later, p)),
-    };
-    let segment_free = |k: usize, a: &Point, b: &Point| space(k).is_segment_free(a, b, 0.0);
-    // The slots and their nearest free points are candidates too: the lattice alone
-    // would round every position by up to half its spacing.
-    let anchors = anchors_of(space, slots, firsts);
-    let (_, track) = best_track_on_lattice(
-        me,
-        slots,
-        &anchors,
-        max_step_m,
-        lattice,
-        clearance_m,
-        segment_free,
-    )?;
+    let later = LaterSpaces::Shared(later);
+    let track = track_round_obstacles(now, later, me, slots, firsts, max_step_m, lattice)?;
     track.first().copied()
 }
 
-/// The best track round the obstacles, as [`first_move_round_obstacles`] searches it, with
-/// a free space of its own for each later move: `later[k - 1]` for the move to
-/// `slots[k]` (bodies that stand only for some moves, such as a mate's predicted way).
-/// Returns the whole track (its first point the first move's end), or `None` when no track
-/// through the lattice exists or `later` is too short.
-///
-/// Each later space must hold every point the next one holds at the same place (a
-/// node's clearance serves the move out of it too): a body of move `k + 1` belongs to
-/// move `k`'s space as well.
-pub fn track_round_obstacles_per_step(
+/// The free spaces of a search's later moves ([`track_round_obstacles`]).
+#[derive(Clone, Copy, Debug)]
+pub enum LaterSpaces<'a, 's> {
+    /// One free space for every later move (the static obstacles only: the mates move
+    /// on too).
+    Shared(&'a FreeSpace<'s>),
+    /// A free space of its own for each later move: `[k - 1]` for the move to
+    /// `slots[k]` (bodies that stand only for some moves, such as a mate's predicted
+    /// way). Each must hold every point the next one holds at the same place (a node's
+    /// clearance serves the move out of it too): a body of move `k + 1` belongs to move
+    /// `k`'s space as well.
+    PerMove(&'a [FreeSpace<'s>]),
+}
+
+/// The best track round the obstacles, as [`first_move_round_obstacles`] searches it,
+/// with the later moves' free spaces `later`. Returns the whole track (its first point
+/// the first move's end), or `None` when no track through the lattice exists or `later`
+/// holds fewer spaces than later moves.
+pub fn track_round_obstacles(
     now: &FreeSpace<'_>,
-    later: &[FreeSpace<'_>],
+    later: LaterSpaces<'_, '_>,
     me: &Point,
     slots: &[Point],
     firsts: &[Point],
     max_step_m: f64,
     lattice: Lattice,
 ) -> Option<Vec<Point>> {
-    if !(max_step_m.is_finite() && max_step_m > 0.0) || later.len() + 1 < slots.len() {
+    let enough = match later {
+        LaterSpaces::Shared(_) => true,
+        LaterSpaces::PerMove(spaces) => spaces.len() + 1 >= slots.len(),
+    };
+    if !(max_step_m.is_finite() && max_step_m > 0.0 && enough) {
         return None;
     }
-    let space = |k: usize| if k == 0 { now } else { &later[k - 1] };
-    let clearance_m = |k: usize, p: &Point| {
-        let s = space(k);
-        s.is_free(p, 0.0)
-            .then(|| s.clearance_m(p, max_step_m).max(0.0))
+    let space = |k: usize| match (k, later) {
+        (0, _) => now,
+        (_, LaterSpaces::Shared(shared)) => shared,
+        (_, LaterSpaces::PerMove(spaces)) => &spaces[k - 1],
+    };
+    let clearance_in = |space: &FreeSpace<'_>, p: &Point| {
+        space
+            .is_free(p, 0.0)
+            .then(|| space.clearance_m(p, max_step_m).max(0.0))
+    };
+    // A shared later space is asked about each point once: the lattices of consecutive
+    // steps overlap. (A cheap hash: the default one, built against hostile keys, took
+    // about 5 % of a capped run; these keys are the search's own points.)
+    let shared_clearances: RefCell<FxHashMap<(u64, u64), Option<f64>>> = RefCell::default();
+    let clearance_m = |k: usize, p: &Point| match (k, later) {
+        (1.., LaterSpaces::Shared(shared)) => *shared_clearances
+            .borrow_mut()
+            .entry((p.x.to_bits(), p.y.to_bits()))
+            .or_insert_with(|| clearance_in(shared, p)),
+        _ => clearance_in(space(k), p),
     };
     let segment_free = |k: usize, a: &Point, b: &Point| space(k).is_segment_free(a, b, 0.0);
+    // The slots and their nearest free points are candidates too: the lattice alone
+    // would round every position by up to half its spacing.
     let anchors = anchors_of(space, slots, firsts);
     best_track_on_lattice(
         me,

@@ -63,6 +63,20 @@ impl TurnController {
             && !self.formation.is_empty()
     }
 
+    /// The mates agent `agent` plans with ([`Self::plan_turn_ahead`]): every view of
+    /// `views` but its own, or none when it does not give way ([`Self::gives_way`]):
+    /// listing them is a turn's cost at 200 agents, so `views` is only walked when used.
+    pub fn mate_views(
+        &self,
+        agent: usize,
+        views: impl IntoIterator<Item = MateView>,
+    ) -> Vec<MateView> {
+        if !self.gives_way() {
+            return Vec::new();
+        }
+        views.into_iter().filter(|m| m.agent != agent).collect()
+    }
+
     /// The mates of `mates` this agent (at `me`, its slots `slots`, the centre at
     /// `centre` then `ahead`) gives way to: alive, sensed, within the search's window
     /// ([`tracking::ROUND_WINDOW_RADII`] radii), of the same radius and with a top speed,
@@ -175,10 +189,9 @@ pub(super) fn predicted_tracks(
             let layers = [planning.obstacles, &bodies];
             let now = planning.space(&layers);
             let slots_p: Vec<Point> = mate.slots.iter().map(|s| s - offset).collect();
-            let later: Vec<FreeSpace<'_>> = (1..slots_p.len()).map(|_| *statics).collect();
-            tracking::track_round_obstacles_per_step(
+            tracking::track_round_obstacles(
                 &now,
-                &later,
+                tracking::LaterSpaces::Shared(statics),
                 &(mate.position - offset),
                 &slots_p,
                 &[],
@@ -234,9 +247,9 @@ pub(super) fn first_move_giving_way(
         .collect();
     let layer_sets: Vec<[&DiskGrid; 2]> = grids.iter().map(|g| [planning.obstacles, g]).collect();
     let later: Vec<FreeSpace<'_>> = layer_sets.iter().map(|l| planning.space(l)).collect();
-    let track = tracking::track_round_obstacles_per_step(
+    let track = tracking::track_round_obstacles(
         space,
-        &later,
+        tracking::LaterSpaces::PerMove(&later),
         &(me - offset),
         &slots_p,
         &firsts,
