@@ -60,7 +60,7 @@ fn bench_round_obstacles(c: &mut Criterion) {
     let space = FreeSpace::new(Field::new(40.0, 20.0), &layers);
     let turns = turns();
     assert!(turns.iter().all(|(me, _)| space.is_free(me, 0.0)));
-    let lattice = round_lattice_for(RADIUS_M, MAX_STEP_M);
+    let lattice = round_lattice_for(RADIUS_M);
     let search = |(me, slots): &(Point, Vec<Point>)| {
         first_move_round_obstacles(&space, &space, me, slots, &[], MAX_STEP_M, lattice)
     };

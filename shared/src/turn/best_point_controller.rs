@@ -384,7 +384,7 @@ impl BestPointController {
                 &slots_p,
                 &firsts,
                 max_step_m,
-                tracking::round_lattice_for(self.radius_m, max_step_m),
+                tracking::round_lattice_for(self.radius_m),
             )?;
             let follows = matches!(followed.waypoints[..], [_, end] if end - self.offset == end_p);
             let end = if end_p == me_p {

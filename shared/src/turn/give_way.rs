@@ -196,7 +196,7 @@ pub(super) fn predicted_tracks(
                 &slots_p,
                 &[],
                 mate.max_step_m,
-                tracking::round_lattice_for(radius_m, mate.max_step_m),
+                tracking::round_lattice_for(radius_m),
             )
         })
         .filter(|track| track.iter().any(|p| (p - me_p).norm() <= window_m))
@@ -254,7 +254,7 @@ pub(super) fn first_move_giving_way(
         &slots_p,
         &firsts,
         max_step_m,
-        tracking::round_lattice_for(planning.radius_m, max_step_m),
+        tracking::round_lattice_for(planning.radius_m),
     )?;
     track.first().copied()
 }
