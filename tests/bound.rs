@@ -175,6 +175,7 @@ fn in_a_changing_world_the_bound_follows_the_mended_plan() {
 fn the_formation_searched_together_stays_above_the_bound_and_apart() {
     let plain = bound(Some("scenarios/paper-top-speed.toml"));
     assert!(plain["together"].is_null(), "{plain}");
+    assert!(plain["lattice_per_move"].is_null(), "{plain}");
     let dir = tempfile::tempdir().expect("a scratch folder");
     let csv_path = dir.path().join("together.csv");
     let csv_arg = csv_path.to_str().expect("a UTF-8 path");
@@ -236,5 +237,40 @@ fn the_formation_searched_together_stays_above_the_bound_and_apart() {
                 );
             }
         }
+    }
+}
+
+/// A lattice twice as fine (`--lattice-per-move 10`, every point of the default's
+/// among its own) finds each agent alone a track no worse than the default lattice, and
+/// still no better than its bound; the report says which lattice it searched.
+#[test]
+fn a_finer_lattice_finds_each_agent_alone_no_worse_a_track() {
+    let scenario = Some("scenarios/paper-top-speed.toml");
+    let coarse = bound_with(scenario, &["--alone"]);
+    let fine = bound_with(scenario, &["--alone", "--lattice-per-move", "10"]);
+    assert_eq!(coarse["lattice_per_move"], 5, "{coarse}");
+    assert_eq!(fine["lattice_per_move"], 10, "{fine}");
+    let searched = |r: &serde_json::Value| -> Vec<f64> {
+        r["alone"]["per_agent"]
+            .as_array()
+            .expect("alone per agent")
+            .iter()
+            .map(|a| a["searched_mean_deviation_m"].as_f64().expect("a track"))
+            .collect()
+    };
+    let bounds: Vec<f64> = fine["per_agent"]
+        .as_array()
+        .expect("per agent")
+        .iter()
+        .map(|a| a["mean_deviation_m"].as_f64().expect("a bound"))
+        .collect();
+    let (coarse, fine) = (searched(&coarse), searched(&fine));
+    assert!(
+        fine.iter().zip(&coarse).any(|(f, c)| f < &(c - 1e-6)),
+        "the finer lattice found nothing better: {fine:?} {coarse:?}"
+    );
+    for ((f, c), b) in fine.iter().zip(&coarse).zip(&bounds) {
+        assert!(*f <= c + 1e-12, "finer {f} against {c}");
+        assert!(*f >= b * (1.0 - 1e-6), "finer {f} below the bound {b}");
     }
 }

@@ -51,7 +51,7 @@ mod cone;
 mod grid;
 mod together;
 
-pub use alone::{AgentAlone, StaticSpace, agent_alone};
+pub use alone::{AgentAlone, DEFAULT_POINTS_PER_MOVE, StaticSpace, agent_alone};
 pub use cone::{Objective, optimal_track};
 pub use grid::{Grid, least_deviation_round_obstacles};
 pub use together::{ORDERS, Together, best_formation_together, tracks_csv};
@@ -173,6 +173,9 @@ pub struct BoundReport {
     /// clear of those before it: achievable with the mates); `null` without, or when no
     /// order of the search gave every agent a track (or an agent has no top speed).
     pub together: Option<Together>,
+    /// With `--alone` or `--together`: the searches' lattice points per top-speed move
+    /// (`--lattice-per-move`); `null` without.
+    pub lattice_per_move: Option<u32>,
 }
 
 /// Each agent alone (`bound --alone`), over the agents.
@@ -314,6 +317,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
             &followed,
             &per_agent,
             summary.mean_deviation_m,
+            args.lattice_per_move,
         )?)
     } else {
         None
@@ -324,7 +328,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
             ORDERS.len()
         ));
         bar.enable_steady_tick(std::time::Duration::from_millis(200));
-        let found = best_formation_together(scenario, &followed, &per_agent);
+        let found = best_formation_together(scenario, &followed, &per_agent, args.lattice_per_move);
         bar.finish_and_clear();
         if let (Some(path), Some(found)) = (&args.together_csv, &found) {
             let bytes = tracks_csv(found).context("the tracks found together as CSV")?;
@@ -352,6 +356,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         per_agent,
         alone,
         together,
+        lattice_per_move: (args.alone || args.together).then_some(args.lattice_per_move),
     };
     // Three digits, so that a ratio just above a target (1.503x) does not read as 1.50x.
     let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.3}x"));
@@ -418,19 +423,20 @@ fn progress_bar(agents: usize, what: &str) -> indicatif::ProgressBar {
 
 /// Each agent of `scenario` alone along `centre_path`, with a progress bar on stderr;
 /// `bounds` are the agents' bounds, `formation_mean_m` the whole formation's mean
-/// deviation.
+/// deviation, `per_move` the search's lattice points per top-speed move.
 fn alone_report(
     scenario: &Scenario,
     centre_path: &[Pose],
     bounds: &[AgentBound],
     formation_mean_m: f64,
+    per_move: u32,
 ) -> Result<AloneReport, CliError> {
     let bar = progress_bar(scenario.agents.len(), "each agent alone");
     let per_agent = bounds
         .iter()
         .map(|b| {
             let agent = b.agent;
-            let alone = agent_alone(scenario, centre_path, agent, b.max_deviation_m)
+            let alone = agent_alone(scenario, centre_path, agent, b.max_deviation_m, per_move)
                 .with_context(|| format!("agent {agent} alone"))
                 .map_err(CliError::Other);
             bar.inc(1);

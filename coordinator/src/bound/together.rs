@@ -79,14 +79,16 @@ pub struct Together {
 }
 
 /// The formation of `scenario` along `centre_path` searched together in `order`;
-/// `bounds` are the agents' bounds (they size each search's window). `None` when an
-/// agent has no top speed (the search needs one), the path has no step, or the search
-/// finds no track for an agent clear of those before it.
+/// `bounds` are the agents' bounds (they size each search's window), `per_move` the
+/// lattice points per top-speed move ([`lattice_for`]). `None` when an agent has no top
+/// speed (the search needs one), the path has no step, or the search finds no track for
+/// an agent clear of those before it.
 pub fn formation_together(
     scenario: &Scenario,
     centre_path: &[Pose],
     bounds: &[AgentBound],
     order: Order,
+    per_move: u32,
 ) -> Option<Together> {
     let (first, rest) = centre_path.split_first()?;
     if rest.is_empty() || bounds.len() != scenario.agents.len() {
@@ -98,7 +100,7 @@ pub fn formation_together(
     for (i, &agent) in agents.iter().enumerate() {
         let spec = &scenario.agents[agent];
         let cap = spec.max_step_m?;
-        let lattice = lattice_for(cap, bounds[agent].max_deviation_m);
+        let lattice = lattice_for(cap, bounds[agent].max_deviation_m, per_move);
         let after: Vec<MateTrack> = agents[i + 1..]
             .iter()
             .map(|&a| MateTrack {
@@ -131,23 +133,25 @@ pub fn formation_together(
 }
 
 /// The best of [`ORDERS`] (the least mean deviation), the orders shared between two
-/// threads; `None` when no order gives every agent a track.
+/// threads, `per_move` lattice points per top-speed move; `None` when no order gives
+/// every agent a track.
 pub fn best_formation_together(
     scenario: &Scenario,
     centre_path: &[Pose],
     bounds: &[AgentBound],
+    per_move: u32,
 ) -> Option<Together> {
     let results: Vec<Option<Together>> = std::thread::scope(|scope| {
         let (mine, theirs) = ORDERS.split_at(ORDERS.len() / 2);
         let other = scope.spawn(|| {
             theirs
                 .iter()
-                .map(|o| formation_together(scenario, centre_path, bounds, *o))
+                .map(|o| formation_together(scenario, centre_path, bounds, *o, per_move))
                 .collect::<Vec<_>>()
         });
         let mut results: Vec<Option<Together>> = mine
             .iter()
-            .map(|o| formation_together(scenario, centre_path, bounds, *o))
+            .map(|o| formation_together(scenario, centre_path, bounds, *o, per_move))
             .collect();
         // A panic in the other thread is a bug; it is the caller's, as it would be here.
         match other.join() {
@@ -199,7 +203,7 @@ pub fn tracks_csv(found: &Together) -> anyhow::Result<Vec<u8>> {
 mod tests {
     use super::*;
     use crate::bound::agent_bounds;
-    use crate::bound::alone::searched_track;
+    use crate::bound::alone::{DEFAULT_POINTS_PER_MOVE, searched_track};
     use shared::geometry::DiskGrid;
     use shared::safety::check_move;
     use shared::vocabulary::Body;
@@ -232,7 +236,7 @@ mod tests {
             .iter()
             .zip(&bounds)
             .map(|(spec, bound)| {
-                let lattice = lattice_for(0.5, bound.max_deviation_m);
+                let lattice = lattice_for(0.5, bound.max_deviation_m, DEFAULT_POINTS_PER_MOVE);
                 let (sum_m, _) = searched_track(&scenario, spec, &path, lattice, 0.5, &[], &[])
                     .expect("a track alone");
                 sum_m / steps
@@ -240,7 +244,9 @@ mod tests {
             .collect();
         let mut found_in = Vec::new();
         for order in ORDERS {
-            let Some(found) = formation_together(&scenario, &path, &bounds, order) else {
+            let Some(found) =
+                formation_together(&scenario, &path, &bounds, order, DEFAULT_POINTS_PER_MOVE)
+            else {
                 continue;
             };
             found_in.push(order);
