@@ -312,12 +312,11 @@ pub struct BoundArgs {
     /// agents move in the order the report names), to plot or replay them.
     #[arg(long, value_name = "FILE", requires = "together")]
     pub together_csv: Option<PathBuf>,
-    /// Lattice points per top-speed move of the searches of `--alone` and `--together`:
-    /// a finer lattice finds tracks nearer the least achievable deviation, in more time
-    /// (about the square of it).
-    #[arg(long, value_name = "N", default_value_t = crate::bound::DEFAULT_POINTS_PER_MOVE,
-          value_parser = clap::value_parser!(u32).range(2..=20))]
-    pub lattice_per_move: u32,
+    /// Lattice points per top-speed move of the searches of `--alone` and `--together`
+    /// (5 unless given): a finer lattice finds tracks nearer the least achievable
+    /// deviation, in more time (about the square of it).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=20))]
+    pub lattice_per_move: Option<u32>,
 }
 
 /// Arguments of `compare`.

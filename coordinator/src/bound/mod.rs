@@ -311,13 +311,14 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
     let mean_of = |f: fn(&AgentBound) -> f64| per_agent.iter().map(f).sum::<f64>() / n;
     let speed_mean = mean_of(|a| a.speed_mean_deviation_m);
     let obstacle_mean = mean_of(|a| a.obstacle_mean_deviation_m);
+    let per_move = args.lattice_per_move.unwrap_or(DEFAULT_POINTS_PER_MOVE);
     let alone = if args.alone {
         Some(alone_report(
             scenario,
             &followed,
             &per_agent,
             summary.mean_deviation_m,
-            args.lattice_per_move,
+            per_move,
         )?)
     } else {
         None
@@ -328,7 +329,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
             ORDERS.len()
         ));
         bar.enable_steady_tick(std::time::Duration::from_millis(200));
-        let found = best_formation_together(scenario, &followed, &per_agent, args.lattice_per_move);
+        let found = best_formation_together(scenario, &followed, &per_agent, per_move);
         bar.finish_and_clear();
         if let (Some(path), Some(found)) = (&args.together_csv, &found) {
             let bytes = tracks_csv(found).context("the tracks found together as CSV")?;
@@ -356,7 +357,7 @@ pub fn execute(args: &BoundArgs) -> Result<(), CliError> {
         per_agent,
         alone,
         together,
-        lattice_per_move: (args.alone || args.together).then_some(args.lattice_per_move),
+        lattice_per_move: (args.alone || args.together).then_some(per_move),
     };
     // Three digits, so that a ratio just above a target (1.503x) does not read as 1.50x.
     let show = |r: Option<f64>| r.map_or("-".to_string(), |r| format!("{r:.3}x"));
