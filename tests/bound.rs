@@ -249,6 +249,14 @@ fn a_finer_lattice_finds_each_agent_alone_no_worse_a_track() {
     let coarse = bound_with(scenario, &["--alone"]);
     let fine = bound_with(scenario, &["--alone", "--lattice-per-move", "10"]);
     assert_eq!(coarse["lattice_per_move"], 5, "{coarse}");
+    // Without a search to run, the flag is refused, not ignored.
+    let alone_flag = Command::new(support::coordinator_bin())
+        .args(["bound", "--lattice-per-move", "10"])
+        .output()
+        .expect("coordinator bound");
+    assert!(!alone_flag.status.success());
+    let stderr = String::from_utf8_lossy(&alone_flag.stderr);
+    assert!(stderr.contains("--alone"), "{stderr}");
     assert_eq!(fine["lattice_per_move"], 10, "{fine}");
     let searched = |r: &serde_json::Value| -> Vec<f64> {
         r["alone"]["per_agent"]

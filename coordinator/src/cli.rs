@@ -293,6 +293,7 @@ pub struct SimulateArgs {
 
 /// Arguments of `bound`.
 #[derive(Debug, Args)]
+#[command(group(clap::ArgGroup::new("searches").args(["alone", "together"]).multiple(true)))]
 pub struct BoundArgs {
     /// The scenario file (TOML); the embedded paper example when omitted.
     pub scenario: Option<PathBuf>,
@@ -314,8 +315,9 @@ pub struct BoundArgs {
     pub together_csv: Option<PathBuf>,
     /// Lattice points per top-speed move of the searches of `--alone` and `--together`
     /// (5 unless given): a finer lattice finds tracks nearer the least achievable
-    /// deviation, in more time (about the square of it).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=20))]
+    /// deviation, in more time (about (N/5)² times the default's).
+    #[arg(long, value_name = "N", requires = "searches",
+          value_parser = clap::value_parser!(u32).range(2..=20))]
     pub lattice_per_move: Option<u32>,
 }
 

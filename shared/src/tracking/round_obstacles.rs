@@ -29,9 +29,9 @@ pub const ROUND_SPACING_RADII: f64 = 1.0;
 pub const ROUND_WINDOW_RADII: f64 = 10.0;
 
 /// The lattice an agent of radius `radius_m` searches round the obstacles
-/// ([`first_move_round_obstacles`]), whatever its top speed. Measured on the paper, dense, narrow
-/// and large scenarios capped at twice the centre's step (agents of radius 0.25 and 0.3
-/// m): a first lattice 0.2 m apart instead of 0.1 m left agents further from their slots
+/// ([`first_move_round_obstacles`]), whatever its top speed. Measured on the paper,
+/// dense, narrow and large scenarios capped at twice the centre's step (agents of radius
+/// 0.25 and 0.3 m): a first lattice 0.2 m apart instead of 0.1 m left agents further from their slots
 /// (mean deviation up to 1.3 times); a later one 0.25 m apart instead of 0.35 m took
 /// twice the time and did no better; a window of 2 m instead of 3 m left narrow's agents
 /// behind its walls. The first lattice's spacing does not grow with the top speed: with
