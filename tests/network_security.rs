@@ -140,7 +140,9 @@ fn misbehaving_agents_over_zenoh_are_refused_and_nobody_collides() {
         let (output, pid) = support::run_to_end(&args, &out);
         assert!(
             output.status.success(),
-            "{mode}: {}",
+            "{mode}: {} ({}): {}",
+            output.status,
+            String::from_utf8_lossy(&output.stdout),
             String::from_utf8_lossy(&output.stderr)
         );
         let s = support::summary(&out);
