@@ -1,7 +1,7 @@
 //! The agent's test modes (`agent --misbehave MODE`, [`Misbehave`]): an agent that
 //! misbehaves or attacks on purpose, so users and the integration tests can check that
 //! the coordinator survives every one of them. Compiled only with the crate's
-//! `misbehave` feature (`cargo test --workspace --all-features` turns it on); the
+//! `misbehave` feature (the integration tests turn it on: `cargo test --workspace`); the
 //! shipping agent has none of this code.
 //!
 //! Every mode is a decorator around the honest agent, which runs unchanged inside it:

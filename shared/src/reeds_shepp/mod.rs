@@ -28,7 +28,7 @@
 //!
 //! The solver follows OMPL's `ReedsSheppStateSpace` step by step (same formulas, same
 //! acceptance tolerances, same evaluation order), so lengths agree with OMPL to rounding;
-//! `tests/oracle_reeds_shepp.rs` checks this against OMPL 2.0.1. Two shortcuts make a
+//! `tests/it/oracle_reeds_shepp.rs` checks this against OMPL 2.0.1. Two shortcuts make a
 //! length 2.5 times cheaper (the Hybrid A* search computes one for every pose it reaches)
 //! and change no result: the sine and cosine of the heading change are computed once, not
 //! per formula; and a formula stops before its arc tangents when the part of its word

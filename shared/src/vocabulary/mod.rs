@@ -3,7 +3,7 @@
 //!
 //! This module is a leaf of the library's module graph: it uses only
 //! [`geometry`](crate::geometry) and [`formation`](crate::formation), so anything may use
-//! it without an import cycle (the test `shared/tests/module_graph.rs` keeps it so).
+//! it without an import cycle (the test `shared/tests/it/module_graph.rs` keeps it so).
 //!
 //! - [`Body`]: a disk at a position, as the controllers see the other agents;
 //! - [`Move`] and [`MoveStatus`]: the outcome of one agent's turn;
