@@ -345,8 +345,14 @@ fn run_held_mid_way(long: LongRun, dir: &std::path::Path, out: &std::path::Path)
 
 #[test]
 fn agents_leave_when_the_coordinator_is_killed_and_the_next_run_cleans_up() {
+    agents_leave_when_the_coordinator_is_killed(LongRun::Paper);
+}
+
+/// A run of `long` whose coordinator is killed with SIGKILL mid-run: its agents go with
+/// it, it leaves its log and no summary, and the next run cleans up its files.
+pub(crate) fn agents_leave_when_the_coordinator_is_killed(long: LongRun) {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (mut run, pid) = run_held_mid_way(LongRun::Paper, dir.path(), &dir.path().join("a"));
+    let (mut run, pid) = run_held_mid_way(long, dir.path(), &dir.path().join("a"));
     let held = run.hold();
     kill(Pid::from_raw(pid as i32), Signal::SIGKILL).expect("kill coordinator");
     let killed = Instant::now();
@@ -468,8 +474,13 @@ pub(crate) fn sigterm_and_ctrl_c_stop_cleanly(long: LongRun) {
 /// no process of the run left, no file of it in shared memory.
 #[test]
 fn a_second_ctrl_c_ends_a_stuck_coordinator_at_once_and_leaves_nothing() {
+    a_second_ctrl_c_ends_a_stuck_coordinator(LongRun::Paper);
+}
+
+/// The test above on a run of `long`.
+pub(crate) fn a_second_ctrl_c_ends_a_stuck_coordinator(long: LongRun) {
     let dir = tempfile::tempdir().expect("tempdir");
-    let (mut run, pid) = run_held_mid_way(LongRun::Paper, dir.path(), &dir.path().join("out"));
+    let (mut run, pid) = run_held_mid_way(long, dir.path(), &dir.path().join("out"));
     // Held: the coordinator runs on until its stderr pipe is full, then blocks there; it
     // cannot stop cleanly any more (nor print its last line) before the hold ends.
     let held = run.hold();
