@@ -1,9 +1,9 @@
-//! A thousand agent processes: the fast tier's `multiprocess` at the largest scale.
+//! The fast tier's `multiprocess` at the largest scale and on the heaviest scenarios.
 
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
 
-use crate::multiprocess::{options, run_and_compare};
+use crate::multiprocess::{HEAVY_SCENARIOS, options, run_and_compare};
 use crate::support;
 use coordinator::turns::run_scenario;
 
@@ -36,4 +36,15 @@ fn a_thousand_agent_processes_match_the_reference_or_are_refused_up_front() {
         failure.partial.prefix.is_empty(),
         "no run prefix was even drawn"
     );
+}
+
+/// The shipped scenarios the fast tier leaves to this tier
+/// ([`HEAVY_SCENARIOS`]): each multi-process run equals the reference to the bit.
+#[test]
+fn the_heavy_shipped_scenarios_match_the_reference() {
+    for name in HEAVY_SCENARIOS {
+        let file = support::repo_root().join("scenarios").join(name);
+        let scenario = Scenario::load(&file).expect("a shipped scenario");
+        run_and_compare(&scenario);
+    }
 }
