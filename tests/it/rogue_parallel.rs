@@ -321,6 +321,21 @@ fn replayed_early_repeated_answers_and_forks_change_nothing_in_parallel_turns() 
                 unsolicited.len(),
                 steps(&s)
             );
+            // A flooder may pay for its flood (see tests/it/rogue.rs): a copy still on its
+            // way when its next turn is granted fills its channel, its own next answer is
+            // refused and it misses that turn; then the run is not the honest one.
+            if mode == "flood" && !faults_against(&s, "missed", ROGUE).is_empty() {
+                assert_eq!(fault_kinds(&s), ["missed", "unsolicited"], "{mode}: {s:#}");
+                assert!(
+                    s["faults"]
+                        .as_array()
+                        .expect("faults")
+                        .iter()
+                        .all(|f| f["agent"] == ROGUE),
+                    "{mode}: {s:#}"
+                );
+                continue;
+            }
             assert_eq!(fault_kinds(&s), ["unsolicited"], "{mode}: {s:#}");
         }
         assert_eq!(trajectory(&out), trajectory(&honest), "{mode}");
