@@ -78,14 +78,7 @@ fn replayed_early_and_repeated_answers_change_nothing_and_are_recorded() {
             unsolicited.len()
         );
         // ...against the attacker alone...
-        assert!(
-            s["faults"]
-                .as_array()
-                .expect("faults")
-                .iter()
-                .all(|f| f["agent"] == ROGUE),
-            "{mode}: {s:#}"
-        );
+        support::assert_faults_only_against(&s, ROGUE);
         // ...and the first answer carrying the turn's token is the one taken: the run is
         // the honest run to the bit, every agent, every step. A flooder may pay: a copy
         // still on its way when its next turn is granted fills its channel (which refuses

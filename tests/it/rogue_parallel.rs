@@ -326,14 +326,7 @@ fn replayed_early_repeated_answers_and_forks_change_nothing_in_parallel_turns() 
             // refused and it misses that turn; then the run is not the honest one.
             if mode == "flood" && !faults_against(&s, "missed", ROGUE).is_empty() {
                 assert_eq!(fault_kinds(&s), ["missed", "unsolicited"], "{mode}: {s:#}");
-                assert!(
-                    s["faults"]
-                        .as_array()
-                        .expect("faults")
-                        .iter()
-                        .all(|f| f["agent"] == ROGUE),
-                    "{mode}: {s:#}"
-                );
+                support::assert_faults_only_against(&s, ROGUE);
                 continue;
             }
             assert_eq!(fault_kinds(&s), ["unsolicited"], "{mode}: {s:#}");

@@ -119,6 +119,9 @@ const ROOM_STEPS: usize = 2 * (progress::RUN_AHEAD_STEPS + 1);
 /// otherwise written into `dir` with its `step_m` divided by the smallest whole number
 /// that gives it that many.
 fn long_enough(dir: &Path, file: &Path, min_steps: usize) -> PathBuf {
+    if progress::centre_path_steps(file) >= min_steps {
+        return file.to_path_buf();
+    }
     let text = std::fs::read_to_string(file).expect("scenario");
     let (at, line) = text
         .match_indices("\nstep_m = ")
@@ -132,7 +135,7 @@ fn long_enough(dir: &Path, file: &Path, min_steps: usize) -> PathBuf {
         .unwrap_or_else(|| panic!("{}: {line}", file.display()));
     let stem = file.file_stem().and_then(|s| s.to_str()).expect("name");
     let path = dir.join(format!("{stem}-long.toml"));
-    for divisor in 1..=8u32 {
+    for divisor in 2..=8u32 {
         let longer = format!(
             "{}\nstep_m = {}{}",
             &text[..at],

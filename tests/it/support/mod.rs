@@ -297,6 +297,19 @@ pub fn faults_of(s: &Value, kind: &str) -> Vec<Value> {
         .collect()
 }
 
+/// Every fault in the summary `s` is recorded against `agent`: an attacker's faults cost
+/// nobody else.
+pub fn assert_faults_only_against(s: &Value, agent: u64) {
+    assert!(
+        s["faults"]
+            .as_array()
+            .expect("faults")
+            .iter()
+            .all(|f| f["agent"] == agent),
+        "a fault against another agent than {agent}: {s:#}"
+    );
+}
+
 pub fn assert_safe(s: &Value) {
     assert_eq!(s["collisions"], 0, "{s:#}");
     assert!(
