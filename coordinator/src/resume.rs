@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use shared::record::{Recorder, replay_course};
+use shared::geometry::DiskGrid;
+use shared::record::{Recorder, Step, replay_course};
+use shared::safety;
 use shared::scenario::Scenario;
 use wire::misbehave::Misbehave;
 
@@ -130,6 +132,14 @@ pub fn load_resume(dir: &Path, scenario_file: Option<&Path>) -> Result<Resumed, 
                 "{shown}: its steps do not fit the scenario logged (another number of agents or moving obstacles)"
             )));
         }
+        if let Some(last) = logged.steps.last()
+            && let Err(e) = check_where_agents_stand(&scenario, last)
+        {
+            return Err(usage(format!(
+                "{shown}: step {}: {e}: not where a run leaves its agents",
+                last.step
+            )));
+        }
         if let Err(step) = replay_course(&scenario, &logged.first_plan, &logged.steps) {
             return Err(usage(format!(
                 "{shown}: step {step}'s centre is not where the scenario's course puts it: not the log of this scenario's run"
@@ -143,6 +153,44 @@ pub fn load_resume(dir: &Path, scenario_file: Option<&Path>) -> Result<Resumed, 
         logged: Arc::new(logged),
         record,
     })
+}
+
+/// Where the log leaves the agents, checked like any input before the run goes on from
+/// there: every agent (dead ones too) finite, inside the field, clear of the obstacles
+/// (the unknown ones too), of the polygons and of every other agent, its heading finite if
+/// it has one: the safety invariant at the step the run resumes from, checked by the same
+/// code as a move (a move that stays where the agent stands). The log of a real run
+/// passes, its monitor having checked every move; a crafted one need not.
+fn check_where_agents_stand(scenario: &Scenario, last: &Step) -> Result<(), String> {
+    let bodies = last.bodies(scenario);
+    let grid = safety::bodies_grid(&bodies);
+    let obstacles = DiskGrid::new(scenario.static_obstacles());
+    let others = safety::Others {
+        bodies: &bodies,
+        passing: &[],
+        grid: Some(&grid),
+    };
+    for (agent, (body, row)) in bodies.iter().zip(&last.agents).enumerate() {
+        let at = [body.position];
+        safety::check_move_among(
+            &scenario.field,
+            &obstacles,
+            &others,
+            agent,
+            &at[0],
+            &at,
+            &[],
+            1,
+        )
+        .and_then(|()| safety::check_move_against_polygons(&scenario.polygons, body.radius_m, &at))
+        .map_err(|v| format!("agent {agent} at {:?}: {v}", body.position.coords))?;
+        if let Some(heading) = row.heading_rad
+            && !heading.is_finite()
+        {
+            return Err(format!("agent {agent}'s heading is {heading}"));
+        }
+    }
+    Ok(())
 }
 
 /// Every agent named by the options is one of the scenario's `agents`.

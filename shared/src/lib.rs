@@ -27,7 +27,10 @@
 //! - [`sensing`]: which agents an agent senses (limited sensing);
 //! - [`safety`]: the safety invariant checked with plain geometry;
 //! - [`record`]: the record of a run and its figures;
-//! - [`simulate`]: the in-process reference simulation.
+//! - [`simulate`]: the in-process reference simulation;
+//! - [`input_file`]: reading a file handed in, with a size bound that holds for devices,
+//!   FIFOs and sparse files;
+//! - [`output_file`]: writing into a folder that may hold someone else's links.
 #![warn(missing_docs)]
 
 pub mod best_point;
@@ -40,11 +43,13 @@ pub mod formation;
 pub mod geometry;
 pub mod groups;
 pub mod hybrid_astar;
+pub mod input_file;
 pub mod kinematics;
 pub mod moving_obstacle;
 pub mod occupancy;
 pub mod orca;
 mod ordered;
+pub mod output_file;
 pub mod record;
 pub mod reeds_shepp;
 pub mod safety;

@@ -18,9 +18,7 @@ use crate::support;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::sync::mpsc;
-use std::time::Duration;
+use std::process::{Command, Output};
 
 use coordinator::validate::load_and_plan;
 use shared::scenario::{Scenario, ScenarioError};
@@ -28,9 +26,6 @@ use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 
 /// The corpus must hold at least this many files.
 const MIN_CORPUS_FILES: usize = 30;
-/// Longest a refusal may take (parsing, checking and planning are milliseconds; a hang or
-/// a runaway allocation on bad input is what this catches).
-const PROCESS_TIME_LIMIT: Duration = Duration::from_secs(60);
 
 /// One malformed scenario and the field its error must name.
 struct Case {
@@ -79,36 +74,6 @@ fn corpus() -> Vec<Case> {
             Case { path, expect }
         })
         .collect()
-}
-
-/// `cmd` run to completion with stdin closed and its output captured, or an error if it
-/// could not start or outlived [`PROCESS_TIME_LIMIT`] (then it is killed).
-fn run_bounded(mut cmd: Command) -> Result<Output, String> {
-    let child = cmd
-        .env_remove("RUST_LOG")
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("cannot start {cmd:?}: {e}"))?;
-    let pid = child.id();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(child.wait_with_output());
-    });
-    match rx.recv_timeout(PROCESS_TIME_LIMIT) {
-        Ok(Ok(output)) => Ok(output),
-        Ok(Err(e)) => Err(format!("waiting for {cmd:?} failed: {e}")),
-        Err(_) => {
-            // The child is not reaped until the waiting thread returns, so the id is still
-            // this child's.
-            let pid = nix::unistd::Pid::from_raw(i32::try_from(pid).expect("pid fits i32"));
-            let _ = nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGKILL);
-            Err(format!(
-                "{cmd:?} did not finish within {PROCESS_TIME_LIMIT:?} (a hang on bad input?)"
-            ))
-        }
-    }
 }
 
 /// Problems with a refusal by a `coordinator` process (empty when it is right): exit code
@@ -214,7 +179,7 @@ fn library_problems(case: &Case) -> Vec<String> {
 fn validate_problems(case: &Case) -> Vec<String> {
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.arg("validate").arg(&case.path);
-    match run_bounded(cmd) {
+    match support::run_bounded(cmd) {
         Ok(output) => refusal_problems("validate", case, &output),
         Err(e) => vec![format!("coordinator validate {}: {e}", case.name())],
     }
@@ -242,7 +207,7 @@ fn command_problems(command: &str, case: &Case) -> Vec<String> {
         // `run` draws a progress bar; `compare` has none to hush.
         cmd.arg("--quiet");
     }
-    let mut problems = match run_bounded(cmd) {
+    let mut problems = match support::run_bounded(cmd) {
         Ok(output) => refusal_problems(command, case, &output),
         Err(e) => vec![e],
     };
@@ -415,23 +380,37 @@ fn coordinator_run_refuses_every_corpus_file_before_creating_anything() {
     assert_no_problems("coordinator run on the corpus", cases.len(), &problems);
 }
 
+/// What is not a regular file of at most `MAX_SCENARIO_BYTES` is refused as unreadable
+/// before its bytes are read, in bounded time and memory: a missing file, a folder, a
+/// device (`/dev/zero` reports no length and never ends), a FIFO (opening it waits for a
+/// writer), a sparse file one byte over the bound (nothing on disk, its length over).
 #[test]
-fn a_missing_file_and_a_directory_are_refused_as_unreadable() {
+fn what_is_not_a_small_regular_file_is_refused_as_unreadable_before_it_is_read() {
     let dir = tempfile::tempdir().expect("temporary folder");
     let folder = dir.path().join("a-folder.toml");
     std::fs::create_dir(&folder).expect("create the folder");
+    let fifo = dir.path().join("a-fifo.toml");
+    nix::unistd::mkfifo(&fifo, nix::sys::stat::Mode::from_bits_truncate(0o600)).expect("mkfifo");
+    let sparse = dir.path().join("sparse.toml");
+    std::fs::File::create(&sparse)
+        .and_then(|f| f.set_len(shared::scenario::MAX_SCENARIO_BYTES + 1))
+        .expect("a sparse file");
+    let zero = dir.path().join("zero.toml");
+    std::os::unix::fs::symlink("/dev/zero", &zero).expect("a link to /dev/zero");
     let cases = [
-        Case {
-            path: dir.path().join("does-not-exist.toml"),
-            expect: "(file)".into(),
-        },
-        Case {
-            path: folder,
-            expect: "(file)".into(),
-        },
-    ];
+        dir.path().join("does-not-exist.toml"),
+        folder,
+        fifo,
+        sparse,
+        zero,
+        PathBuf::from("/dev/zero"),
+    ]
+    .map(|path| Case {
+        path,
+        expect: "(file)".into(),
+    });
     assert_no_problems(
-        "a missing file and a directory",
+        "what is not a small regular file",
         cases.len(),
         &all_problems(&cases),
     );
@@ -507,7 +486,7 @@ fn a_valid_file_passes_validate_so_the_refusals_mean_something() {
     .expect("write the valid scenario");
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.arg("validate").arg(&path);
-    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         output.status.code(),
         Some(0),
@@ -529,7 +508,7 @@ fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
     let maps = support::repo_root().join("shared/tests/data/maps");
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.arg("validate").arg(maps.join("depot.yaml"));
-    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(0), "{stderr}");
     assert!(
@@ -543,6 +522,23 @@ fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
     std::fs::write(dir.path().join("m.pgm"), b"P5 2 2 255\n\x00\xfe\xfe\xfe").expect("pgm");
     std::fs::write(dir.path().join("short.pgm"), b"P5 2 2 255\n\x00\xfe").expect("pgm");
     let image = |name: &str| dir.path().join(name).display().to_string();
+    // The YAML itself a FIFO or a device: refused as unreadable.
+    let yaml_fifo = dir.path().join("a-fifo.yaml");
+    nix::unistd::mkfifo(&yaml_fifo, nix::sys::stat::Mode::from_bits_truncate(0o600))
+        .expect("mkfifo");
+    let yaml_device = dir.path().join("device-map.yaml");
+    std::os::unix::fs::symlink("/dev/zero", &yaml_device).expect("a link to /dev/zero");
+    for path in [yaml_fifo, yaml_device] {
+        let mut cmd = Command::new(support::coordinator_bin());
+        cmd.arg("validate").arg(&path);
+        let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+        let case = Case {
+            path,
+            expect: "(file)".into(),
+        };
+        let problems = refusal_problems("validate", &case, &output);
+        assert!(problems.is_empty(), "{}", problems.join("\n"));
+    }
     let cases = [
         (
             "missing-key.yaml",
@@ -580,7 +576,25 @@ fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
             "(image)",
             Some("short.pgm"),
         ),
+        // An image that is a device or a FIFO: refused before a byte is read.
+        (
+            "device.yaml",
+            good.replace("m.pgm", "/dev/zero"),
+            "(image)",
+            Some("/dev/zero"),
+        ),
+        (
+            "fifo.yaml",
+            good.replace("m.pgm", "fifo.pgm"),
+            "(image)",
+            Some("fifo.pgm"),
+        ),
     ];
+    nix::unistd::mkfifo(
+        &dir.path().join("fifo.pgm"),
+        nix::sys::stat::Mode::from_bits_truncate(0o600),
+    )
+    .expect("mkfifo");
     let mut problems = Vec::new();
     for (name, text, field, in_image) in cases {
         let path = dir.path().join(name);
@@ -592,7 +606,7 @@ fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
         };
         let mut cmd = Command::new(support::coordinator_bin());
         cmd.arg("validate").arg(&path);
-        match run_bounded(cmd) {
+        match support::run_bounded(cmd) {
             Ok(output) => problems.extend(refusal_problems("validate", &named, &output)),
             Err(e) => problems.push(e),
         }
@@ -603,7 +617,7 @@ fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
     std::fs::write(&path, good).expect("write the good map");
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.arg("validate").arg(&path);
-    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(output.status.code(), Some(0), "{output:?}");
 }
 
@@ -622,7 +636,7 @@ fn a_controller_that_does_not_see_polygons_is_refused_on_a_polygon_scenario() {
         if command == "run" {
             cmd.arg("--out").arg(&out);
         }
-        let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+        let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(2), "{command}: {stderr}");
         assert_eq!(stderr.trim_end().lines().count(), 1, "{command}: {stderr}");
@@ -641,7 +655,7 @@ fn validate_names_a_scenarios_map_and_its_pieces() {
     let scenario = support::repo_root().join("scenarios/depot-shelves.toml");
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.arg("validate").arg(&scenario);
-    let output = run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(0), "{stderr}");
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");

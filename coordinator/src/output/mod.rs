@@ -32,19 +32,11 @@ pub use out_dir::{OutDir, Staging};
 pub use summary::{FaultRecord, GroupTiming, StartupPhases, SummaryFile, SummaryRead, Timing};
 pub use tables::{moves_csv, obstacles_csv, path_csv, plans_csv, trajectory_csv};
 
-/// Write `bytes` to `path` atomically: a temporary file beside it, then a rename.
+/// Write `bytes` to `path` atomically: a temporary file beside it, created new, then a
+/// rename; never through a symbolic link ([`shared::output_file::write_replacing`]).
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let name = path
-        .file_name()
-        .with_context(|| format!("{}: not a file name", path.display()))?;
-    let tmp = path.with_file_name(format!(
-        ".{}.tmp-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))?;
-    Ok(())
+    shared::output_file::write_replacing(path, bytes)
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// The record of the run logged in `log` (`run.mcap`) of `scenario`: every step in the

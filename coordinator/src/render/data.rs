@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 use shared::geometry::{Disk, Point, Pose};
+use shared::input_file::{Links, open_input, read_input_text};
 use shared::record::AgentStep;
-use shared::scenario::Scenario;
+use shared::scenario::{MAX_SCENARIO_BYTES, Scenario};
 
 pub use crate::output::FaultRecord;
 use crate::output::SummaryRead;
@@ -245,12 +246,18 @@ fn invalid(path: &Path, reason: impl std::fmt::Display) -> RunDirError {
     }
 }
 
-fn read_text(path: &Path) -> Result<String, RunDirError> {
-    std::fs::read_to_string(path).map_err(|e| invalid(path, e))
+/// The largest table (`trajectory.csv`, `moves.csv`, ...) or `summary.json` read, in
+/// bytes: the bound of the log they are made from.
+const MAX_TABLE_BYTES: u64 = crate::run_log::MAX_RUN_LOG_BYTES;
+
+/// A file of the run folder: a regular file, not a link (the folder may be someone
+/// else's), of at most `max_bytes`.
+fn read_text(path: &Path, max_bytes: u64) -> Result<String, RunDirError> {
+    read_input_text(path, max_bytes, Links::Refuse).map_err(|e| invalid(path, e))
 }
 
 fn read_scenario(path: &Path) -> Result<Scenario, RunDirError> {
-    let text = read_text(path)?;
+    let text = read_text(path, MAX_SCENARIO_BYTES)?;
     // The scenario error already reads `FILE: FIELD: REASON`.
     Scenario::parse(&text, &path.display().to_string()).map_err(|e| RunDirError::Invalid {
         path: path.to_path_buf(),
@@ -266,7 +273,8 @@ fn csv_rows<T: DeserializeOwned>(
     path: &Path,
     mut each: impl FnMut(u64, T) -> Result<(), String>,
 ) -> Result<(), RunDirError> {
-    let mut reader = csv::Reader::from_path(path).map_err(|e| invalid(path, e))?;
+    let file = open_input(path, MAX_TABLE_BYTES, Links::Refuse).map_err(|e| invalid(path, e))?;
+    let mut reader = csv::Reader::from_reader(file);
     let headers = reader.headers().map_err(|e| invalid(path, e))?.clone();
     let mut record = csv::StringRecord::new();
     loop {
@@ -397,7 +405,7 @@ fn read_moves(path: &Path, steps: &mut [StepRecord]) -> Result<(), RunDirError> 
 }
 
 fn read_summary(path: &Path) -> Result<SummaryRead, RunDirError> {
-    let text = read_text(path)?;
+    let text = read_text(path, MAX_TABLE_BYTES)?;
     serde_json::from_str(&text).map_err(|e| invalid(path, e))
 }
 

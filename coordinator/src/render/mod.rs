@@ -87,7 +87,13 @@ pub fn render_data_with(
     options: RenderOptions,
 ) -> anyhow::Result<Vec<PathBuf>> {
     font::ensure_registered()?;
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    // The folder may be someone else's (a run folder handed over, its `plots`): created
+    // if missing, never followed if it is a link.
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("creating {}", parent.display()))?;
+    }
+    shared::output_file::real_folder(out).with_context(|| format!("creating {}", out.display()))?;
     let metrics = metrics::per_step(data);
     let mut written = Vec::new();
     written.extend(canvas::write_figure(

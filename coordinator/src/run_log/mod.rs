@@ -31,7 +31,7 @@ mod sync;
 mod thread;
 mod writer;
 
-pub use reader::{LoggedRun, ReadLogError, StepMarks, read_run_log};
+pub use reader::{LoggedRun, MAX_RUN_LOG_BYTES, ReadLogError, StepMarks, read_run_log};
 pub use records::{LOG_FORMAT_VERSION, LoggedOptions, StepMessage, TurnMessage};
 pub use thread::LogThread;
 pub use writer::{CourseSoFar, LogOptions, RunLogError, RunLogWriter, SyncPolicy};

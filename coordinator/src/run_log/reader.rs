@@ -9,6 +9,7 @@ use mcap::read::{ChunkReader, LinearReader, Options};
 use mcap::records::Record;
 use shared::course::{Replan, Wait};
 use shared::geometry::Pose;
+use shared::input_file::{Links, ReadInputError, read_input};
 use shared::record::{CourseRecord, Fault, Run, Step};
 
 use super::Topic;
@@ -67,16 +68,21 @@ pub struct StepMarks {
     pub turns: usize,
 }
 
+/// The largest log read back (`render`, `run --resume`), in bytes: a run of a thousand
+/// agents over a few thousand steps logs far less; a larger file is refused before it is
+/// read, whatever its length on disk (a sparse file, a device).
+pub const MAX_RUN_LOG_BYTES: u64 = 1 << 30;
+
 /// Why a log cannot be read.
 #[derive(Debug, thiserror::Error)]
 pub enum ReadLogError {
-    /// The file cannot be read.
-    #[error("{}: {source}", path.display())]
-    Io {
+    /// The file cannot be read: missing, not a regular file, a symbolic link, too large.
+    #[error("{}: {reason}", path.display())]
+    Unreadable {
         /// The file.
         path: PathBuf,
-        /// What failed.
-        source: std::io::Error,
+        /// Why.
+        reason: ReadInputError,
     },
     /// The file is not an MCAP file at all.
     #[error("{}: not an MCAP file (no magic bytes at the start)", .0.display())]
@@ -113,10 +119,15 @@ pub enum ReadLogError {
 
 /// Read the log at `path`: every message of every complete chunk, the last chunk dropped
 /// if it was cut short.
+///
+/// The file is read only if it is a regular file (not a symbolic link: the folder may be
+/// someone else's) of at most [`MAX_RUN_LOG_BYTES`].
 pub fn read_run_log(path: &Path) -> Result<LoggedRun, ReadLogError> {
-    let bytes = std::fs::read(path).map_err(|source| ReadLogError::Io {
-        path: path.to_path_buf(),
-        source,
+    let bytes = read_input(path, MAX_RUN_LOG_BYTES, Links::Refuse).map_err(|reason| {
+        ReadLogError::Unreadable {
+            path: path.to_path_buf(),
+            reason,
+        }
     })?;
     if !bytes.starts_with(mcap::MAGIC) {
         return Err(ReadLogError::NotMcap(path.to_path_buf()));

@@ -205,7 +205,9 @@ impl RunLogWriter {
             path: path.clone(),
             source,
         };
-        let file = File::create(&path).map_err(io)?;
+        // Created new: a link at the name (`run.mcap.resuming` in a folder handed over) is
+        // removed, never followed.
+        let file = shared::output_file::create_new(&path).map_err(io)?;
         let sync_file = file.try_clone().map_err(io)?;
         let writer = mcap::WriteOptions::new()
             .profile("")

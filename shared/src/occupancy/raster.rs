@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::{MAX_MAP_CELLS, MapError};
+use crate::input_file::{Links, read_input};
 
 /// Most bytes of a map image file (a plain PGM of [`MAX_MAP_CELLS`] takes up to six
 /// bytes a cell).
@@ -43,17 +44,8 @@ impl Raster {
             file: file.clone(),
             reason,
         };
-        let meta = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
-        if meta.is_dir() {
-            return Err(fail("is a directory, not an image".into()));
-        }
-        if meta.len() > MAX_IMAGE_BYTES {
-            return Err(fail(format!(
-                "{} bytes exceed the limit of {MAX_IMAGE_BYTES} for a map image",
-                meta.len()
-            )));
-        }
-        let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+        let bytes =
+            read_input(path, MAX_IMAGE_BYTES, Links::Follow).map_err(|e| fail(e.to_string()))?;
         Self::decode(&bytes).map_err(fail)
     }
 

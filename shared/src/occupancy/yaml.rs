@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::MapError;
+use crate::input_file::{Links, read_input_text};
 
 /// How a pixel's shade becomes a cell (the map_server's `mode`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,17 +75,8 @@ impl MapYaml {
             file: file.clone(),
             reason,
         };
-        let meta = std::fs::metadata(path).map_err(|e| read(e.to_string()))?;
-        if meta.is_dir() {
-            return Err(read("is a directory, not a map YAML file".into()));
-        }
-        if meta.len() > MAX_MAP_YAML_BYTES {
-            return Err(read(format!(
-                "{} bytes exceed the limit of {MAX_MAP_YAML_BYTES} for a map YAML file",
-                meta.len()
-            )));
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| read(e.to_string()))?;
+        let text = read_input_text(path, MAX_MAP_YAML_BYTES, Links::Follow)
+            .map_err(|e| read(e.to_string()))?;
         let folder = path.parent().unwrap_or(Path::new(""));
         Self::parse(&text, &file, folder)
     }

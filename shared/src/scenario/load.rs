@@ -5,11 +5,16 @@ use std::path::Path;
 use super::check::{Checker, Checks};
 use super::file::{parse_file, parse_json_file};
 use super::{Scenario, ScenarioError};
+use crate::input_file::{Links, read_input_text};
 
 /// The paper's example (section III), embedded so `coordinator run` works with no file.
 pub const PAPER_SCENARIO_TOML: &str = include_str!("../../../scenarios/paper.toml");
 /// The name shown for the embedded paper scenario in messages.
 pub const PAPER_SCENARIO_NAME: &str = "<embedded paper.toml>";
+/// The largest scenario file read, in bytes: the most agents, obstacles, polygon vertices
+/// and moving-obstacle waypoints a scenario may hold fit in far less; the same bound as
+/// the mission file the agents read (a scenario's resolved form).
+pub const MAX_SCENARIO_BYTES: u64 = 16 << 20;
 
 impl Scenario {
     /// Read and validate the scenario file at `path`.
@@ -17,18 +22,12 @@ impl Scenario {
         Self::parse(&Self::read(path)?, &path.display().to_string())
     }
 
-    /// The text of the scenario file at `path` (a directory, a missing file or a file
-    /// that is not UTF-8 is a [`ScenarioError::Read`]).
+    /// The text of the scenario file at `path`: a regular file of at most
+    /// [`MAX_SCENARIO_BYTES`] of UTF-8 (anything else, a folder, a FIFO or a device
+    /// included, is a [`ScenarioError::Read`], refused before its bytes are read).
     pub fn read(path: &Path) -> Result<String, ScenarioError> {
-        let file = path.display().to_string();
-        if path.is_dir() {
-            return Err(ScenarioError::Read {
-                file,
-                reason: "is a directory, not a scenario file".into(),
-            });
-        }
-        std::fs::read_to_string(path).map_err(|e| ScenarioError::Read {
-            file,
+        read_input_text(path, MAX_SCENARIO_BYTES, Links::Follow).map_err(|e| ScenarioError::Read {
+            file: path.display().to_string(),
             reason: e.to_string(),
         })
     }

@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use crate::occupancy::{Cell, OccupancyGrid};
+use crate::output_file::{real_folder, write_replacing};
 
 /// The occupancy map a scenario's obstacles come from (`[map]`).
 ///
@@ -171,11 +172,14 @@ impl ScenarioMap {
 
     /// Write a copy of the map into `dir` (`map/map.yaml` and its image `map/map.pgm`),
     /// for the map tools: a map_server map whose cells read back as these cells, at the
-    /// same place. Each file is written under a temporary name and renamed.
+    /// same place. Each file is written under a temporary name and renamed, never through a
+    /// symbolic link ([`crate::output_file`]).
     pub fn write_copy(&self, dir: &Path) -> std::io::Result<()> {
         let g = &self.grid;
         let folder = dir.join("map");
-        std::fs::create_dir_all(&folder)?;
+        // The run folder may be someone else's (`render`, `run --resume`): a link at
+        // `map` is refused, never followed.
+        real_folder(&folder)?;
         let mut pgm = format!("P5\n{} {}\n255\n", g.width, g.height).into_bytes();
         pgm.reserve(g.width * g.height);
         // The image's first row is the map's top row.
@@ -212,12 +216,4 @@ fn shade(cell: Cell) -> u8 {
         Cell::Occupied => 0,
         Cell::Unknown => 128,
     }
-}
-
-/// Write `bytes` to `path` through a temporary file beside it and a rename.
-fn write_replacing(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let mut part = path.as_os_str().to_owned();
-    part.push(".part");
-    std::fs::write(&part, bytes)?;
-    std::fs::rename(&part, path)
 }

@@ -32,7 +32,7 @@ pub use check::{
     Checks, MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, MAX_STEPS,
 };
 pub use error::ScenarioError;
-pub use load::{PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
+pub use load::{MAX_SCENARIO_BYTES, PAPER_SCENARIO_NAME, PAPER_SCENARIO_TOML};
 pub use map::{CellsTextError, ScenarioMap};
 pub use model::{PathSpec, Scenario};
 pub use resolved::{ResolveError, moving_obstacle_table};

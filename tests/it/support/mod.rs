@@ -335,3 +335,37 @@ pub fn agent_rows(out: &Path, agent: usize) -> Vec<(usize, f64, f64, bool)> {
         })
         .collect()
 }
+
+/// How long [`run_bounded`] lets a process run: a refusal takes well under a second, so
+/// only a hang (on a FIFO, a device) comes near it.
+pub const BOUNDED_RUN_LIMIT: Duration = Duration::from_secs(60);
+
+/// `cmd` run to completion with stdin closed and its output captured, or an error if it
+/// could not start or outlived [`BOUNDED_RUN_LIMIT`] (then it is killed).
+pub fn run_bounded(mut cmd: Command) -> Result<Output, String> {
+    let child = cmd
+        .env_remove("RUST_LOG")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot start {cmd:?}: {e}"))?;
+    let pid = child.id();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    match rx.recv_timeout(BOUNDED_RUN_LIMIT) {
+        Ok(Ok(output)) => Ok(output),
+        Ok(Err(e)) => Err(format!("waiting for {cmd:?} failed: {e}")),
+        Err(_) => {
+            // The child is not reaped until the waiting thread returns, so the id is still
+            // this child's.
+            let pid = nix::unistd::Pid::from_raw(i32::try_from(pid).expect("pid fits i32"));
+            let _ = nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGKILL);
+            Err(format!(
+                "{cmd:?} did not finish within {BOUNDED_RUN_LIMIT:?} (a hang on bad input?)"
+            ))
+        }
+    }
+}
