@@ -11,6 +11,7 @@ use shared::course::{Replan, Wait};
 use shared::geometry::Pose;
 use shared::input_file::{Links, ReadInputError, read_input};
 use shared::record::{CourseRecord, Fault, Run, Step};
+use shared::scenario::MAX_SCENARIO_BYTES;
 
 use super::Topic;
 use super::records::{
@@ -221,6 +222,14 @@ fn take_message(log: &mut LoggedRun, topic: Topic, data: &[u8]) -> Result<(), St
     match topic {
         Topic::Scenario => {
             let message = parse::<ScenarioMessage>(topic, data)?;
+            // Read back as a scenario file is: no longer than one may be.
+            if message.toml.len() as u64 > MAX_SCENARIO_BYTES {
+                return Err(format!(
+                    "{}: a scenario of {} bytes, more than the {MAX_SCENARIO_BYTES} a scenario file may hold",
+                    topic.name(),
+                    message.toml.len()
+                ));
+            }
             log.scenario_toml = message.toml;
             log.format_version = message.format_version;
             log.source = message.source;
