@@ -1,7 +1,11 @@
 //! Starting an agent in its sandbox: a user of its own, a control group of its own with
 //! limits, no new privileges, no descriptor but its socket, an environment with only what
-//! it needs. The relay (the coordinator's user) starts it and is its only link to the
-//! run: the agent's user can open none of the run's files.
+//! it needs, a session of its own (no terminal), and a view of the file system of its own:
+//! every file system read-only, a small private `/tmp`, `/var/tmp` and `/dev/shm`, and
+//! private System V and POSIX message-queue IPC, all gone with it. The relay (the
+//! coordinator's user) starts it and is its only link to the run: the agent's user can
+//! open none of the run's files, and what it writes (its output, its temporary files) is
+//! bounded and charged to it.
 
 use std::ffi::CString;
 use std::os::fd::{AsRawFd, OwnedFd};
@@ -16,9 +20,18 @@ use wire::cgroup::{CgroupDirs, Limits, join_opened, raw_fds};
 /// The descriptor the sandboxed agent finds its socket on.
 pub const AGENT_SOCKET_FD: i32 = 3;
 
-/// How much of a sandboxed agent's stderr its relay passes on; the rest is counted and
-/// dropped, so an agent that floods its log costs the run's log no more than this.
+/// How much of a sandboxed agent's output (stdout and stderr, one pipe) its relay passes
+/// on to its own stderr; the rest is counted and dropped, so an agent that floods its
+/// output costs the run's log no more than this and writes nothing to the coordinator's
+/// stdout.
 pub const MAX_AGENT_LOG_BYTES: u64 = 64 << 10;
+
+/// The size of each of the agent's private temporary file systems (`/tmp`, `/var/tmp`,
+/// `/dev/shm`): memory, charged to the agent's control group, freed when it dies.
+pub const PRIVATE_TMP_BYTES: u64 = 16 << 20;
+
+/// The folders that get a private temporary file system, if they exist.
+const PRIVATE_TMP_DIRS: [&std::ffi::CStr; 3] = [c"/tmp", c"/var/tmp", c"/dev/shm"];
 
 /// The environment variables an agent keeps (all others are dropped).
 const KEPT_ENV: [&str; 2] = ["RUST_LOG", "RUST_BACKTRACE"];
@@ -156,6 +169,14 @@ pub fn spawn_sandboxed(
         env.push((wire::RUN_ENV.to_string(), run));
     }
     let image = ExecImage::new(exe, args, &env)?;
+    let tmpfs_options = CString::new(format!("size={PRIVATE_TMP_BYTES},nr_inodes=4096,mode=1777"))
+        .context("the temporary file systems' options")?;
+    // Its stdout and stderr are one pipe, read by a thread of this relay that passes on a
+    // bounded part: it never writes to the coordinator's terminal or stdout.
+    let (output, output_writer) = std::io::pipe().context("the agent's output pipe")?;
+    let output_writer_too = output_writer
+        .try_clone()
+        .context("the agent's output pipe")?;
     // Never on the socket's place: the child puts the socket there first.
     let _held = (exe_file.as_raw_fd() == AGENT_SOCKET_FD)
         .then(|| exe_file.try_clone())
@@ -172,23 +193,30 @@ pub fn spawn_sandboxed(
         .current_dir("/")
         .env_remove(wire::PARENT_ENV)
         .stdin(Stdio::null())
-        .stderr(Stdio::piped());
+        .stdout(output_writer)
+        .stderr(output_writer_too);
     // SAFETY: between fork and exec the closure makes only async-signal-safe system
-    // calls (write, dup2, fcntl, setrlimit, setgroups, setresgid, setresuid, prctl,
-    // close_range, fexecve) on values made before the fork; it allocates nothing.
+    // calls (write, dup2, fcntl, setrlimit, setsid, unshare, mount, mount_setattr,
+    // setgroups, setresgid, setresuid, prctl, close_range, fexecve) on values made before
+    // the fork; it allocates nothing.
     unsafe {
         command.pre_exec(move || {
-            enter_sandbox(&procs_raw, socket_fd, uid, nproc, relay_pid)?;
+            enter_sandbox(&procs_raw, socket_fd, uid, nproc, relay_pid, &tmpfs_options)?;
             image.exec(exe_fd)
         });
     }
-    let mut child = command
+    let child = command
         .spawn()
         .with_context(|| format!("starting the sandboxed agent as user {uid}"))?;
-    let stderr_relay = child.stderr.take().map(|stderr| {
+    // The pipe's write ends are the agent's alone now: this relay's copies go with the
+    // command, so the reader sees the end when the agent (and what it left) closes them.
+    drop(command);
+    let stderr_relay = {
         let pid = child.id();
-        std::thread::spawn(move || pass_on_bounded(stderr, pid, MAX_AGENT_LOG_BYTES))
-    });
+        Some(std::thread::spawn(move || {
+            pass_on_bounded(output, pid, MAX_AGENT_LOG_BYTES)
+        }))
+    };
     drop(socket);
     drop(procs);
     drop(exe_file);
@@ -254,13 +282,16 @@ impl ExecImage {
 }
 
 /// In the child, before exec: join the group (while still privileged), take the
-/// socket as descriptor 3, become the agent's user for good, and close the door behind.
+/// socket as descriptor 3, leave the coordinator's session and terminal, see the file
+/// systems read-only with private temporary ones, become the agent's user for good, and
+/// close the door behind.
 fn enter_sandbox(
     procs: &[i32],
     socket_fd: i32,
     uid: u32,
     nproc: u64,
     relay_pid: u32,
+    tmpfs_options: &std::ffi::CStr,
 ) -> std::io::Result<()> {
     let check = |r: libc::c_int| {
         if r < 0 {
@@ -291,6 +322,10 @@ fn enter_sandbox(
             rlim_max: 0,
         };
         check(libc::setrlimit(libc::RLIMIT_CORE, &no_core))?;
+        // A session of its own: no controlling terminal, so none to push input into
+        // (TIOCSTI) or to signal; its stdin is /dev/null and its output a pipe.
+        check(libc::setsid())?;
+        private_file_systems(tmpfs_options)?;
         check(libc::setgroups(0, std::ptr::null()))?;
         check(libc::setresgid(uid, uid, uid))?;
         check(libc::setresuid(uid, uid, uid))?;
@@ -305,9 +340,83 @@ fn enter_sandbox(
     Ok(())
 }
 
-/// Pass the first `limit` bytes of `from` (a sandboxed agent's stderr) on to this
-/// process's stderr, whole lines only, and count the rest; say how much was dropped once
-/// the agent closes it.
+/// `mount_setattr(2)`'s argument (linux/mount.h).
+#[repr(C)]
+struct MountAttr {
+    attr_set: u64,
+    attr_clr: u64,
+    propagation: u64,
+    userns_fd: u64,
+}
+
+/// `MOUNT_ATTR_RDONLY` (linux/mount.h).
+const MOUNT_ATTR_RDONLY: u64 = 0x1;
+
+/// In the child, still privileged: a mount and IPC namespace of its own, in which every
+/// file system is read-only (`mount_setattr(2)` with `AT_RECURSIVE`, Linux 5.12) and
+/// [`PRIVATE_TMP_DIRS`] are small private tmpfs ([`PRIVATE_TMP_BYTES`]): whatever the
+/// agent writes is memory charged to its control group and is gone with its namespace,
+/// as are its System V IPC objects and POSIX message queues. Nothing it writes outlives
+/// it, fills a disk or the host's `/dev/shm`.
+///
+/// # Safety
+///
+/// Only between fork and exec: async-signal-safe system calls on values made before.
+unsafe fn private_file_systems(tmpfs_options: &std::ffi::CStr) -> std::io::Result<()> {
+    let check = |r: libc::c_long| {
+        if r < 0 {
+            Err(std::io::Error::last_os_error())
+        } else {
+            Ok(())
+        }
+    };
+    // SAFETY: plain system calls on static strings, `tmpfs_options` and a local struct.
+    unsafe {
+        check(libc::unshare(libc::CLONE_NEWNS | libc::CLONE_NEWIPC).into())?;
+        // Nothing done here propagates back to the host's mounts.
+        check(
+            libc::mount(
+                c"none".as_ptr(),
+                c"/".as_ptr(),
+                std::ptr::null(),
+                libc::MS_REC | libc::MS_PRIVATE,
+                std::ptr::null(),
+            )
+            .into(),
+        )?;
+        let read_only = MountAttr {
+            attr_set: MOUNT_ATTR_RDONLY,
+            attr_clr: 0,
+            propagation: 0,
+            userns_fd: 0,
+        };
+        check(libc::syscall(
+            libc::SYS_mount_setattr,
+            libc::AT_FDCWD,
+            c"/".as_ptr(),
+            libc::AT_RECURSIVE,
+            &read_only as *const MountAttr,
+            std::mem::size_of::<MountAttr>(),
+        ))?;
+        for dir in PRIVATE_TMP_DIRS {
+            let mounted = libc::mount(
+                c"tmpfs".as_ptr(),
+                dir.as_ptr(),
+                c"tmpfs".as_ptr(),
+                libc::MS_NOSUID | libc::MS_NODEV,
+                tmpfs_options.as_ptr().cast(),
+            );
+            if mounted < 0 && *libc::__errno_location() != libc::ENOENT {
+                return Err(std::io::Error::last_os_error());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Pass the first `limit` bytes of `from` (a sandboxed agent's stdout and stderr) on to
+/// this process's stderr, whole lines only, and count the rest; say how much was dropped
+/// once the agent closes it.
 fn pass_on_bounded(from: impl std::io::Read, pid: u32, limit: u64) {
     use std::io::{BufRead, Read, Write};
     let mut reader = std::io::BufReader::new(from);
@@ -333,7 +442,7 @@ fn pass_on_bounded(from: impl std::io::Read, pid: u32, limit: u64) {
     }
     if dropped > 0 {
         tracing::warn!(
-            "sandboxed agent {pid}: {dropped} bytes of its stderr dropped (past the first {limit})"
+            "sandboxed agent {pid}: {dropped} bytes of its output dropped (past the first {limit})"
         );
     }
 }

@@ -1,6 +1,7 @@
 //! The coordinator: validates and plans a scenario, runs it over agent processes, and
 //! writes the outputs. The binary's `main` calls [`run_cli`].
 
+mod agent_uids;
 mod agents;
 mod bench;
 mod bound;

@@ -54,6 +54,25 @@ impl ProcStat {
     }
 }
 
+/// Every user id some live process runs under now (real, effective, saved or file
+/// system), as `/proc/PID/status` says (a process whose user changed is owned by root in
+/// `/proc`, so its folder's owner would not tell).
+pub fn user_ids_in_use() -> std::collections::HashSet<u32> {
+    let mut uids = std::collections::HashSet::new();
+    for pid in all_pids() {
+        let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else {
+            continue;
+        };
+        if let Some(line) = status.lines().find_map(|l| l.strip_prefix("Uid:")) {
+            uids.extend(
+                line.split_whitespace()
+                    .filter_map(|u| u.parse::<u32>().ok()),
+            );
+        }
+    }
+    uids
+}
+
 /// The process ids listed in `/proc` now.
 fn all_pids() -> Vec<u32> {
     let Ok(entries) = std::fs::read_dir("/proc") else {

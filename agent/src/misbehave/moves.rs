@@ -211,7 +211,10 @@ pub fn corrupt(
         | Misbehave::ForkBomb
         | Misbehave::LateSome
         | Misbehave::Sluggish
-        | Misbehave::LogFlood => Some((honest, status)),
+        | Misbehave::LogFlood
+        | Misbehave::TtyPush
+        | Misbehave::FillTmp
+        | Misbehave::KillTwin => Some((honest, status)),
         Misbehave::Garbage => {
             // Deterministic nonsense, different at every step.
             let s = (step as f64 * 12.9898).sin() * 43_758.545;

@@ -1,6 +1,7 @@
 //! The attacks a sandbox (`coordinator run --sandbox`) must hold against, tried before the
 //! agent starts serving honestly: [`Misbehave::Scribble`], [`Misbehave::StopOthers`],
-//! [`Misbehave::RewriteMission`], [`Misbehave::ForkBomb`], [`Misbehave::LogFlood`]. Each says on stderr, at warn
+//! [`Misbehave::RewriteMission`], [`Misbehave::ForkBomb`], [`Misbehave::LogFlood`],
+//! [`Misbehave::TtyPush`], [`Misbehave::FillTmp`], [`Misbehave::KillTwin`]. Each says on stderr, at warn
 //! level, what it reached (`scribble: wrote into 0 of 0 files`), so a test can tell an
 //! attack that was stopped from one that was never tried.
 
@@ -20,6 +21,9 @@ pub fn before_opening(prefix: &str, agent: usize, mode: Misbehave) {
         Misbehave::RewriteMission => rewrite_mission(prefix, agent),
         Misbehave::ForkBomb => fork_bomb(agent),
         Misbehave::LogFlood => log_flood(agent),
+        Misbehave::TtyPush => tty_push(agent),
+        Misbehave::FillTmp => fill_tmp(agent),
+        Misbehave::KillTwin => kill_twin(agent),
         _ => {}
     }
 }
@@ -150,14 +154,97 @@ fn fork_bomb(agent: usize) {
 }
 
 fn log_flood(agent: usize) {
-    use std::io::Write as _;
     let line = format!("agent {agent} (log-flood): {}\n", "x".repeat(100));
-    let mut stderr = std::io::stderr().lock();
-    let mut written = 0usize;
-    while written < 16 << 20 {
-        if stderr.write_all(line.as_bytes()).is_err() {
-            break;
+    let flood = |out: &mut dyn std::io::Write| {
+        let mut written = 0usize;
+        while written < 16 << 20 {
+            if out.write_all(line.as_bytes()).is_err() {
+                break;
+            }
+            written += line.len();
         }
-        written += line.len();
+        let _ = out.flush();
+    };
+    flood(&mut std::io::stderr().lock());
+    flood(&mut std::io::stdout().lock());
+}
+
+/// What `tty-push` types: a comment, harmless if a shell runs it.
+const TTY_LINE: &[u8] = b"# pushed by a sandboxed agent\n";
+
+fn tty_push(agent: usize) {
+    use std::os::fd::AsRawFd;
+    let tty = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open("/dev/tty");
+    let opened = match &tty {
+        Ok(_) => "opened /dev/tty".to_string(),
+        Err(e) => format!("cannot open /dev/tty ({e})"),
+    };
+    let fds: Vec<i32> = tty.iter().map(|f| f.as_raw_fd()).chain([0, 1, 2]).collect();
+    let mut pushed = 0;
+    for fd in fds {
+        let push = |b: &u8| {
+            // SAFETY: ioctl(2) TIOCSTI with a pointer to one byte that outlives the call.
+            unsafe { libc::ioctl(fd, libc::TIOCSTI, b as *const u8) == 0 }
+        };
+        if TTY_LINE.iter().all(push) {
+            pushed += 1;
+        }
     }
+    tracing::warn!("agent {agent} (tty-push): {opened}; pushed a line into {pushed} terminals");
+}
+
+/// The most `fill-tmp` writes into each folder.
+const FILL_BYTES: usize = 256 << 20;
+
+fn fill_tmp(agent: usize) {
+    use std::io::Write as _;
+    let block = vec![0x5au8; 1 << 20];
+    let mut report = Vec::new();
+    for dir in ["/dev/shm", "/tmp", "/var/tmp"] {
+        let path = format!("{dir}/formation-fill-tmp-{}", std::process::id());
+        let mut written = 0usize;
+        if let Ok(mut file) = std::fs::File::create(&path) {
+            while written < FILL_BYTES && file.write_all(&block).is_ok() {
+                written += block.len();
+            }
+        }
+        report.push(format!("{} MiB into {dir}", written >> 20));
+    }
+    tracing::warn!("agent {agent} (fill-tmp): wrote {}", report.join(", "));
+}
+
+fn kill_twin(agent: usize) {
+    let me = std::process::id();
+    // SAFETY: getuid(2) cannot fail.
+    let uid = unsafe { libc::getuid() };
+    let (mut found, mut killed) = (0, 0);
+    for pid in std::fs::read_dir("/proc")
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|&pid| pid != me)
+    {
+        let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else {
+            continue;
+        };
+        let real_uid = status
+            .lines()
+            .find_map(|l| l.strip_prefix("Uid:"))
+            .and_then(|ids| ids.split_whitespace().next()?.parse::<u32>().ok());
+        if real_uid != Some(uid) {
+            continue;
+        }
+        found += 1;
+        // SAFETY: kill(2) with a pid read from /proc and a plain signal.
+        if unsafe { libc::kill(pid as libc::pid_t, libc::SIGKILL) } == 0 {
+            killed += 1;
+        }
+    }
+    tracing::warn!(
+        "agent {agent} (kill-twin): killed {killed} of {found} other processes of user {uid}"
+    );
 }

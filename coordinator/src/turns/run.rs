@@ -13,8 +13,9 @@ use wire::{RunPrefix, RunRoot};
 use super::driver::{BetweenSteps, BetweenStepsFn, Driver, EarlyStart, agent_args, tell_step_done};
 use super::hand_over::HandOver;
 use super::lateness::TurnHistory;
-use super::options::RunOptions;
+use super::options::{RunOptions, SandboxOptions};
 use super::outcome::{Progress, RunFailure, RunOutcome, outcome};
+use crate::agent_uids::AgentUids;
 use crate::agents::{self, AgentProcesses, StartGate};
 use crate::ipc::CoordinatorIpc;
 use crate::network::Router;
@@ -99,6 +100,32 @@ fn run_scenario_between(
     let root = match RunRoot::create(&prefix) {
         Ok(root) => root,
         Err(e) => return Err(fail(e.into(), &recorder, progress)),
+    };
+    // Agents of different runs are different users: this run's ids, claimed until it ends.
+    let uids = match options.sandbox.map(|s| AgentUids::claim(s.first_uid, n)) {
+        None => None,
+        Some(Ok(uids)) => Some(uids),
+        Some(Err(e)) => return Err(fail(e.into(), &recorder, progress)),
+    };
+    let with_claimed_uids;
+    let options = match (&options.sandbox, &uids) {
+        (Some(sandbox), Some(uids)) if uids.first() != sandbox.first_uid => {
+            tracing::info!(
+                "agents' user ids {} to {} (from {}: taken by another run or a live process)",
+                uids.first(),
+                u64::from(uids.first()) + n as u64 - 1,
+                sandbox.first_uid
+            );
+            with_claimed_uids = RunOptions {
+                sandbox: Some(SandboxOptions {
+                    first_uid: uids.first(),
+                    ..*sandbox
+                }),
+                ..options.clone()
+            };
+            &with_claimed_uids
+        }
+        _ => options,
     };
     // The scenario as run, for the agents to read at start-up.
     let mission_digest = match wire::write_mission(&prefix, scenario) {

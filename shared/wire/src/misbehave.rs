@@ -90,8 +90,21 @@ pub enum Misbehave {
     /// Answer every turn 200 ms after it is granted: within the default deadline, later
     /// than the default slow bound.
     Sluggish,
-    /// Before it starts, write 16 MiB of lines to stderr, then serve honestly.
+    /// Before it starts, write 16 MiB of lines to stderr and 16 MiB to stdout, then serve
+    /// honestly.
     LogFlood,
+    /// Before it starts, push a line into its terminal's input (`TIOCSTI`, on
+    /// `/dev/tty` and on its standard descriptors), as if typed at the shell that
+    /// started the run, then serve honestly.
+    TtyPush,
+    /// Before it starts, write up to 256 MiB into each of `/dev/shm`, `/tmp` and
+    /// `/var/tmp` and leave the files there, then serve honestly.
+    FillTmp,
+    /// Before it starts, SIGKILL every other process that runs under its own user id
+    /// (another run's agent of the same index, if the runs shared ids), then serve
+    /// honestly. Only against a sandboxed run: a trusted agent runs as the coordinator's
+    /// user, and would kill it.
+    KillTwin,
 }
 
 /// A mode name that is none of [`Misbehave::ALL`]'s.
@@ -105,7 +118,7 @@ pub struct UnknownMisbehave {
 impl Misbehave {
     /// Every mode, in the order of the documentation; the modes that name a victim name
     /// agent 0.
-    pub const ALL: [Self; 26] = [
+    pub const ALL: [Self; 29] = [
         Self::Nan,
         Self::Teleport,
         Self::ThroughObstacle,
@@ -132,6 +145,9 @@ impl Misbehave {
         Self::LateSome,
         Self::Sluggish,
         Self::LogFlood,
+        Self::TtyPush,
+        Self::FillTmp,
+        Self::KillTwin,
     ];
 
     /// The mode's name on the command line, without the victim (`impersonate` and
@@ -164,6 +180,9 @@ impl Misbehave {
             Self::LateSome => "late-some",
             Self::Sluggish => "sluggish",
             Self::LogFlood => "log-flood",
+            Self::TtyPush => "tty-push",
+            Self::FillTmp => "fill-tmp",
+            Self::KillTwin => "kill-twin",
         }
     }
 

@@ -145,9 +145,16 @@ fn a_sandboxed_run_equals_the_reference_and_each_agent_is_a_user_of_its_own() {
         (0..scenario.agents.len()).collect::<Vec<_>>(),
         "one sandboxed process per agent"
     );
+    // Agent i is user first + i: the default first id, or the next free block of ids if
+    // another run (another test's, at the same time) holds it.
+    let first = seen
+        .first()
+        .and_then(|(_, creds)| creds.as_ref()?.0.first().copied())
+        .expect("agent 0's user");
+    assert!(first >= FIRST_UID, "agent 0 runs as user {first}");
     for (agent, creds) in &seen {
         let (uids, no_new_privs, fds) = creds.clone().expect("the agent's /proc entry");
-        let uid = FIRST_UID + *agent as u32;
+        let uid = first + *agent as u32;
         assert_eq!(uids, [uid; 4], "agent {agent}");
         assert!(no_new_privs, "agent {agent} may gain privileges");
         assert_eq!(fds, [0, 1, 2, 3], "agent {agent}'s descriptors");
@@ -194,19 +201,23 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
     assert_nothing_left(pid);
     let honest = std::fs::read(honest_out.join("trajectory.csv")).expect("trajectory");
     let limits = wire::cgroup::Limits::default();
-    let attacks: [(&str, String); 7] = [
-        ("scribble", "wrote into 0 of 0 files".to_string()),
-        ("stop-others", "stopped 0 of".to_string()),
-        ("rewrite-mission", "cannot read it".to_string()),
-        ("fork-bomb", "children before fork failed".to_string()),
-        ("hoard", "attack (hoard) stopped".to_string()),
+    // Each attack's report of what it reached, any one of them: an attack on the run's
+    // shared memory finds either none it may open, or (its `/tmp` and `/dev/shm` its
+    // own) none at all.
+    let attacks: [(&str, &[&str]); 8] = [
+        ("scribble", &["wrote into 0 of 0 files"]),
+        ("stop-others", &["stopped 0 of"]),
+        ("rewrite-mission", &["cannot read it"]),
+        ("fork-bomb", &["children before fork failed"]),
         (
-            "impersonate=0",
-            "attack (impersonate=0) stopped".to_string(),
+            "hoard",
+            &["attack (hoard) stopped", "hoarding 0 ports on other agents"],
         ),
-        ("log-flood", "bytes of its stderr dropped".to_string()),
+        ("impersonate=0", &["attack (impersonate=0) stopped"]),
+        ("log-flood", &["bytes of its output dropped"]),
+        ("fill-tmp", &["(fill-tmp): wrote"]),
     ];
-    for (mode, report) in attacks {
+    for (mode, reports) in attacks {
         let out = temp.path().join(mode);
         let rogue = format!("3={mode}");
         let (output, pid) = run_to_end(
@@ -224,8 +235,8 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert!(output.status.success(), "{mode}: {stderr}");
         assert!(
-            stderr.contains(&report),
-            "{mode}: no report `{report}` in {stderr}"
+            reports.iter().any(|report| stderr.contains(report)),
+            "{mode}: none of the reports {reports:?} in {stderr}"
         );
         if mode == "fork-bomb" {
             // Its own limit, and only its own: the others started and moved.
@@ -239,13 +250,47 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
                 "{mode}: {forked} children"
             );
         }
-        // The log stays bounded: a flood is cut at what the relay passes on.
+        // The log stays bounded: a flood is cut at what the relay passes on, and nothing
+        // of the agent's reaches the coordinator's stdout.
         let bound = sandbox_log_bound();
         assert!(
             stderr.len() < bound,
             "{mode}: stderr of {} bytes",
             stderr.len()
         );
+        assert!(
+            output.stdout.len() < 4096,
+            "{mode}: stdout of {} bytes",
+            output.stdout.len()
+        );
+        if mode == "fill-tmp" {
+            // Its private temporary file systems only, each bounded, and gone with it.
+            let line = stderr
+                .lines()
+                .find(|l| l.contains("(fill-tmp): wrote"))
+                .expect("the report");
+            let written: Vec<u64> = line
+                .split(" MiB into ")
+                .filter_map(|part| part.rsplit(' ').next()?.parse().ok())
+                .collect();
+            let most = agent::sandbox::PRIVATE_TMP_BYTES >> 20;
+            assert_eq!(written.len(), 3, "{line}");
+            assert!(written.iter().all(|&w| w <= most), "{line}");
+            for dir in ["/dev/shm", "/tmp", "/var/tmp"] {
+                let left: Vec<_> = std::fs::read_dir(dir)
+                    .into_iter()
+                    .flatten()
+                    .flatten()
+                    .filter(|e| {
+                        e.file_name()
+                            .to_string_lossy()
+                            .starts_with("formation-fill-tmp-")
+                    })
+                    .map(|e| e.path())
+                    .collect();
+                assert!(left.is_empty(), "{mode}: left in {dir}: {left:?}");
+            }
+        }
         let s = summary(&out);
         assert_eq!(s["completed"], true, "{mode}");
         assert_safe(&s);
@@ -321,4 +366,154 @@ fn a_dead_coordinators_control_groups_are_cleaned_by_the_next_run() {
         "{:?}",
         run_cgroups(&prefix)
     );
+}
+
+/// The first agent's user in `a_sandboxed_agent_has_no_terminal_to_push_input_into`.
+const TTY_FIRST_UID: u32 = FIRST_UID + 20_000;
+/// The first agent's user of both runs in `agents_of_two_runs_are_different_users`.
+const TWIN_FIRST_UID: u32 = FIRST_UID + 30_000;
+
+/// A run started from a terminal (a pseudo-terminal, the coordinator's controlling
+/// terminal and stdin, as an interactive shell's): a sandboxed agent that opens
+/// `/dev/tty` and pushes a line into it (`TIOCSTI`), and into its standard descriptors,
+/// finds no terminal; nothing waits in the terminal's input afterwards, and the run
+/// completes with no fault.
+#[test]
+fn a_sandboxed_agent_has_no_terminal_to_push_input_into() {
+    use std::os::fd::AsRawFd;
+    use std::os::unix::process::CommandExt;
+    support::system::require_root();
+    let temp = tempfile::tempdir().expect("tempdir");
+    let out = temp.path().join("out");
+    let (mut master, mut slave) = (-1, -1);
+    // SAFETY: openpty(3) writes two descriptors; the name and settings are not asked for.
+    let opened = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    assert_eq!(opened, 0, "openpty: {}", std::io::Error::last_os_error());
+    // SAFETY: both descriptors were just opened and are owned here alone.
+    let (_master, slave) = unsafe {
+        use std::os::fd::FromRawFd;
+        (
+            std::os::fd::OwnedFd::from_raw_fd(master),
+            std::os::fd::OwnedFd::from_raw_fd(slave),
+        )
+    };
+    let uids = TTY_FIRST_UID.to_string();
+    let mut command = support::coordinator(
+        &[
+            "--sandbox",
+            "--agent-uids",
+            &uids,
+            "--misbehave",
+            "3=tty-push",
+        ],
+        &out,
+    );
+    command.stdin(std::process::Stdio::from(
+        slave.try_clone().expect("the terminal"),
+    ));
+    // SAFETY: setsid(2) and ioctl(2) on descriptor 0, between fork and exec.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::setsid() < 0 || libc::ioctl(0, libc::TIOCSCTTY, 0) < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let child = command.spawn().expect("coordinator");
+    let pid = child.id();
+    let output = child.wait_with_output().expect("coordinator");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("cannot open /dev/tty")
+            && stderr.contains("pushed a line into 0 terminals"),
+        "{stderr}"
+    );
+    let mut waiting: libc::c_int = 0;
+    // SAFETY: FIONREAD writes one int.
+    let asked = unsafe { libc::ioctl(slave.as_raw_fd(), libc::FIONREAD, &mut waiting) };
+    assert_eq!(asked, 0, "FIONREAD");
+    assert_eq!(waiting, 0, "bytes pushed into the terminal's input");
+    let s = summary(&out);
+    assert_eq!(s["completed"], true);
+    assert_eq!(s["faults"].as_array().map(Vec::len), Some(0), "{s:#}");
+    assert_nothing_left(pid);
+}
+
+/// Two sandboxed runs at once, asked for the same user ids: the second's agents get
+/// other ids, so its agent 3, which SIGKILLs every other process of its own user, finds
+/// none of the first run's; the first run, stopped by SIGTERM once the second ended,
+/// records no fault.
+#[test]
+fn agents_of_two_runs_are_different_users() {
+    support::system::require_root();
+    let temp = tempfile::tempdir().expect("tempdir");
+    let uids = TWIN_FIRST_UID.to_string();
+    // The first run lasts: agent 0 answers every turn 200 ms late (within the deadline).
+    let first_out = temp.path().join("first");
+    let first = support::coordinator(
+        &[
+            "--sandbox",
+            "--agent-uids",
+            &uids,
+            "--misbehave",
+            "0=sluggish",
+        ],
+        &first_out,
+    )
+    .spawn()
+    .expect("the first run");
+    let first_pid = first.id();
+    let agents = Scenario::paper().agents.len();
+    support::wait_for_agents(first_pid, agents);
+    let second_out = temp.path().join("second");
+    let (output, second_pid) = run_to_end(
+        &[
+            "--sandbox",
+            "--agent-uids",
+            &uids,
+            "--misbehave",
+            "3=kill-twin",
+        ],
+        &second_out,
+    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("(kill-twin): killed 0 of 0"), "{stderr}");
+    let first_ran_on = nix::sys::wait::waitpid(
+        nix::unistd::Pid::from_raw(first_pid as i32),
+        Some(nix::sys::wait::WaitPidFlag::WNOHANG),
+    )
+    .expect("waitpid");
+    assert_eq!(
+        first_ran_on,
+        nix::sys::wait::WaitStatus::StillAlive,
+        "the first run ended before the second did: nothing was shown"
+    );
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(first_pid as i32),
+        nix::sys::signal::Signal::SIGTERM,
+    )
+    .expect("SIGTERM");
+    let first_output = first.wait_with_output().expect("the first run");
+    let s = summary(&first_out);
+    assert_eq!(
+        s["faults"].as_array().map(Vec::len),
+        Some(0),
+        "the first run: {s:#}\n{}",
+        String::from_utf8_lossy(&first_output.stderr)
+    );
+    assert_eq!(summary(&second_out)["completed"], true);
+    for pid in [first_pid, second_pid] {
+        assert_nothing_left(pid);
+    }
 }
