@@ -665,3 +665,61 @@ fn validate_names_a_scenarios_map_and_its_pieces() {
         "{stderr}"
     );
 }
+
+/// A map whose blocked cells make millions of pieces (a 4096 x 4096 checkerboard: one
+/// piece of every other cell) is refused in one line once the count passes the limit,
+/// before the rest are built: the refusal fits in 512 MiB of address space (building
+/// them all took about 1.9 GB).
+#[test]
+fn a_map_of_millions_of_pieces_is_refused_before_they_are_built() {
+    use std::os::unix::process::CommandExt;
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let side = 4096;
+    let mut pgm = format!("P5\n{side} {side}\n255\n").into_bytes();
+    for y in 0..side {
+        pgm.extend((0..side).map(|x| if (x + y) % 2 == 0 { 0u8 } else { 255 }));
+    }
+    std::fs::write(dir.path().join("checker.pgm"), pgm).expect("pgm");
+    std::fs::write(
+        dir.path().join("checker.yaml"),
+        "image: checker.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n\
+         occupied_thresh: 0.65\nfree_thresh: 0.25\n",
+    )
+    .expect("yaml");
+    let scenario = dir.path().join("checker.toml");
+    std::fs::write(
+        &scenario,
+        "name = \"checker\"\n[map]\nyaml = \"checker.yaml\"\n[formation]\n\
+         agent_radius_m = 0.2\nslots = [{ r_m = 0.0, theta_deg = 0.0 }]\n[path]\n\
+         start = { x_m = 4.0, y_m = 7.5, heading_deg = 0.0 }\n\
+         goal = { x_m = 28.6, y_m = 4.35, heading_deg = 0.0 }\n\
+         turning_radius_m = 1.0\nstep_m = 0.25\ncentre_clearance_m = 0.3\n",
+    )
+    .expect("scenario");
+    let mut cmd = Command::new(support::coordinator_bin());
+    cmd.arg("validate").arg(&scenario);
+    // SAFETY: setrlimit(2) between fork and exec, on a value made before.
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 512 << 20,
+                rlim_max: 512 << 20,
+            };
+            if libc::setrlimit(libc::RLIMIT_AS, &limit) < 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
+    let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));
+    let case = Case {
+        path: scenario,
+        expect: "map.yaml".into(),
+    };
+    let problems = refusal_problems("validate", &case, &output);
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert!(
+        String::from_utf8_lossy(&output.stderr).contains("pieces"),
+        "{output:?}"
+    );
+}

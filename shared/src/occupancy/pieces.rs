@@ -12,7 +12,7 @@
 //! of one piece lies within the growth of its neighbour) but changes no free point. Those
 //! corners are marked as seams ([`Polygon::seams`]), so that no path searches round them.
 
-use crate::geometry::Polygon;
+use crate::geometry::{Point, Polygon};
 
 use super::outline::{CellCorner, outline_cells, ring_area2_cells};
 use super::{Cell, OccupancyGrid};
@@ -35,13 +35,57 @@ impl OccupancyGrid {
     /// assert!((area_m2 - blocked_m2).abs() < 1e-6 * blocked_m2);
     /// ```
     pub fn pieces(&self, blocked: impl Fn(Cell) -> bool) -> Vec<Polygon> {
+        let everywhere = |_: (Point, Point)| true;
+        match self.pieces_meeting(blocked, everywhere, usize::MAX) {
+            Ok(pieces) => pieces,
+            // No count passes usize::MAX.
+            Err(_) => Vec::new(),
+        }
+    }
+
+    /// [`Self::pieces`], only those whose bounding box (in metres, its corners' least and
+    /// greatest coordinates) `meets`, built tile by tile and counted as they are: more
+    /// than `max_pieces` is `Err` with the count reached, before the rest of the map is
+    /// outlined (a checkerboard map makes a piece of every other cell: millions, which
+    /// are never built). A tile whose bounding box `meets` not is skipped: `meets` must
+    /// hold of a box if it holds of a box inside it.
+    pub fn pieces_meeting(
+        &self,
+        blocked: impl Fn(Cell) -> bool,
+        meets: impl Fn((Point, Point)) -> bool,
+        max_pieces: usize,
+    ) -> Result<Vec<Polygon>, usize> {
         let blocked_at = |x: usize, y: usize| blocked(self.cell(x, y));
+        let corners_box =
+            |lo: CellCorner, hi: CellCorner| (self.corner_point(lo), self.corner_point(hi));
         let mut rings = Vec::new();
         for y0 in (0..self.height).step_by(PIECE_TILE_CELLS) {
             for x0 in (0..self.width).step_by(PIECE_TILE_CELLS) {
                 let w = PIECE_TILE_CELLS.min(self.width - x0);
                 let h = PIECE_TILE_CELLS.min(self.height - y0);
+                if !meets(corners_box([x0, y0], [x0 + w, y0 + h])) {
+                    continue;
+                }
+                let before = rings.len();
                 tile_rings(&blocked_at, [x0, y0], [w, h], &mut rings);
+                let mut kept = before;
+                for k in before..rings.len() {
+                    let ring: &Vec<CellCorner> = &rings[k];
+                    let lo = ring
+                        .iter()
+                        .fold([usize::MAX; 2], |m, c| [m[0].min(c[0]), m[1].min(c[1])]);
+                    let hi = ring
+                        .iter()
+                        .fold([0; 2], |m, c| [m[0].max(c[0]), m[1].max(c[1])]);
+                    if meets(corners_box(lo, hi)) {
+                        rings.swap(kept, k);
+                        kept += 1;
+                    }
+                }
+                rings.truncate(kept);
+                if rings.len() > max_pieces {
+                    return Err(rings.len());
+                }
             }
         }
         // A corner where the blocked cells round it make no convex corner of their union
@@ -64,13 +108,13 @@ impl OccupancyGrid {
             let diagonal = count == 2 && ll == ur;
             !(count == 1 || diagonal)
         };
-        rings
+        Ok(rings
             .iter()
             .map(|ring| {
                 let corners = ring.iter().map(|&c| self.corner_point(c)).collect();
                 Polygon::new_trusted_simple(corners, |k| seam(ring[k]))
             })
-            .collect()
+            .collect())
     }
 }
 

@@ -339,7 +339,7 @@ fn bad_map_files_are_refused_naming_the_file_and_the_field() {
         "{e}"
     );
     let e = OccupancyGrid::load(&dir.0).unwrap_err();
-    assert!(e.to_string().contains("is a directory"), "{e}");
+    assert!(e.to_string().contains("is a folder"), "{e}");
 }
 
 #[test]

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::{Checker, MAX_FIELD_SIDE_M, num};
-use crate::geometry::{Field, Polygon};
+use crate::geometry::{Field, Point, Polygon};
 use crate::occupancy::MAX_MAP_CELLS;
 use crate::occupancy::OccupancyGrid;
 use crate::scenario::ScenarioError;
@@ -147,21 +147,21 @@ impl Checker<'_> {
         map: &ScenarioMap,
         field: &Field,
     ) -> Result<Vec<Polygon>, ScenarioError> {
-        let mut pieces = map.grid.pieces(|c| map.blocks(c));
-        // Pieces wholly outside the field block nothing an agent can reach.
-        pieces.retain(|p| {
-            let (min, max) = p.bounding_box();
+        // Pieces wholly outside the field block nothing an agent can reach: not built.
+        let meets_field = |(min, max): (Point, Point)| {
             min.x < field.width_m && min.y < field.height_m && max.x > 0.0 && max.y > 0.0
-        });
-        if pieces.len() > MAX_MAP_PIECES {
-            return Err(self.invalid(
-                "map.yaml",
-                format!(
-                    "the map's blocked cells make {} pieces, beyond the limit of {MAX_MAP_PIECES}",
-                    pieces.len()
-                ),
-            ));
-        }
+        };
+        let pieces = map
+            .grid
+            .pieces_meeting(|c| map.blocks(c), meets_field, MAX_MAP_PIECES)
+            .map_err(|reached| {
+                self.invalid(
+                    "map.yaml",
+                    format!(
+                        "the map's blocked cells make over {MAX_MAP_PIECES} pieces in the field (counting stopped at {reached}), beyond the limit"
+                    ),
+                )
+            })?;
         Ok(pieces)
     }
 }
