@@ -36,11 +36,9 @@ impl OccupancyGrid {
     /// ```
     pub fn pieces(&self, blocked: impl Fn(Cell) -> bool) -> Vec<Polygon> {
         let everywhere = |_: (Point, Point)| true;
-        match self.pieces_meeting(blocked, everywhere, usize::MAX) {
-            Ok(pieces) => pieces,
-            // No count passes usize::MAX.
-            Err(_) => Vec::new(),
-        }
+        // No count passes usize::MAX: never the default.
+        self.pieces_meeting(blocked, everywhere, usize::MAX)
+            .unwrap_or_default()
     }
 
     /// [`Self::pieces`], only those whose bounding box (in metres, its corners' least and
