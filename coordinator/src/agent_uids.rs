@@ -100,7 +100,9 @@ mod tests {
         // forks meanwhile (other tests start processes) holds copies until it execs.
         let mut again = None;
         wire::poll_until(std::time::Duration::from_secs(10), || {
-            again = AgentUids::claim(first, 5).ok().filter(|c| c.first() == first);
+            again = AgentUids::claim(first, 5)
+                .ok()
+                .filter(|c| c.first() == first);
             again.is_some()
         });
         assert!(again.is_some(), "the ids from {first} were never freed");

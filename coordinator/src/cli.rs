@@ -174,10 +174,22 @@ pub struct SandboxArgs {
 impl SandboxArgs {
     /// `--sandbox` asked for, or implied by running as root; without root and without
     /// `--trusted-agents`, a warning says the agents are trusted.
-    pub fn options(&self, agents: usize, zenoh: bool) -> Result<Option<SandboxOptions>, String> {
+    ///
+    /// `zenoh_local_agents`: over Zenoh, how many agents this host starts (`None` over
+    /// iceoryx2). They cannot be sandboxed yet, so as root they run only with
+    /// `--trusted-agents`: never as root unknowingly.
+    pub fn options(
+        &self,
+        agents: usize,
+        zenoh_local_agents: Option<usize>,
+    ) -> Result<Option<SandboxOptions>, String> {
         let root = crate::turns::running_as_root();
+        let zenoh = zenoh_local_agents.is_some();
         if self.sandbox && zenoh {
             return Err("--sandbox: not with --transport zenoh (a remote agent is sandboxed by its own host)".into());
+        }
+        if root && !self.trusted_agents && zenoh_local_agents.is_some_and(|n| n > 0) {
+            return Err("--transport zenoh as root: the agents this host starts cannot be sandboxed over Zenoh yet and would run as root, trusted; pass --trusted-agents to run them so knowingly, or start them elsewhere (--remote)".into());
         }
         if self.sandbox && !root {
             return Err(

@@ -52,7 +52,14 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     }
     let sandbox = args
         .sandbox
-        .options(scenario.agents.len(), network.is_some())
+        .options(
+            scenario.agents.len(),
+            network.as_ref().map(|n| {
+                (0..scenario.agents.len())
+                    .filter(|a| !n.remote.contains(a))
+                    .count()
+            }),
+        )
         .map_err(CliError::Usage)?;
     let dir = match dir {
         Some(dir) => dir,

@@ -517,3 +517,24 @@ fn agents_of_two_runs_are_different_users() {
         assert_nothing_left(pid);
     }
 }
+
+/// As root, `run --transport zenoh` without `--trusted-agents` is refused before anything
+/// runs: the agents the host would start cannot be sandboxed over Zenoh yet, and would
+/// run as root. One line naming the flag, exit 2, no folder.
+#[test]
+fn zenoh_as_root_asks_for_trusted_agents() {
+    support::system::require_root();
+    let temp = tempfile::tempdir().expect("tempdir");
+    let out = temp.path().join("never");
+    let mut command = std::process::Command::new(support::coordinator_bin());
+    command
+        .args(["run", "--transport", "zenoh", "--quiet", "--out"])
+        .arg(&out)
+        .env("FORMATION_AGENT_BIN", support::agent_bin());
+    let output = support::run_bounded(command).unwrap_or_else(|e| panic!("{e}"));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("--trusted-agents"), "{stderr}");
+    assert!(!out.exists(), "an output folder was made");
+}
