@@ -413,6 +413,8 @@ fn a_sandboxed_agent_has_no_terminal_to_push_input_into() {
             &uids,
             "--misbehave",
             "3=tty-push",
+            "--turn-deadline-ms",
+            "10000",
         ],
         &out,
     );
@@ -458,7 +460,8 @@ fn agents_of_two_runs_are_different_users() {
     support::system::require_root();
     let temp = tempfile::tempdir().expect("tempdir");
     let uids = TWIN_FIRST_UID.to_string();
-    // The first run lasts: agent 0 answers every turn 200 ms late (within the deadline).
+    // The first run lasts (34 s, stopped long before): agent 0 answers every turn 200 ms
+    // late, well within the deadline and the slow bound even on a loaded machine.
     let first_out = temp.path().join("first");
     let first = support::coordinator(
         &[
@@ -467,6 +470,10 @@ fn agents_of_two_runs_are_different_users() {
             &uids,
             "--misbehave",
             "0=sluggish",
+            "--slow-turn-ms",
+            "2000",
+            "--turn-deadline-ms",
+            "10000",
         ],
         &first_out,
     )
@@ -483,6 +490,8 @@ fn agents_of_two_runs_are_different_users() {
             &uids,
             "--misbehave",
             "3=kill-twin",
+            "--turn-deadline-ms",
+            "10000",
         ],
         &second_out,
     );
