@@ -78,17 +78,21 @@ fn scribble(prefix: &str, agent: usize) {
     );
 }
 
-fn stop_others(prefix: &str, agent: usize) {
+/// Every process in `/proc` but this one.
+fn other_processes() -> impl Iterator<Item = u32> {
     let me = std::process::id();
-    let needle = format!("--prefix\0{prefix}\0");
-    let (mut tried, mut stopped) = (0, 0);
-    for pid in std::fs::read_dir("/proc")
+    std::fs::read_dir("/proc")
         .into_iter()
         .flatten()
         .flatten()
         .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
-        .filter(|&pid| pid != me)
-    {
+        .filter(move |&pid| pid != me)
+}
+
+fn stop_others(prefix: &str, agent: usize) {
+    let needle = format!("--prefix\0{prefix}\0");
+    let (mut tried, mut stopped) = (0, 0);
+    for pid in other_processes() {
         let Ok(cmdline) = std::fs::read(format!("/proc/{pid}/cmdline")) else {
             continue;
         };
@@ -217,17 +221,10 @@ fn fill_tmp(agent: usize) {
 }
 
 fn kill_twin(agent: usize) {
-    let me = std::process::id();
     // SAFETY: getuid(2) cannot fail.
     let uid = unsafe { libc::getuid() };
     let (mut found, mut killed) = (0, 0);
-    for pid in std::fs::read_dir("/proc")
-        .into_iter()
-        .flatten()
-        .flatten()
-        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
-        .filter(|&pid| pid != me)
-    {
+    for pid in other_processes() {
         let Ok(status) = std::fs::read_to_string(format!("/proc/{pid}/status")) else {
             continue;
         };
