@@ -148,7 +148,8 @@ pub struct SandboxArgs {
     /// Run each agent in a sandbox (the default as root; refused without): a user of its
     /// own (`--agent-uids`), a control group of its own with the limits below, no new
     /// privileges, no descriptor but its link, behind a relay of the coordinator's user
-    /// that alone opens the run's shared memory. Not with `--transport zenoh`.
+    /// that alone opens the run's shared memory. Over `--transport zenoh`, the agents
+    /// this host starts (the remote ones are their hosts' to sandbox).
     #[arg(long, conflicts_with = "trusted_agents")]
     pub sandbox: bool,
     /// Trust the agents: each runs as the coordinator's user on the run's channels itself
@@ -176,20 +177,20 @@ impl SandboxArgs {
     /// `--trusted-agents`, a warning says the agents are trusted.
     ///
     /// `zenoh_local_agents`: over Zenoh, how many agents this host starts (`None` over
-    /// iceoryx2). They cannot be sandboxed yet, so as root they run only with
-    /// `--trusted-agents`: never as root unknowingly.
+    /// iceoryx2). They are sandboxed as over iceoryx2 (behind the sandbox's socket relay,
+    /// with no key of their own); an agent started elsewhere is its own host's to
+    /// sandbox, so a run whose agents are all remote has no sandbox here.
     pub fn options(
         &self,
         agents: usize,
         zenoh_local_agents: Option<usize>,
     ) -> Result<Option<SandboxOptions>, String> {
         let root = crate::turns::running_as_root();
-        let zenoh = zenoh_local_agents.is_some();
-        if self.sandbox && zenoh {
-            return Err("--sandbox: not with --transport zenoh (a remote agent is sandboxed by its own host)".into());
-        }
-        if root && !self.trusted_agents && zenoh_local_agents.is_some_and(|n| n > 0) {
-            return Err("--transport zenoh as root: the agents this host starts cannot be sandboxed over Zenoh yet and would run as root, trusted; pass --trusted-agents to run them so knowingly, or start them elsewhere (--remote)".into());
+        let none_here = zenoh_local_agents == Some(0);
+        if self.sandbox && none_here {
+            return Err(
+                "--sandbox: every agent is remote (--remote), sandboxed by its own host".into(),
+            );
         }
         if self.sandbox && !root {
             return Err(
@@ -197,7 +198,7 @@ impl SandboxArgs {
                     .into(),
             );
         }
-        if self.trusted_agents || zenoh {
+        if self.trusted_agents || none_here {
             return Ok(None);
         }
         if !root {

@@ -93,7 +93,9 @@ pub(super) struct EarlyStart {
 
 /// The command-line arguments of agent `agent`'s process beyond its prefix and index:
 /// its channel's `generation`, the mission's digest, its test mode unless it is a
-/// `replacement` (a replacement never misbehaves), and its relay's settings.
+/// `replacement` (a replacement never misbehaves), and its relay's settings: a sandbox
+/// relay for an agent this host starts when the run sandboxes (over Zenoh too), a
+/// network relay for the others over Zenoh.
 pub(super) fn agent_args(
     options: &RunOptions,
     agent: usize,
@@ -112,11 +114,14 @@ pub(super) fn agent_args(
     if !replacement && let Some((_, mode)) = options.misbehave.iter().find(|(a, _)| *a == agent) {
         extra.extend(["--misbehave".to_string(), mode.to_string()]);
     }
-    if let Some(network) = network {
-        extra.extend(network.relay_args(agent));
-    }
-    if let Some(sandbox) = &options.sandbox {
-        extra.extend(sandbox.relay_args(agent, run_cgroup));
+    // An agent this host starts is sandboxed when the run sandboxes, over Zenoh too:
+    // behind the sandbox's socket relay, with no key and no link of its own. An agent
+    // started elsewhere (`--remote`) has a network relay here.
+    let here = network.is_none_or(|n| !n.remote.contains(&agent));
+    match (&options.sandbox, network) {
+        (Some(sandbox), _) if here => extra.extend(sandbox.relay_args(agent, run_cgroup)),
+        (_, Some(network)) => extra.extend(network.relay_args(agent)),
+        (_, None) => {}
     }
     extra
 }

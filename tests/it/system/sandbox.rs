@@ -320,8 +320,8 @@ fn attacks_from_inside_the_sandbox_reach_nothing() {
     }
 }
 
-/// `--sandbox` is refused, before anything runs, with `--transport zenoh` and with user
-/// ids that do not fit.
+/// `--sandbox` is refused, before anything runs, with user ids that do not fit and when
+/// every agent is remote.
 #[test]
 fn bad_sandbox_flags_are_refused_before_anything_runs() {
     let temp = tempfile::tempdir().expect("tempdir");
@@ -334,6 +334,19 @@ fn bad_sandbox_flags_are_refused_before_anything_runs() {
         (
             vec!["--sandbox", "--agent-pids-max", "1"],
             "--agent-pids-max",
+        ),
+        (
+            vec![
+                "--sandbox",
+                "--transport",
+                "zenoh",
+                "--remote",
+                "0,1,2,3,4,5",
+                "--allow-plain-tcp",
+                "--listen",
+                "tcp/127.0.0.1:7447",
+            ],
+            "every agent is remote",
         ),
     ] {
         let out = temp.path().join("never");
@@ -527,23 +540,46 @@ fn agents_of_two_runs_are_different_users() {
     }
 }
 
-/// As root, `run --transport zenoh` without `--trusted-agents` is refused before anything
-/// runs: the agents the host would start cannot be sandboxed over Zenoh yet, and would
-/// run as root. One line naming the flag, exit 2, no folder.
+/// As root, `run --transport zenoh` sandboxes the agents it starts as over iceoryx2:
+/// each behind the sandbox's socket relay, as a user of its own, with no key and no link
+/// of its own. Agent 3, which writes over every file of the run it can open (the run's
+/// TLS folder with the relays' key among them), opens none: the run completes with no
+/// fault and moves every agent as the honest sandboxed run does over iceoryx2.
 #[test]
-fn zenoh_as_root_asks_for_trusted_agents() {
+fn agents_started_over_zenoh_as_root_are_sandboxed_and_hold_no_key() {
     support::system::require_root();
     let temp = tempfile::tempdir().expect("tempdir");
-    let out = temp.path().join("never");
-    let mut command = std::process::Command::new(support::coordinator_bin());
-    command
-        .args(["run", "--transport", "zenoh", "--quiet", "--out"])
-        .arg(&out)
-        .env("FORMATION_AGENT_BIN", support::agent_bin());
-    let output = support::run_bounded(command).unwrap_or_else(|e| panic!("{e}"));
+    let honest_out = temp.path().join("honest");
+    let (output, pid) = run_to_end(&["--sandbox", "--turn-deadline-ms", "10000"], &honest_out);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_nothing_left(pid);
+    let out = temp.path().join("zenoh");
+    let (output, pid) = run_to_end(
+        &[
+            "--sandbox",
+            "--transport",
+            "zenoh",
+            "--misbehave",
+            "3=scribble",
+            "--turn-deadline-ms",
+            "10000",
+        ],
+        &out,
+    );
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("--trusted-agents"), "{stderr}");
-    assert!(!out.exists(), "an output folder was made");
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("wrote into 0 of 0 files"), "{stderr}");
+    let s = summary(&out);
+    assert_eq!(s["completed"], true);
+    assert_eq!(s["faults"].as_array().map(Vec::len), Some(0), "{s:#}");
+    let trajectory = |dir: &Path| std::fs::read(dir.join("trajectory.csv")).expect("trajectory");
+    assert!(
+        trajectory(&out) == trajectory(&honest_out),
+        "the run over Zenoh differs from the honest sandboxed run"
+    );
+    assert_nothing_left(pid);
 }
