@@ -36,7 +36,13 @@ pub fn text(size_px: f64) -> TextStyle<'static> {
 }
 
 /// Width and height of `s` in `style`, in pixels (0 when the font cannot measure it).
+/// The font is registered first: a layout measured before anything was drawn in this
+/// process is the layout drawn (unregistered, the font measured nothing, and a figure
+/// sized then came out smaller than the one drawn).
 pub fn measure(s: &str, style: &TextStyle<'_>) -> (u32, u32) {
+    if ensure_registered().is_err() {
+        return (0, 0);
+    }
     style.font.box_size(s).unwrap_or((0, 0))
 }
 
