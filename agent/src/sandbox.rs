@@ -52,8 +52,8 @@ pub struct Sandbox {
 pub struct SandboxedAgent {
     child: Child,
     cgroup: Option<CgroupDirs>,
-    /// The thread passing its stderr on (and saying at the end how much it dropped).
-    stderr_relay: Option<std::thread::JoinHandle<()>>,
+    /// The thread passing its output on (and saying at the end how much it dropped).
+    output_relay: Option<std::thread::JoinHandle<()>>,
 }
 
 impl SandboxedAgent {
@@ -92,9 +92,9 @@ impl Drop for SandboxedAgent {
             Some(_) => ORPHANS_TIMEOUT,
             None => std::time::Duration::ZERO,
         });
-        // Let the stderr relay drain what the agent wrote and report what it dropped
+        // Let the output relay drain what the agent wrote and report what it dropped
         // before this process goes; not for ever (a child it left may hold the pipe).
-        if let Some(relay) = self.stderr_relay.take()
+        if let Some(relay) = self.output_relay.take()
             && wire::poll_until(ORPHANS_TIMEOUT, || relay.is_finished())
         {
             let _ = relay.join();
@@ -211,7 +211,7 @@ pub fn spawn_sandboxed(
     // The pipe's write ends are the agent's alone now: this relay's copies go with the
     // command, so the reader sees the end when the agent (and what it left) closes them.
     drop(command);
-    let stderr_relay = {
+    let output_relay = {
         let pid = child.id();
         Some(std::thread::spawn(move || {
             pass_on_bounded(output, pid, MAX_AGENT_LOG_BYTES)
@@ -223,7 +223,7 @@ pub fn spawn_sandboxed(
     Ok(SandboxedAgent {
         child,
         cgroup: sandbox.cgroup.clone(),
-        stderr_relay,
+        output_relay,
     })
 }
 

@@ -70,8 +70,7 @@ pub fn locate_agent_binary(explicit: Option<&Path>) -> anyhow::Result<PathBuf> {
 /// counterparts (4); the turn notifier's socket and event segment (2). The mission is a
 /// file and the done event one shared service, not services per agent: services per
 /// agent for them would cost 25 files per agent, and 1 000 agents would not fit a hard
-/// limit of 20 000. One more, under the sandbox: the claim on the agent's user id
-/// (`agent_uids`).
+/// limit of 20 000. One more for the sandbox's claim on the agent's user id.
 const FDS_PER_AGENT: u64 = 16;
 /// Open files the coordinator holds whatever the number of agents (about 10 measured),
 /// with room for the files it opens while it runs (/proc, outputs).

@@ -212,40 +212,30 @@ pub fn read_mission_text(
     prefix: &str,
     expected: Option<MissionDigest>,
 ) -> Result<MissionText, MissionFileError> {
-    use std::os::unix::fs::OpenOptionsExt;
+    use shared::input_file::{Links, ReadInputError, open_input};
     let path = private_mission_path(prefix)?;
     let untrusted = |why: String| MissionFileError::Untrusted {
         path: path.clone(),
         why,
     };
-    let file = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(libc::O_NOFOLLOW)
-        .open(&path)
-        .map_err(|source| MissionFileError::Io {
-            path: path.clone(),
-            source,
-        })?;
-    let meta = file.metadata().map_err(|source| MissionFileError::Io {
+    let io = |source| MissionFileError::Io {
         path: path.clone(),
         source,
+    };
+    // Opened without following a link or blocking on a FIFO (a trusted agent of this
+    // user could put one there), a regular file within the bound; then this user's, 0600.
+    let mut file = open_input(&path, MAX_MISSION_BYTES, Links::Refuse).map_err(|e| match e {
+        ReadInputError::Io(source) => io(source),
+        // As open(2) with O_NOFOLLOW says it.
+        ReadInputError::SymbolicLink => io(std::io::Error::from_raw_os_error(libc::ELOOP)),
+        refused => untrusted(refused.to_string()),
     })?;
+    let meta = file.get_ref().metadata().map_err(io)?;
     if let Some(why) = private_file_problem(&meta) {
         return Err(untrusted(why));
     }
-    if meta.len() > MAX_MISSION_BYTES {
-        return Err(untrusted(format!(
-            "{} bytes, more than {MAX_MISSION_BYTES}",
-            meta.len()
-        )));
-    }
     let mut text = String::new();
-    file.take(MAX_MISSION_BYTES)
-        .read_to_string(&mut text)
-        .map_err(|source| MissionFileError::Io {
-            path: path.clone(),
-            source,
-        })?;
+    file.read_to_string(&mut text).map_err(io)?;
     if let Some(expected) = expected {
         let found = MissionDigest::of(text.as_bytes());
         if found != expected {
