@@ -364,6 +364,57 @@ fn another_user_can_neither_join_nor_disturb_a_run_in_its_default_configuration(
     assert_clean(&outcome.prefix, &listen);
 }
 
+/// A stranger's failed handshakes cannot keep the members out: from before the run starts
+/// until it ends, a stranger opens a connection to the run's TLS port every 5 ms and
+/// breaks it off (closed at once, or after a few bytes that are not TLS). Zenoh's TLS
+/// listener used to sleep 100 ms after each failed handshake, so at this pace no agent
+/// ever got its session (every one `failed-to-start`, the run "completed" with nobody
+/// moved). Now each failed handshake costs only itself: the run equals the reference to
+/// the bit, with no fault.
+#[test]
+fn a_strangers_failed_handshakes_keep_no_member_out() {
+    use std::io::Write;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let network = loopback();
+    let port = network.listen.port;
+    let scenario = Scenario::paper();
+    let path = plan_centre_path(&scenario).expect("centre path");
+    let reference = simulate_along(&scenario, &path).expect("reference");
+    let stop = Arc::new(AtomicBool::new(false));
+    let broken_off = Arc::new(AtomicUsize::new(0));
+    let stranger = {
+        let (stop, broken_off) = (Arc::clone(&stop), Arc::clone(&broken_off));
+        std::thread::spawn(move || {
+            let mut n = 0usize;
+            while !stop.load(Ordering::Relaxed) {
+                if let Ok(mut stream) = std::net::TcpStream::connect(("127.0.0.1", port)) {
+                    if n % 2 == 1 {
+                        let _ = stream.write_all(b"GET / HTTP/1.0\r\n\r\n");
+                    }
+                    drop(stream);
+                    broken_off.fetch_add(1, Ordering::Relaxed);
+                }
+                n += 1;
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        })
+    };
+    // Until the router listens the stranger's connections are refused; from then on every
+    // agent's handshake meets the churn.
+    let outcome = run_scenario(&scenario, &path, &options(network.clone()));
+    stop.store(true, Ordering::Relaxed);
+    stranger.join().expect("the stranger's thread");
+    let outcome = outcome.unwrap_or_else(|f| panic!("{:#}", f.error));
+    assert!(
+        broken_off.load(Ordering::Relaxed) > 0,
+        "the stranger never reached the port"
+    );
+    assert!(outcome.run.faults.is_empty(), "{:?}", outcome.run.faults);
+    assert_equal_runs(&outcome.run, &reference, "paper under handshake churn");
+    assert_clean(&outcome.prefix, &network.listen);
+}
+
 /// `binary`, or a copy of it in `dir` where another user cannot reach it (a folder on
 /// its path not open to others).
 fn binary_for_another_user(binary: &std::path::Path, dir: &std::path::Path) -> std::path::PathBuf {
