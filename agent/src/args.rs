@@ -96,3 +96,18 @@ pub struct Args {
     #[arg(long, value_name = "FD", hide = true, conflicts_with_all = ["connect", "relay", "sandbox_uid"])]
     pub socket_fd: Option<i32>,
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// The help reads as text: no rustdoc link markup from the doc comments.
+    #[test]
+    fn the_help_shows_no_rustdoc_markup() {
+        let mut command = super::Args::command();
+        let text = command.render_long_help().to_string();
+        for markup in ["[`", "`]", "]("] {
+            assert!(!text.contains(markup), "`agent --help` shows {markup}:\n{text}");
+        }
+    }
+}

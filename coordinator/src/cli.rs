@@ -563,4 +563,26 @@ mod tests {
         assert_eq!(a.controllers, [ControllerKind::Cbf, ControllerKind::Orca]);
         assert!(Cli::try_parse_from(["coordinator", "run", "--planer", "cbf"]).is_err());
     }
+
+    /// Every command's help (long and short) reads as text: no rustdoc link markup
+    /// (``[`wire::Doorbells`]``) carried over from the doc comments clap reads it from.
+    #[test]
+    fn no_help_shows_rustdoc_markup() {
+        use clap::CommandFactory;
+        fn check(command: &mut clap::Command, path: &str) {
+            for help in [command.render_long_help(), command.render_help()] {
+                let text = help.to_string();
+                for markup in ["[`", "`]", "]("] {
+                    assert!(!text.contains(markup), "`{path} --help` shows {markup}:\n{text}");
+                }
+            }
+            for sub in command.get_subcommands_mut() {
+                let name = format!("{path} {}", sub.get_name());
+                check(sub, &name);
+            }
+        }
+        let mut command = Cli::command();
+        command.build();
+        check(&mut command, "coordinator");
+    }
 }

@@ -45,9 +45,9 @@ impl WaitMode {
 /// published").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum WakeMode {
-    /// The run's doorbells ([`wire::Doorbells`]): a futex word per agent and one answer
-    /// counter, in a file of the run's private folder; a ring is a store and at most one
-    /// system call on each side.
+    /// The run's doorbells: a futex word per agent and one answer counter, in a file of
+    /// the run's private folder; a ring is a store and at most one system call on each
+    /// side (`wire::Doorbells`).
     #[default]
     Doorbell,
     /// iceoryx2 events: each agent's `turn` service, and the run's `done` service rung

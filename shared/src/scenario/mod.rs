@@ -7,8 +7,10 @@
 //! One concept per file:
 //! - `model`: the validated [`Scenario`] and its [`PathSpec`];
 //! - `error`: [`ScenarioError`], the one error of loading a scenario;
-//! - `file`: the TOML side: reading, [`Scenario::parse`], [`Scenario::load`], the
-//!   embedded paper scenario, the raw serde structures of the format;
+//! - `load`: reading a scenario, [`Scenario::load`] (a file, within its bound) and
+//!   [`Scenario::parse`] (text), and the embedded paper scenario;
+//! - `file`: the raw serde structures of the TOML format and the errors that name its
+//!   line or field;
 //! - `check`: validation of the raw structures into a [`Scenario`], and its limits;
 //! - `map`: [`ScenarioMap`], the occupancy map the obstacles of `[map]` come from, its
 //!   cells written inline in a resolved scenario, and the copy of it a run keeps;
