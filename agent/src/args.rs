@@ -107,7 +107,10 @@ mod tests {
         let mut command = super::Args::command();
         let text = command.render_long_help().to_string();
         for markup in ["[`", "`]", "]("] {
-            assert!(!text.contains(markup), "`agent --help` shows {markup}:\n{text}");
+            assert!(
+                !text.contains(markup),
+                "`agent --help` shows {markup}:\n{text}"
+            );
         }
     }
 }

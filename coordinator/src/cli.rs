@@ -573,7 +573,10 @@ mod tests {
             for help in [command.render_long_help(), command.render_help()] {
                 let text = help.to_string();
                 for markup in ["[`", "`]", "]("] {
-                    assert!(!text.contains(markup), "`{path} --help` shows {markup}:\n{text}");
+                    assert!(
+                        !text.contains(markup),
+                        "`{path} --help` shows {markup}:\n{text}"
+                    );
                 }
             }
             for sub in command.get_subcommands_mut() {

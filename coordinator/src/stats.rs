@@ -2,6 +2,11 @@
 
 use serde::Serialize;
 
+/// `a / b`, or 0 when `b` is not a positive number (a ratio of two measured times).
+pub fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 && a.is_finite() { a / b } else { 0.0 }
+}
+
 /// The median (the mean of the middle two for an even count; 0 for none).
 pub fn median(values: &[f64]) -> f64 {
     let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();

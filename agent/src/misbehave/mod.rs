@@ -65,5 +65,5 @@ pub fn serve_ipc(transport: IpcTransport, agent: usize, mode: Misbehave) -> anyh
         // Leave at once, without closing anything: the coordinator must cope.
         std::process::exit(3);
     }
-    crate::serve(&mut Misbehaving::new(transport, agent, mode), agent)
+    crate::serve::serve(&mut Misbehaving::new(transport, agent, mode), agent)
 }

@@ -113,7 +113,7 @@ pub fn measure(
             }
         }
         if let (Some(w), Some(n)) = (with.last(), without.last()) {
-            round_ratios.push(super::ratio(*w, *n));
+            round_ratios.push(crate::stats::ratio(*w, *n));
         }
     }
     let log_bytes = std::fs::metadata(log_path).map_or(0, |m| m.len());
@@ -125,7 +125,7 @@ pub fn measure(
         steps: path.len().saturating_sub(1),
         rounds,
         order,
-        with_vs_without_steps_per_s: super::ratio(median(&with), median(&without)),
+        with_vs_without_steps_per_s: crate::stats::ratio(median(&with), median(&without)),
         median_round_ratio: median(&round_ratios),
         round_ratios,
         with_log_steps_per_s: with,

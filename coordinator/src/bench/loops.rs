@@ -225,7 +225,7 @@ fn wait_report(
         wait,
         loop_s: loops,
         loop_median_s,
-        vs_simulate: super::ratio(loop_median_s, simulate_s),
+        vs_simulate: crate::stats::ratio(loop_median_s, simulate_s),
         turn_us: Distribution::of(&turn),
         compute_us: Distribution::of(&compute),
         ipc_overhead_us: Distribution::of(&overhead),

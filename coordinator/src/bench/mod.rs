@@ -47,13 +47,13 @@ use anyhow::Context;
 use shared::vocabulary::MAX_AGENTS;
 
 use crate::agents::locate_agent_binary;
-use crate::bench::run_options::bench_run_options;
+use crate::bench::run_options::{ECHO_DEADLINE, MAX_BENCH_STEPS, bench_run_options};
 use crate::cli::BenchArgs;
 use crate::error::CliError;
 use crate::ipc::TurnSplit;
 use crate::output::write_atomically;
 use crate::procfs;
-use crate::stats::Distribution;
+use crate::stats::{Distribution, ratio};
 use crate::turns::{BetweenSteps, RunOptions, WakeMode, run_scenario_with};
 
 pub use report::{Report, RunReport, Targets};
@@ -75,10 +75,6 @@ const REPLY_WAYPOINTS: usize = 4;
 const BLOCKS: usize = 40;
 /// Round trips dropped at the start of every block (the switch between mechanisms).
 const BLOCK_WARMUP: usize = 10;
-/// How long an agent has to answer an echo.
-pub(super) const ECHO_DEADLINE: Duration = Duration::from_secs(2);
-/// Most steps: the generated field must stay within the largest field accepted.
-pub const MAX_BENCH_STEPS: usize = 20_000;
 
 /// Formation sizes measured when `--agents` is not given (none with `--turns-scenario`).
 pub const DEFAULT_AGENTS: [usize; 2] = [6, 200];
@@ -493,11 +489,6 @@ fn bench_one(
         uds_us: pp.uds_us,
     };
     Ok((r, samples))
-}
-
-/// `a / b`, or 0 when `b` is not a positive number.
-fn ratio(a: f64, b: f64) -> f64 {
-    if b > 0.0 && a.is_finite() { a / b } else { 0.0 }
 }
 
 /// `runs/bench-<UTC timestamp>.json`.

@@ -154,10 +154,10 @@ pub fn check_sizes(sizes: &[usize], steps: usize) -> Result<(), CliError> {
             shared::vocabulary::MAX_AGENTS
         )));
     }
-    if !(2..=super::MAX_BENCH_STEPS).contains(&steps) {
+    if !(2..=super::run_options::MAX_BENCH_STEPS).contains(&steps) {
         return Err(CliError::Usage(format!(
             "--scale-steps: 2 to {}",
-            super::MAX_BENCH_STEPS
+            super::run_options::MAX_BENCH_STEPS
         )));
     }
     Ok(())
@@ -231,7 +231,7 @@ fn run_with_floor(
                 .collect();
             let answered = ctx
                 .ipc
-                .echo_group(&members, Instant::now() + super::ECHO_DEADLINE)?;
+                .echo_group(&members, Instant::now() + super::run_options::ECHO_DEADLINE)?;
             wake_floor_unanswered += members.len() - answered;
         }
         wake_floor_s += started.elapsed().as_secs_f64();
@@ -296,23 +296,23 @@ fn measure_one(
         spawn_floor_s,
         startup_s: timing.startup_s,
         startup_phases_s: timing.startup_phases_s,
-        startup_vs_floor: super::ratio(timing.startup_s, spawn_floor_s),
+        startup_vs_floor: crate::stats::ratio(timing.startup_s, spawn_floor_s),
         simulate_s,
         loop_s,
-        loop_vs_simulate: super::ratio(loop_s, simulate_s),
+        loop_vs_simulate: crate::stats::ratio(loop_s, simulate_s),
         wake_floor_s,
-        wake_floor_vs_simulate: super::ratio(wake_floor_s, simulate_s),
-        loop_vs_wake_floor: super::ratio(loop_s, wake_floor_s),
+        wake_floor_vs_simulate: crate::stats::ratio(wake_floor_s, simulate_s),
+        loop_vs_wake_floor: crate::stats::ratio(loop_s, wake_floor_s),
         wake_floor_unanswered: wake_floor_unanswered + events.wake_floor_unanswered,
         futex_floor_s,
-        futex_floor_vs_simulate: super::ratio(futex_floor_s, simulate_s),
-        wake_floor_vs_futex_floor: super::ratio(wake_floor_s, futex_floor_s),
+        futex_floor_vs_simulate: crate::stats::ratio(futex_floor_s, simulate_s),
+        wake_floor_vs_futex_floor: crate::stats::ratio(wake_floor_s, futex_floor_s),
         event_rings: EventRings {
             startup_s: events.outcome.timing.startup_s,
             loop_s: events.loop_s,
-            loop_vs_simulate: super::ratio(events.loop_s, simulate_s),
+            loop_vs_simulate: crate::stats::ratio(events.loop_s, simulate_s),
             wake_floor_s: events.wake_floor_s,
-            loop_vs_doorbells: super::ratio(events.loop_s, loop_s),
+            loop_vs_doorbells: crate::stats::ratio(events.loop_s, loop_s),
             collisions: events.outcome.run.summary().collisions,
             faults: events.outcome.run.faults.len(),
         },

@@ -284,8 +284,8 @@ pub fn measure(
         [s, p] => {
             let of = |f: fn(&ModeReport) -> f64| {
                 [
-                    super::ratio(f(s), f(&sequential)),
-                    super::ratio(f(p), f(&parallel)),
+                    crate::stats::ratio(f(s), f(&sequential)),
+                    crate::stats::ratio(f(p), f(&parallel)),
                 ]
             };
             Some(SandboxCost {
@@ -309,11 +309,14 @@ pub fn measure(
         ],
         rounds: b.rounds,
         order,
-        parallel_vs_sequential_steps_per_s: super::ratio(
+        parallel_vs_sequential_steps_per_s: crate::stats::ratio(
             parallel.steps_per_s,
             sequential.steps_per_s,
         ),
-        parallel_vs_sequential_turn_p50: super::ratio(parallel.turn_us.p50, sequential.turn_us.p50),
+        parallel_vs_sequential_turn_p50: crate::stats::ratio(
+            parallel.turn_us.p50,
+            sequential.turn_us.p50,
+        ),
         sequential,
         parallel,
         over_zenoh,

@@ -1,8 +1,6 @@
 //! A run's files on the RAM file system: its private folder, and the segments iceoryx2
 //! puts beside it in /dev/shm.
 
-#[cfg(doc)]
-use crate::ipc_config;
 use crate::prefix::is_valid_prefix;
 
 /// The folder where run `prefix` keeps iceoryx2's files (node and service descriptions,
@@ -11,7 +9,7 @@ use crate::prefix::is_valid_prefix;
 /// to disk as it creates it, about 5 N of them per run: on a disk that makes start-up
 /// several times slower (6 s instead of 1.8 s for 200 agents here). A folder per run
 /// also means that removing the run removes the folder ([`remove_run_root`]).
-/// An invalid prefix ([`ipc_config`] refuses it) has no folder.
+/// An invalid prefix ([`ipc_config`](crate::ipc_config) refuses it) has no folder.
 pub fn run_root(prefix: &str) -> Option<std::path::PathBuf> {
     let shm = std::path::Path::new("/dev/shm");
     (is_valid_prefix(prefix) && shm.is_dir()).then(|| shm.join(format!("{prefix}iox2")))
