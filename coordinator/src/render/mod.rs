@@ -144,6 +144,9 @@ pub fn execute(args: &RenderArgs) -> Result<(), CliError> {
     }
     let data = RunData::load(&args.run_dir).map_err(|e| CliError::Usage(e.to_string()))?;
     let out = args.run_dir.join(PLOTS_DIR);
+    // The folder handed in is input: a `plots` that is a link or no folder is refused
+    // (exit code 2) before anything is drawn.
+    shared::output_file::real_folder(&out).map_err(|e| CliError::Usage(e.to_string()))?;
     let options = RenderOptions {
         sensing_circles: args.sensing_circles,
     };
