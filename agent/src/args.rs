@@ -68,9 +68,11 @@ pub struct Args {
     /// attack on purpose (the coordinator must survive it): nan, teleport,
     /// through-obstacle, silent, garbage, overspeed, raw-length, raw-length-ready, replay,
     /// early, flood, impersonate=AGENT, spoof-ready=AGENT, hoard, fork, exit-before-ready,
-    /// killed-connecting, deaf-to-prepare, late-some, sluggish, log-flood; against a sandbox only: scribble,
-    /// stop-others, rewrite-mission, fork-bomb.
-    #[arg(long)]
+    /// killed-connecting, deaf-to-prepare, late-some, sluggish, log-flood; against a
+    /// sandbox only: scribble, stop-others, rewrite-mission, fork-bomb, fill-tmp,
+    /// tty-push, kill-twin. A shipping agent (built without the feature) does not list it
+    /// and refuses it in one line saying how to build one with it.
+    #[arg(long, hide = cfg!(not(feature = "misbehave")))]
     pub misbehave: Option<Misbehave>,
     /// Sandbox relay mode (started by the coordinator as root): start this agent as user
     /// and group UID, in a sandbox, and stand for it on the run's channels.

@@ -13,9 +13,15 @@ fn the_help_names_every_option() {
     let out = agent().arg("--help").output().expect("agent --help");
     assert!(out.status.success());
     let help = String::from_utf8_lossy(&out.stdout);
-    for option in ["--prefix", "--agent", "--liveness-ms", "--misbehave"] {
+    for option in ["--prefix", "--agent", "--liveness-ms"] {
         assert!(help.contains(option), "{option} missing from:\n{help}");
     }
+    // The test modes are listed only by an agent built with them.
+    assert_eq!(
+        help.contains("--misbehave"),
+        cfg!(feature = "misbehave"),
+        "{help}"
+    );
     // The bench's ping-pong is a program of the bench's own.
     for gone in ["--pingpong", "--uds"] {
         assert!(!help.contains(gone), "{gone} in:\n{help}");
