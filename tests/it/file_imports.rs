@@ -482,12 +482,23 @@ fn the_check_reads_crate_root_paths_and_follows_re_exports() {
         "pub fn open() -> &'static str { crate::KEY }\n\
          #[cfg(test)]\nmod tests {\n    use super::*;\n}\n",
     );
-    write("loop_.rs", "mod inner { pub fn f() { super::super::serve(); } }\n");
+    write(
+        "loop_.rs",
+        "mod inner { pub fn f() { super::super::serve(); } }\n",
+    );
     let imports = imports_of_crate(src);
     let of = |p: &str| imports[&src.join(p)].clone();
     let set = |ps: &[&str]| -> BTreeSet<PathBuf> { ps.iter().map(|p| src.join(p)).collect() };
-    assert_eq!(of("lib.rs"), set(&["modes.rs"]), "the re-export of keys is no use");
-    assert_eq!(of("session.rs"), set(&["keys.rs"]), "crate::KEY lives in keys.rs");
+    assert_eq!(
+        of("lib.rs"),
+        set(&["modes.rs"]),
+        "the re-export of keys is no use"
+    );
+    assert_eq!(
+        of("session.rs"),
+        set(&["keys.rs"]),
+        "crate::KEY lives in keys.rs"
+    );
     assert_eq!(of("loop_.rs"), set(&["lib.rs"]), "an inline module's super");
     assert_eq!(
         mutual_pairs(&imports),
