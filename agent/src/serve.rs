@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use shared::geometry::Point;
-use shared::turn::{TurnController, Velocities};
+use shared::turn::{TurnController, TurnRequest, Velocities};
 use shared::vocabulary::{Body, TurnMode};
 
 use crate::transport::{Command, Reply, Transport, TurnInput};
@@ -111,16 +111,16 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
         let step = turn_step(&turn);
         let velocities = simultaneous.then(|| velocities_of(&turn, agent));
         let mates = turn.mates_for(agent, controller);
-        let mv = controller.plan_turn_ahead(
+        let mv = controller.plan(&TurnRequest {
             step,
-            &turn.centre,
-            &turn.ahead,
-            &me,
-            turn.heading_rad,
-            &others,
-            &mates,
-            velocities.as_ref(),
-        );
+            centre: turn.centre,
+            ahead: &turn.ahead,
+            me,
+            heading_rad: turn.heading_rad,
+            others: &others,
+            mates: &mates,
+            velocities: velocities.as_ref(),
+        });
         let compute = started.elapsed();
         transport.publish_move(Reply::new(&turn, &mv, compute))?;
     }
@@ -216,16 +216,16 @@ mod tests {
                     radius_m: scenario.agents[j].radius_m,
                 })
                 .collect();
-            let want = controller.plan_turn_ahead(
-                turn_step(turn),
-                &turn.centre,
-                &turn.ahead,
-                &turn.bodies[agent].1,
-                None,
-                &others,
-                &turn.mates_for(agent, controller),
-                None,
-            );
+            let want = controller.plan(&TurnRequest {
+                step: turn_step(turn),
+                centre: turn.centre,
+                ahead: &turn.ahead,
+                me: turn.bodies[agent].1,
+                heading_rad: None,
+                others: &others,
+                mates: &turn.mates_for(agent, controller),
+                velocities: None,
+            });
             assert_eq!(*seq, turn.seq);
             assert_eq!(*mv, want);
             assert_eq!(*status, want.status as u32);

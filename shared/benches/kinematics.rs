@@ -12,7 +12,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use shared::geometry::{Point, Pose};
 use shared::scenario::Scenario;
 use shared::simulate::{agent_controllers, simulate};
-use shared::turn::TurnController;
+use shared::turn::{TurnController, TurnRequest};
 use shared::vocabulary::{Body, Kinematics};
 
 /// One recorded turn: the centre, the agent, where it stood and faced, the others.
@@ -63,13 +63,13 @@ fn recorded(name: &str) -> (Vec<TurnController>, Vec<TurnController>, Vec<Turn>)
 
 /// The car's move on `turn`.
 fn plan_car_turn(cars: &[TurnController], t: &Turn) {
-    black_box(cars[t.agent].plan_turn_with_heading(
-        t.step,
-        &t.centre,
-        &t.me,
-        t.heading_rad,
-        &t.others,
-    ));
+    black_box(
+        cars[t.agent].plan(
+            &TurnRequest::new(t.centre, t.me, &t.others)
+                .at_step(t.step)
+                .facing(t.heading_rad),
+        ),
+    );
 }
 
 /// Each car turn timed alone (see [`support::print_best_of_five_percentiles`]).
@@ -89,7 +89,10 @@ fn bench_kinematics(c: &mut Criterion) {
         b.iter(|| {
             let t = &turns[i % turns.len()];
             i += 1;
-            black_box(holonomic[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others))
+            black_box(
+                holonomic[t.agent]
+                    .plan(&TurnRequest::new(t.centre, t.me, &t.others).at_step(t.step)),
+            )
         })
     });
     let mut i = 0;
@@ -97,13 +100,13 @@ fn bench_kinematics(c: &mut Criterion) {
         b.iter(|| {
             let t = &turns[i % turns.len()];
             i += 1;
-            black_box(unicycles[t.agent].plan_turn_with_heading(
-                t.step,
-                &t.centre,
-                &t.me,
-                t.heading_rad,
-                &t.others,
-            ))
+            black_box(
+                unicycles[t.agent].plan(
+                    &TurnRequest::new(t.centre, t.me, &t.others)
+                        .at_step(t.step)
+                        .facing(t.heading_rad),
+                ),
+            )
         })
     });
     let mut i = 0;

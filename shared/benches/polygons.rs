@@ -15,7 +15,7 @@ use shared::best_point::nearest_free_point;
 use shared::geometry::{Disk, DiskGrid, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose};
 use shared::scenario::Scenario;
 use shared::simulate::{agent_controllers, simulate};
-use shared::turn::TurnController;
+use shared::turn::{TurnController, TurnRequest};
 use shared::vocabulary::Body;
 
 /// One recorded turn: the centre, the agent, where it stood, the others.
@@ -63,7 +63,9 @@ fn turns(scenario: &Scenario) -> Vec<Turn> {
 fn print_turn_percentiles(what: &str, controllers: &[TurnController], turns: &[Turn]) {
     support::print_best_of_five_percentiles(what, turns.len(), |i| {
         let t = &turns[i];
-        black_box(controllers[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others));
+        black_box(
+            controllers[t.agent].plan(&TurnRequest::new(t.centre, t.me, &t.others).at_step(t.step)),
+        );
     });
 }
 
@@ -133,7 +135,10 @@ fn bench_scenario(c: &mut Criterion, name: &str, scenario: &Scenario) {
             b.iter(|| {
                 let t = &turns[i % turns.len()];
                 i += 1;
-                black_box(controllers[t.agent].plan_turn(t.step, &t.centre, &t.me, &t.others))
+                black_box(
+                    controllers[t.agent]
+                        .plan(&TurnRequest::new(t.centre, t.me, &t.others).at_step(t.step)),
+                )
             })
         });
     }

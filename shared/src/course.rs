@@ -189,7 +189,7 @@ impl<'a> Course<'a> {
 
     /// The next poses along the current plan, at most `n`: where the centre goes next if
     /// it does not hold or replan (fewer near the goal). An agent looks ahead along them
-    /// ([`crate::turn::TurnController::plan_turn_ahead`]).
+    /// ([`crate::turn::TurnController::plan`]).
     pub fn ahead(&self, n: usize) -> &[Pose] {
         let from = (self.at + 1).min(self.plan.len());
         &self.plan[from..(from + n).min(self.plan.len())]

@@ -14,7 +14,7 @@ use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
 use crate::tracking::MAX_HORIZON_STEPS;
-use crate::turn::{TurnController, Velocities};
+use crate::turn::{TurnController, TurnRequest, Velocities};
 use crate::vocabulary::CbfSettingsError;
 use crate::vocabulary::Move;
 use crate::vocabulary::TurnMode;
@@ -171,16 +171,16 @@ pub fn simulate_along_with_deaths(
                     let velocities = velocities
                         .as_ref()
                         .map(|all| Velocities::of_agent(all, agent));
-                    let mv = controllers[agent].plan_turn_ahead(
+                    let mv = controllers[agent].plan(&TurnRequest {
                         step,
-                        centre,
+                        centre: *centre,
                         ahead,
-                        &me,
+                        me,
                         heading_rad,
-                        &others,
-                        &mates,
-                        velocities.as_ref(),
-                    );
+                        others: &others,
+                        mates: &mates,
+                        velocities: velocities.as_ref(),
+                    });
                     (agent, mv)
                 })
                 .collect();

@@ -12,10 +12,10 @@ use crate::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
 use super::{Aim, PLANNING_MARGIN_M, TurnController};
 
 impl TurnController {
-    /// [`Self::plan_turn`] before looking ahead: the escape, if any, and the plan round
+    /// [`Self::plan`] before looking ahead: the escape, if any, and the plan round
     /// the reach disks `reach` (with a step to spare) of the `sensed` moving obstacles;
     /// `others` are the sensed bodies; the best point is taken for `aim` when given
-    /// (`TurnController::plan_turn_ahead`).
+    /// (`TurnController::plan`).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn plan_turn_around(
         &self,

@@ -54,7 +54,7 @@ impl TurnController {
     /// Whether this agent may give way to a mate: it looks ahead (the best-point
     /// controller, a top speed, a look-ahead, no heading) and knows the formation
     /// ([`Self::with_formation`]). Otherwise the mates given to
-    /// [`Self::plan_turn_ahead`] change nothing, and a caller need not list them.
+    /// [`Self::plan`] change nothing, and a caller need not list them.
     pub fn gives_way(&self) -> bool {
         matches!(self.controller, Controller::BestPoint(_))
             && self.spec.max_step_m.is_some()
@@ -63,7 +63,7 @@ impl TurnController {
             && !self.formation.is_empty()
     }
 
-    /// The mates agent `agent` plans with ([`Self::plan_turn_ahead`]): every view of
+    /// The mates agent `agent` plans with ([`Self::plan`]): every view of
     /// `views` but its own, or none when it does not give way ([`Self::gives_way`]):
     /// listing them is a turn's cost at 200 agents, so `views` is only walked when used.
     pub fn mate_views(
@@ -264,6 +264,7 @@ mod tests {
     use super::*;
     use crate::formation::Slot;
     use crate::safety::check_move;
+    use crate::turn::TurnRequest;
     use crate::vocabulary::{AgentSpec, ControllerSpec};
 
     /// A wall across the field at x = 11 with a gap 1 m wide at y = 10, room for one agent.
@@ -323,16 +324,16 @@ mod tests {
                     alive: true,
                 };
                 let views: &[MateView] = if mates { &[view] } else { &[] };
-                let mv = controllers[me].plan_turn_ahead(
+                let mv = controllers[me].plan(&TurnRequest {
                     step,
-                    &centre,
-                    &ahead,
-                    &at[me],
-                    None,
-                    &[other],
-                    views,
-                    None,
-                );
+                    centre,
+                    ahead: &ahead,
+                    me: at[me],
+                    heading_rad: None,
+                    others: &[other],
+                    mates: views,
+                    velocities: None,
+                });
                 let checked = check_move(&field, &grid, &[other], 0.25, &at[me], &mv.waypoints, 8);
                 assert!(checked.is_ok(), "agent {me} step {step}: {checked:?}");
                 let end = *mv.waypoints.last().expect("a move");
@@ -379,16 +380,16 @@ mod tests {
                 position: at[1 - me],
                 radius_m: 0.25,
             };
-            controllers[me].plan_turn_ahead(
-                1,
-                &centre,
-                &[centre; 10],
-                &at[me],
-                None,
-                &[other],
+            controllers[me].plan(&TurnRequest {
+                step: 1,
+                centre,
+                ahead: &[centre; 10],
+                me: at[me],
+                heading_rad: None,
+                others: &[other],
                 mates,
-                None,
-            )
+                velocities: None,
+            })
         };
         let view = |at: &[Point; 2], alive| MateView {
             agent: 1,

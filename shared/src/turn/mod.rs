@@ -2,11 +2,12 @@
 //! point, shortest collision-free path to it, as a polyline the agent then follows.
 //!
 //! This is the one place the decision is made: the reference simulation and the agent
-//! process both call [`TurnController::plan_move`] (the paper's [`BestPointController`] or a
-//! barrier controller), so their trajectories agree to the bit.
+//! process both hand a [`TurnRequest`] to [`TurnController::plan`] (the paper's
+//! [`BestPointController`] or a barrier controller), so their trajectories agree to the bit.
 //!
 //! One concept a file: here the dispatch over the controllers ([`TurnController`]); in
-//! `best_point_controller.rs` the paper's controller; in `escape.rs` a turn among moving
+//! `request.rs` what a turn is planned from; in `best_point_controller.rs` the paper's
+//! controller; in `escape.rs` a turn among moving
 //! obstacles (the escape from an obstacle's reach and the plan round the reach disks);
 //! in `look_ahead.rs` the look-ahead along the moving obstacles' routes.
 
@@ -31,6 +32,7 @@ mod car;
 mod escape;
 mod give_way;
 mod look_ahead;
+mod request;
 
 pub use best_point_controller::{Aim, BestPointController};
 pub use car::{GOAL_HEADINGS, SEARCH_EXPANSIONS};
@@ -39,6 +41,7 @@ pub use look_ahead::{
     LOOKAHEAD_DIRECTIONS, LOOKAHEAD_RUN_TURNS, LOOKAHEAD_TRIGGER_TURNS, LOOKAHEAD_TURNS,
     SURVIVAL_CELLS_PER_MOVE, SURVIVAL_TURNS,
 };
+pub use request::TurnRequest;
 
 /// Extra inflation of every disk when choosing the best point and planning the path, in
 /// metres. It absorbs rounding and the chords of arcs: the followed polyline stays at
@@ -76,8 +79,9 @@ impl Velocities {
     }
 }
 
-/// Any of the controllers, behind one `plan_move`, with the agent's sensing radius and
-/// top speed applied: what the reference simulation and the agent processes call.
+/// Any of the controllers, behind one [`TurnController::plan`], with the agent's sensing
+/// radius and top speed applied: what the reference simulation and the agent processes
+/// call.
 #[derive(Clone, Debug)]
 pub struct TurnController {
     controller: Controller,
@@ -174,7 +178,7 @@ impl TurnController {
         self
     }
 
-    /// This controller in a world with `moving` obstacles: [`Self::plan_turn`] plans around
+    /// This controller in a world with `moving` obstacles: [`Self::plan`] plans around
     /// them. `obstacles` are the static ones given to [`Self::new`] (true radii).
     pub fn with_moving(mut self, moving: &[MovingObstacle], obstacles: &[Disk]) -> Self {
         if !moving.is_empty() {
@@ -215,74 +219,67 @@ impl TurnController {
         &self.spec
     }
 
-    /// Plan this agent's move while every `other` body stands still.
+    /// Plan this agent's move for `turn`: the one entry point of every controller.
     ///
-    /// With a sensing radius the controller sees only the bodies of `others` (and the
-    /// obstacles) whose disks come within it, so bodies beyond it change nothing; `others`
-    /// may be all bodies or any superset of the sensed ones. With a top speed the move is
-    /// the first `max_step_m` of the controller's path, with status
-    /// [`MoveStatus::UnderWay`] when it stops short of the best point.
-    pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
-        self.plan_move_within(centre, None, me, others, self.spec.max_step_m)
-    }
-
-    /// Plan this agent's turn at `step` while every `other` body stands still and every
-    /// moving obstacle stands where it is at `step` ([`crate::moving_obstacle`]).
+    /// Every other body stands still while the agent moves. With a sensing radius the
+    /// controller sees only the bodies of `turn.others` (and the obstacles) whose disks
+    /// come within it, so bodies beyond it change nothing. With a top speed the move is the
+    /// first `max_step_m` of the controller's path, with status [`MoveStatus::UnderWay`]
+    /// when it stops short of the best point.
     ///
-    /// The agent plans around each moving obstacle it senses as around a disk grown by
-    /// twice the obstacle's speed, or as much of that as leaves it outside: at least the
-    /// obstacle's reach ([`MovingObstacle::reach_disk_at`], where it can be until the
-    /// agent's next turn), so a move that ends outside it is still clear after the
-    /// obstacle's next motion, and a step to spare where there is room. An agent that starts its turn inside such a disk (the
-    /// obstacle came closer since its last turn) first escapes: a straight motion out of
-    /// the disk, radially or up to 150 degrees off, that is clear of every body and
-    /// within its top speed, or else the shortest path out round the bodies in its way
-    /// (`escape.rs`); the rest of the turn is planned from there with what is left
-    /// of the top speed. Without an escape, the disk is shrunk to leave the agent outside.
-    /// Without moving obstacles this is [`Self::plan_move`].
+    /// **Moving obstacles** stand where they are at `turn.step`
+    /// ([`crate::moving_obstacle`]). The agent plans around each one it senses as around a
+    /// disk grown by twice the obstacle's speed, or as much of that as leaves it outside:
+    /// at least the obstacle's reach ([`MovingObstacle::reach_disk_at`], where it can be
+    /// until the agent's next turn), so a move that ends outside it is still clear after
+    /// the obstacle's next motion, and a step to spare where there is room. An agent that
+    /// starts its turn inside such a disk (the obstacle came closer since its last turn)
+    /// first escapes: a straight motion out of the disk, radially or up to 150 degrees
+    /// off, that is clear of every body and within its top speed, or else the shortest
+    /// path out round the bodies in its way (`escape.rs`); the rest of the turn is planned
+    /// from there with what is left of the top speed. Without an escape, the disk is
+    /// shrunk to leave the agent outside. Then it looks ahead (`look_ahead.rs`): when the
+    /// move would end where a sensed obstacle's reach will be within
+    /// [`LOOKAHEAD_TRIGGER_TURNS`] steps along its route, the straight move from whose end
+    /// the agent can keep clear longest (up to [`SURVIVAL_TURNS`], moving on as it likes)
+    /// is taken instead.
     ///
-    /// Then it looks ahead (`look_ahead.rs`): when the move would end where a sensed
-    /// obstacle's reach will be within [`LOOKAHEAD_TRIGGER_TURNS`] steps along its route,
-    /// the straight move from whose end the agent can keep clear longest (up to
-    /// [`SURVIVAL_TURNS`], moving on as it likes) is taken instead.
-    pub fn plan_turn(&self, step: usize, centre: &Pose, me: &Point, others: &[Body]) -> Move {
-        self.plan_turn_aiming(step, centre, None, me, others)
-    }
-
-    /// This agent's turn at `step` knowing the centre's plan: `ahead` are the centre's
-    /// next poses along its current plan (the pose of `step + 1` first; fewer near its
-    /// end), and `heading_rad` where the agent faces when it has a heading.
+    /// **The centre's plan** (`turn.ahead`): a holonomic agent with a top speed and a
+    /// look-ahead (`AgentSpec::horizon_steps` > 0) knows where its slot will be over the
+    /// next steps ([`Aim`]): when that way crosses a static obstacle it takes the first
+    /// move of the best track round it, and when it cannot follow its slot exactly it aims
+    /// at the first point of its least-deviation track ([`crate::tracking::lead_point`]);
+    /// see [`BestPointController::plan_move_aiming`]. Only the best-point controller looks
+    /// ahead; the others, an agent with a heading (not yet: see `aim`), without a top speed
+    /// or with a horizon of 0, and an agent that can follow its slot along a way clear of
+    /// obstacles, plan exactly as without `ahead`, bit for bit. With
+    /// [`Self::with_formation`], an agent that looks ahead gives way to a mate of
+    /// `turn.mates` it senses far behind its slot ([`Aim::lagging`]).
     ///
-    /// A holonomic agent with a top speed and a look-ahead (`AgentSpec::horizon_steps` >
-    /// 0) knows where its slot will be over the next steps ([`Aim`]): when that way
-    /// crosses a static obstacle it takes the first move of the best track round it, and
-    /// when it cannot follow its slot exactly it aims at the first point of its
-    /// least-deviation track ([`crate::tracking::lead_point`]); see
-    /// [`BestPointController::plan_move_aiming`]. Everything else (the path, the cut at
-    /// the top speed, the kinematics, the escape from moving obstacles) is as in
-    /// [`Self::plan_turn_with_heading`]. Only the best-point controller looks ahead; the
-    /// others, an agent with a heading (not yet: see `aim`), without a top speed or with
-    /// a horizon of 0, and an agent that can follow its slot along a way clear of
-    /// obstacles, plan exactly as [`Self::plan_turn_with_heading`] does, bit for bit.
+    /// **A heading** (`turn.heading_rad`, for a unicycle or a car): a unicycle agent plans
+    /// its path as a holonomic one would (a disk turning in place sweeps nothing new, so
+    /// the path's safety holds for it), then follows it by turning in place and driving
+    /// straight, as far as one step's time allows ([`drive_unicycle`]); it ends facing the
+    /// centre's heading when the scenario asks for it (`align_heading`); with the barrier
+    /// controller it drives and turns at once ([`CbfController::plan_unicycle_move`]). A
+    /// car agent drives the shortest clear Dubins or Reeds-Shepp path to the holonomic
+    /// best point, cut at the top speed, and stands when it finds none (`car.rs`). A move
+    /// cut short is [`MoveStatus::UnderWay`]. The move carries the heading it ends at.
     ///
-    /// `mates` are the other agents the world lists (any order; they may be the bodies of
-    /// `others` or more): with [`Self::with_formation`], an agent that looks ahead gives
-    /// way to a mate it senses far behind its slot ([`Aim::lagging`]).
-    ///
-    /// With `velocities` (every agent moves at once) the ORCA controller plans in its own
-    /// model ([`OrcaController::plan_move_reciprocal`]); the other controllers ignore them.
-    #[allow(clippy::too_many_arguments)]
-    pub fn plan_turn_ahead(
-        &self,
-        step: usize,
-        centre: &Pose,
-        ahead: &[Pose],
-        me: &Point,
-        heading_rad: Option<f64>,
-        others: &[Body],
-        mates: &[MateView],
-        velocities: Option<&Velocities>,
-    ) -> Move {
+    /// **Velocities** (`turn.velocities`, every agent moving at once): the ORCA controller
+    /// plans in its own model ([`OrcaController::plan_move_reciprocal`]); the other
+    /// controllers ignore them.
+    pub fn plan(&self, turn: &TurnRequest<'_>) -> Move {
+        let TurnRequest {
+            step,
+            ref centre,
+            ahead,
+            ref me,
+            heading_rad,
+            others,
+            mates,
+            velocities,
+        } = *turn;
         if let (Controller::Orca(p), Some(v)) = (&self.controller, velocities) {
             let (sensed, sensed_velocities): (Vec<Body>, Vec<Vector>) = others
                 .iter()
@@ -301,7 +298,7 @@ impl TurnController {
     }
 
     /// Where this agent is heading this turn (`None`: it does not look ahead): see
-    /// [`Self::plan_turn_ahead`].
+    /// [`Self::plan`].
     fn aim(&self, centre: &Pose, ahead: &[Pose], me: &Point, mates: &[MateView]) -> Option<Aim> {
         let (Controller::BestPoint(_), Some(max_step_m)) = (&self.controller, self.spec.max_step_m)
         else {
@@ -330,7 +327,8 @@ impl TurnController {
         })
     }
 
-    /// [`Self::plan_turn`] with the best point taken for `aim` when given.
+    /// A turn of an agent without a heading (see [`Self::plan`]), with the best point
+    /// taken for `aim` when given.
     fn plan_turn_aiming(
         &self,
         step: usize,
@@ -359,28 +357,8 @@ impl TurnController {
         self.look_ahead(step, me, others, &sensed, &reach, mv)
     }
 
-    /// [`Self::plan_turn`] for an agent that may have a heading: a unicycle agent standing
-    /// at `me` facing `heading_rad` plans its path as a holonomic one would (a disk turning
-    /// in place sweeps nothing new, so the path's safety holds for it), then follows it by
-    /// turning in place and driving straight, as far as one step's time allows
-    /// ([`drive_unicycle`]); it ends facing the centre's heading when the scenario asks
-    /// for it (`align_heading`); with the barrier controller it drives and turns at once
-    /// ([`CbfController::plan_unicycle_move`]). A car agent drives the shortest clear Dubins or
-    /// Reeds-Shepp path to the holonomic best point, cut at the top speed, and stands
-    /// when it finds none (`car.rs`). A move cut short is [`MoveStatus::UnderWay`]. The
-    /// move carries the heading it ends at. A holonomic agent ignores `heading_rad`.
-    pub fn plan_turn_with_heading(
-        &self,
-        step: usize,
-        centre: &Pose,
-        me: &Point,
-        heading_rad: f64,
-        others: &[Body],
-    ) -> Move {
-        self.plan_turn_with_heading_aiming(step, centre, None, me, heading_rad, others)
-    }
-
-    /// [`Self::plan_turn_with_heading`] with the best point taken for `aim` when given.
+    /// A turn of an agent facing `heading_rad` (see [`Self::plan`]: a holonomic agent
+    /// ignores it), with the best point taken for `aim` when given.
     fn plan_turn_with_heading_aiming(
         &self,
         step: usize,
@@ -565,8 +543,9 @@ impl TurnController {
         )
     }
 
-    /// [`Self::plan_move`] with the move cut at `max_step_m` (absent: not cut), the best
-    /// point taken for `aim` when given (the best-point controller only).
+    /// The controller's move among `others` (no moving obstacle, no heading) cut at
+    /// `max_step_m` (absent: not cut), the best point taken for `aim` when given (the
+    /// best-point controller only).
     fn plan_move_within(
         &self,
         centre: &Pose,

@@ -18,6 +18,7 @@ use shared::record::{FaultKind, Run};
 use shared::safety::SAFETY_TOLERANCE_M;
 use shared::scenario::{Scenario, moving_obstacle_table};
 use shared::simulate::simulate;
+use shared::turn::TurnRequest;
 
 /// A random moving obstacle: radius, waypoints, speed, and whether its route loops.
 type MoverSpec = (f64, Vec<(f64, f64)>, f64, bool);
@@ -465,8 +466,8 @@ centre_clearance_m = 0.5
             (me.y + slot.1).clamp(0.5, 19.5),
             0.0,
         );
-        let all = controller.plan_turn(step, &centre, &me, &others);
-        let seen = controller.plan_turn(step, &centre, &me, &sensed);
+        let all = controller.plan(&TurnRequest::new(centre, me, &others).at_step(step));
+        let seen = controller.plan(&TurnRequest::new(centre, me, &sensed).at_step(step));
         prop_assert_eq!(all, seen);
     }
 }

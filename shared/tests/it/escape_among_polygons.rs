@@ -6,6 +6,7 @@ use shared::geometry::{Point, Pose};
 use shared::safety::check_move_against_polygons;
 use shared::scenario::Scenario;
 use shared::simulate::agent_controllers;
+use shared::turn::TurnRequest;
 
 /// One agent (radius 0.3 m, at most 0.8 m a step) with a wall 0.15 m to its right and a
 /// moving obstacle coming at it from the left.
@@ -50,7 +51,7 @@ fn an_escape_from_a_moving_obstacle_goes_round_a_wall_not_into_it() {
     let now = mover.disk_at(step);
     assert!((now.centre - Point::new(9.3, 6.0)).norm() < 1e-9, "{now:?}");
     let centre = Pose::new(3.0, 1.0, 0.0);
-    let mv = controllers[0].plan_turn(step, &centre, &me, &[]);
+    let mv = controllers[0].plan(&TurnRequest::new(centre, me, &[]).at_step(step));
     let radius_m = scenario.agents[0].radius_m;
     check_move_against_polygons(&scenario.polygons, radius_m, &mv.waypoints)
         .unwrap_or_else(|v| panic!("the move enters the wall: {v:?}, {mv:?}"));

@@ -19,7 +19,7 @@ use shared::geometry::{
 };
 use shared::groups::turn_groups;
 use shared::safety::check_move;
-use shared::turn::{PLANNING_MARGIN_M, TurnController};
+use shared::turn::{PLANNING_MARGIN_M, TurnController, TurnRequest};
 use shared::vocabulary::{AgentSpec, Body, ControllerSpec, MAX_WAYPOINTS, Move, TurnMode};
 
 /// Slack on lengths and distances, in metres.
@@ -177,11 +177,11 @@ fn controller(w: &World, obstacles: &[Disk], i: usize) -> TurnController {
 
 /// Agent `i`'s move among the world's bodies.
 fn plan(w: &World, i: usize) -> Move {
-    controller(w, &w.obstacles, i).plan_move(
-        &w.centre,
-        &w.bodies[i].position,
+    controller(w, &w.obstacles, i).plan(&TurnRequest::new(
+        w.centre,
+        w.bodies[i].position,
         &others(&w.bodies, i),
-    )
+    ))
 }
 
 /// The safety invariant against every obstacle and every other agent of the snapshot.
