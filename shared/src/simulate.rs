@@ -1,7 +1,7 @@
 //! The reference simulation: the paper's solution flow (Fig. 5) in one process.
 //!
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
-//! plans its move while the others stand still ([`TurnController::plan_move`]), and the
+//! plans its move while the others stand still ([`TurnController::plan`]), and the
 //! move is checked against the safety invariant before it is taken. With parallel turns
 //! the agents of one group ([`turn_groups_ordered`]) plan against the same snapshot and their
 //! moves are taken together. The multi-process

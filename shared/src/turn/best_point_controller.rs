@@ -189,7 +189,7 @@ impl BestPointController {
     /// Plan this agent's move while every `other` body stands still: the reachable free
     /// point nearest to the slot and the shortest path there. With limited sensing, only
     /// the obstacles it senses are planned around (`others` are taken as given: see
-    /// [`TurnController::plan_move`], which picks the sensed ones); the top speed is
+    /// [`TurnController::plan`], which picks the sensed ones); the top speed is
     /// [`TurnController`]'s business too.
     pub fn plan_move(&self, centre: &Pose, me: &Point, others: &[Body]) -> Move {
         self.plan_move_within(centre, me, others, self.spec.max_step_m)

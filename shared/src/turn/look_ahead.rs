@@ -10,7 +10,7 @@ use crate::vocabulary::{Body, Move, MoveStatus};
 use super::{PLANNING_MARGIN_M, TurnController};
 
 /// How many steps ahead along the moving obstacles' routes an agent looks when it weighs
-/// moves ([`TurnController::plan_turn`]).
+/// moves ([`TurnController::plan`]).
 pub const LOOKAHEAD_TURNS: usize = 20;
 
 /// An agent replaces its planned move by one that stays clear longer only when an
