@@ -44,11 +44,18 @@ impl NetworkOptions {
         }
     }
 
-    /// Check the options before anything runs: the endpoint against the security (TLS
-    /// needs `tls/`, plain TCP `--allow-plain-tcp`), that agents the user starts elsewhere
-    /// have an authority they can get files of before the run (`--tls-dir`), and that every
-    /// TLS file the user named is there.
+    /// Check the options for a run of `agents` agents before anything runs: every
+    /// `--remote` agent one of them, the endpoint against the security (TLS needs `tls/`,
+    /// plain TCP `--allow-plain-tcp`), that agents the user starts elsewhere have an
+    /// authority they can get files of before the run (`--tls-dir`), and that every TLS
+    /// file the user named is there.
     pub fn check(&self, agents: usize) -> Result<(), String> {
+        if let Some(a) = self.remote.iter().find(|&&a| a >= agents) {
+            return Err(format!(
+                "--remote {a}: the scenario has {agents} agents (0 to {})",
+                agents.saturating_sub(1)
+            ));
+        }
         if self.makes_own_authority() {
             if !self.remote.is_empty() {
                 return Err(
@@ -82,15 +89,22 @@ impl NetworkOptions {
         self.tls_dir.is_none() && self.listen.protocol == net::LinkProtocol::Tls
     }
 
+    /// Whether the coordinator starts agent `agent` on this host (it is not `--remote`).
+    pub fn starts_here(&self, agent: usize) -> bool {
+        !self.remote.contains(&agent)
+    }
+
+    /// The agents of `agents` the coordinator starts on this host.
+    pub fn agents_started_here(&self, agents: usize) -> impl Iterator<Item = usize> + '_ {
+        (0..agents).filter(|&i| self.starts_here(i))
+    }
+
     /// The roles that take part from this host: the coordinator, the relays, and every
     /// agent the coordinator starts.
     fn local_roles(&self, agents: usize) -> Vec<Role> {
-        let local_agents = (0..agents)
-            .filter(|i| !self.remote.contains(i))
-            .map(Role::Agent);
         [Role::Coordinator, Role::Relay]
             .into_iter()
-            .chain(local_agents)
+            .chain(self.agents_started_here(agents).map(Role::Agent))
             .collect()
     }
 
@@ -128,7 +142,7 @@ impl NetworkOptions {
             "--relay".to_string(),
             self.listen.local_connect().to_string(),
         ];
-        if !self.remote.contains(&agent) {
+        if self.starts_here(agent) {
             args.push("--spawn-agent".to_string());
         }
         if let Some(dir) = &self.tls_dir {

@@ -35,18 +35,6 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
     let scenario = &scenario;
     let centre_path = &centre_path;
     let network = args.network.options().map_err(CliError::Usage)?;
-    if let Some(a) = network.as_ref().and_then(|n| {
-        n.remote
-            .iter()
-            .copied()
-            .find(|&a| a >= scenario.agents.len())
-    }) {
-        return Err(CliError::Usage(format!(
-            "--remote {a}: the scenario has {} agents (0 to {})",
-            scenario.agents.len(),
-            scenario.agents.len() - 1
-        )));
-    }
     if let Some(n) = &network {
         n.check(scenario.agents.len()).map_err(CliError::Usage)?;
     }
@@ -54,11 +42,9 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         .sandbox
         .options(
             scenario.agents.len(),
-            network.as_ref().map(|n| {
-                (0..scenario.agents.len())
-                    .filter(|a| !n.remote.contains(a))
-                    .count()
-            }),
+            network
+                .as_ref()
+                .map(|n| n.agents_started_here(scenario.agents.len()).count()),
         )
         .map_err(CliError::Usage)?;
     let dir = match dir {

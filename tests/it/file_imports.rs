@@ -217,9 +217,21 @@ fn inline_module_depth(chars: &[char]) -> Vec<usize> {
     depth
 }
 
-/// The module paths (from the crate root) that `code`, the code of the file at module
-/// path `module`, names through `crate::`, `super::` and the modules it declares.
-fn references(code: &str, module: &[String]) -> Vec<Vec<String>> {
+/// A path `code` names into its own crate, from the crate root.
+struct NamedPath {
+    /// The names, from the crate root.
+    path: Vec<String>,
+    /// Written through a module the file itself declares (`answer::check`), not through
+    /// `crate::` or `super::`.
+    through_child: bool,
+    /// In a re-export (`pub use ...`).
+    re_exported: bool,
+}
+
+/// Every path that `code`, the code of the file at module path `module`, names into its
+/// crate: through `crate::`, `super::` (an inline module's first) and the modules it
+/// declares; grouped paths one by one.
+fn named_paths(code: &str, module: &[String]) -> Vec<NamedPath> {
     let chars: Vec<char> = code.chars().collect();
     let children = child_modules(code);
     let inline = inline_module_depth(&chars);
@@ -228,102 +240,76 @@ fn references(code: &str, module: &[String]) -> Vec<Vec<String>> {
     while i < chars.len() {
         let boundary = i == 0 || !(is_ident_char(chars[i - 1]) || chars[i - 1] == ':');
         let starts = |word: &str| chars[i..].starts_with(&word.chars().collect::<Vec<_>>());
-        let child = boundary
-            .then(|| {
-                let name: String = chars[i..]
-                    .iter()
-                    .take_while(|c| is_ident_char(**c))
-                    .collect();
-                let after = i + name.chars().count();
-                (children.contains(&name)
-                    && chars.get(after) == Some(&':')
-                    && chars.get(after + 1) == Some(&':')
-                    && !in_re_export(&chars, i))
-                .then_some(name)
-            })
-            .flatten();
-        if child.is_some() {
-            let (paths, end) = use_tree(&chars, i);
-            for p in paths {
-                let mut full = module.to_vec();
-                full.extend(p);
-                out.push(full);
-            }
-            i = end.max(i + 1);
-        } else if boundary && (starts("crate::") || starts("super::")) {
-            let mut base: Vec<String> = Vec::new();
+        let name: String = chars[i..]
+            .iter()
+            .take_while(|c| is_ident_char(**c))
+            .collect();
+        let after = i + name.chars().count();
+        let through_child = children.contains(&name)
+            && chars.get(after) == Some(&':')
+            && chars.get(after + 1) == Some(&':');
+        // Where the path starts (from the crate root) and where its tree begins.
+        let (base, at) = if !boundary {
+            i += 1;
+            continue;
+        } else if through_child {
+            (module.to_vec(), i)
+        } else if starts("crate::") {
+            (Vec::new(), i + "crate::".len())
+        } else if starts("super::") {
+            // Each `super` is one module up (`a/mod.rs` is module `a`, so its `super` is
+            // the crate root), after leaving the inline modules the path is in.
+            let mut base = module.to_vec();
+            let mut inline_levels = inline[i];
             let mut at = i;
-            if starts("crate::") {
-                at += "crate::".len();
-            } else {
-                // Each `super` is one module up (`a/mod.rs` is module `a`, so its
-                // `super` is the crate root).
-                base = module.to_vec();
-                let mut inline_levels = inline[i];
-                while chars[at..].starts_with(&"super::".chars().collect::<Vec<_>>()) {
-                    if inline_levels > 0 {
-                        inline_levels -= 1;
-                    } else {
-                        base.pop();
-                    }
-                    at += "super::".len();
+            while chars[at..].starts_with(&"super::".chars().collect::<Vec<_>>()) {
+                if inline_levels > 0 {
+                    inline_levels -= 1;
+                } else {
+                    base.pop();
                 }
+                at += "super::".len();
             }
-            let (paths, end) = use_tree(&chars, at);
-            for p in paths {
-                let mut full = base.clone();
-                full.extend(p);
-                out.push(full);
-            }
-            i = end.max(i + 1);
+            (base, at)
         } else {
             i += 1;
+            continue;
+        };
+        let re_exported = in_re_export(&chars, i);
+        let (paths, end) = use_tree(&chars, at);
+        for p in paths {
+            let mut path = base.clone();
+            path.extend(p);
+            out.push(NamedPath {
+                path,
+                through_child,
+                re_exported,
+            });
         }
+        i = end.max(i + 1);
     }
     out
+}
+
+/// The module paths (from the crate root) that `code`, the code of the file at module
+/// path `module`, uses: [`named_paths`] but a parent's re-exports of its children.
+fn references(code: &str, module: &[String]) -> Vec<Vec<String>> {
+    named_paths(code, module)
+        .into_iter()
+        .filter(|p| !(p.through_child && p.re_exported))
+        .map(|p| p.path)
+        .collect()
 }
 
 /// What `code`, the file at module path `module`, re-exports from modules of its crate
 /// (`pub use answer::{Answer, check};`): each name, and the path (from the crate root)
 /// of the item it stands for.
 fn re_exports(code: &str, module: &[String]) -> BTreeMap<String, Vec<String>> {
-    let chars: Vec<char> = code.chars().collect();
-    let children = child_modules(code);
-    let mut out = BTreeMap::new();
-    let mut i = 0;
-    while i < chars.len() {
-        let boundary = i == 0 || !is_ident_char(chars[i - 1]);
-        let starts = |word: &str| chars[i..].starts_with(&word.chars().collect::<Vec<_>>());
-        if !(boundary && starts("use ") && in_re_export(&chars, i + "use ".len())) {
-            i += 1;
-            continue;
-        }
-        let (paths, end) = use_tree(&chars, i + "use ".len());
-        for path in paths {
-            let mut full = module.to_vec();
-            let mut names = path.into_iter().peekable();
-            match names.peek().map(String::as_str) {
-                Some("crate") => {
-                    full.clear();
-                    names.next();
-                }
-                Some("super") => {
-                    while names.peek().map(String::as_str) == Some("super") {
-                        full.pop();
-                        names.next();
-                    }
-                }
-                Some(first) if children.contains(first) => {}
-                _ => continue, // another crate's item
-            }
-            full.extend(names);
-            if let Some(name) = full.last() {
-                out.insert(name.clone(), full.clone());
-            }
-        }
-        i = end.max(i + 1);
-    }
-    out
+    named_paths(code, module)
+        .into_iter()
+        .filter(|p| p.re_exported)
+        .filter_map(|p| Some((p.path.last()?.clone(), p.path)))
+        .collect()
 }
 
 /// The file an item path (from the crate root) lives in: the deepest module file on it,

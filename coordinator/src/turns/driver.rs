@@ -117,7 +117,7 @@ pub(super) fn agent_args(
     // An agent this host starts is sandboxed when the run sandboxes, over Zenoh too:
     // behind the sandbox's socket relay, with no key and no link of its own. An agent
     // started elsewhere (`--remote`) has a network relay here.
-    let here = network.is_none_or(|n| !n.remote.contains(&agent));
+    let here = network.is_none_or(|n| n.starts_here(agent));
     match (&options.sandbox, network) {
         (Some(sandbox), _) if here => extra.extend(sandbox.relay_args(agent, run_cgroup)),
         (_, Some(network)) => extra.extend(network.relay_args(agent)),
