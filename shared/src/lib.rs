@@ -27,6 +27,8 @@
 //! - [`sensing`]: which agents an agent senses (limited sensing);
 //! - [`safety`]: the safety invariant checked with plain geometry;
 //! - [`record`]: the record of a run and its figures;
+//! - [`step_loop`]: the step, written once for the reference simulation and the run over
+//!   agent processes;
 //! - [`simulate`]: the in-process reference simulation;
 //! - [`input_file`]: reading a file handed in, with a size bound that holds for devices,
 //!   FIFOs and sparse files;
@@ -56,6 +58,7 @@ pub mod safety;
 pub mod scenario;
 pub mod sensing;
 pub mod simulate;
+pub mod step_loop;
 pub mod survival_grid;
 pub mod tracking;
 pub mod turn;

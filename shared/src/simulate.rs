@@ -3,21 +3,22 @@
 //! The formation centre follows the Hybrid A* path; at every step each agent in turn
 //! plans its move while the others stand still ([`TurnController::plan`]), and the
 //! move is checked against the safety invariant before it is taken. With parallel turns
-//! the agents of one group ([`turn_groups_ordered`]) plan against the same snapshot and their
-//! moves are taken together. The multi-process
-//! run must reproduce this trajectory to the bit.
+//! the agents of one group ([`crate::groups::turn_groups_ordered`]) plan against the same
+//! snapshot and their moves are taken together. The step itself is
+//! [`crate::step_loop::run_steps`], which the multi-process run goes through too, its
+//! moves coming from agent processes instead of the controllers here: the run
+//! reproduces this trajectory to the bit.
+
+use std::convert::Infallible;
 
 use crate::course::Course;
 use crate::geometry::Pose;
-use crate::groups::turn_groups_ordered;
 use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
-use crate::tracking::MAX_HORIZON_STEPS;
+use crate::step_loop::{GroupMoves, GroupTurn, MoveSource, WorldChecksOnly, run_steps};
 use crate::turn::{TurnController, TurnRequest, Velocities};
 use crate::vocabulary::CbfSettingsError;
-use crate::vocabulary::Move;
-use crate::vocabulary::TurnMode;
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {
@@ -120,75 +121,80 @@ pub fn simulate_along_with_deaths(
     centre_path: &[Pose],
     deaths: &[(usize, usize)],
 ) -> Result<Run, SimulateError> {
-    let controllers = agent_controllers(scenario)?;
+    let mut planners = InProcess {
+        controllers: agent_controllers(scenario)?,
+        deaths,
+    };
     let mut course = Course::new(scenario, centre_path);
-    let mut recorder = Recorder::new(scenario, course.pose());
-    let mut step = 0;
-    while let Some(centre) = course.advance(step + 1, recorder.bodies(), recorder.alive()) {
-        step += 1;
-        let centre = &centre;
-        let ahead = course.ahead(MAX_HORIZON_STEPS);
-        recorder.begin_step(step, *centre);
-        let groups = turn_groups_ordered(
-            scenario.turns,
-            scenario.turn_order,
-            centre.heading_rad,
-            &scenario.agents,
-            recorder.bodies(),
-            recorder.alive(),
-        );
-        recorder.note_groups(groups.len());
-        // Every agent moving at once knows how each body moved over the last step.
-        let velocities = (scenario.turns == TurnMode::Simultaneous).then(|| recorder.velocities());
-        for group in groups {
-            for &agent in &group {
-                if deaths.contains(&(agent, step)) {
-                    recorder.note_fault(
-                        step,
-                        agent,
-                        FaultKind::Killed,
-                        "fault injection: killed before its group's turns".to_string(),
-                        None,
-                    );
-                    recorder.freeze(Fault {
-                        agent,
-                        step,
-                        kind: FaultKind::Dead,
-                        detail: "the agent process died during its turn".to_string(),
-                        detection_ms: None,
-                    });
-                }
+    let mut world = Recorder::new(scenario, course.pose());
+    let Ok(_) = run_steps(
+        &mut course,
+        &mut world,
+        0,
+        &mut planners,
+        &mut WorldChecksOnly,
+    );
+    Ok(world.finish(!course.gave_up()))
+}
+
+/// The moves of the reference simulation: every agent's controller in this process, and
+/// the deaths injected (`(agent, step)`).
+struct InProcess<'d> {
+    /// One controller per agent, in agent order.
+    controllers: Vec<TurnController>,
+    /// The agents that die, and when: just before their group's turns.
+    deaths: &'d [(usize, usize)],
+}
+
+impl MoveSource for InProcess<'_> {
+    type Error = Infallible;
+
+    fn take_group(
+        &mut self,
+        turn: &GroupTurn<'_>,
+        world: &mut Recorder<'_>,
+    ) -> Result<GroupMoves, Infallible> {
+        let step = turn.step;
+        for &agent in turn.agents() {
+            if self.deaths.contains(&(agent, step)) {
+                world.note_fault(
+                    step,
+                    agent,
+                    FaultKind::Killed,
+                    "fault injection: killed before its group's turns".to_string(),
+                    None,
+                );
+                world.freeze(Fault {
+                    agent,
+                    step,
+                    kind: FaultKind::Dead,
+                    detail: "the agent process died during its turn".to_string(),
+                    detection_ms: None,
+                });
             }
-            // Every agent of the group plans against the same snapshot.
-            let moves: Vec<(usize, Move)> = group
-                .iter()
-                .filter(|&&agent| recorder.alive()[agent])
-                .map(|&agent| {
-                    let me = recorder.bodies()[agent].position;
-                    let others = recorder.others(agent);
-                    let mates = controllers[agent].mate_views(agent, recorder.views());
-                    let heading_rad = recorder.headings()[agent];
-                    let velocities = velocities
-                        .as_ref()
-                        .map(|all| Velocities::of_agent(all, agent));
-                    let mv = controllers[agent].plan(&TurnRequest {
-                        step,
-                        centre: *centre,
-                        ahead,
-                        me,
-                        heading_rad,
-                        others: &others,
-                        mates: &mates,
-                        velocities: velocities.as_ref(),
-                    });
-                    (agent, mv)
-                })
-                .collect();
-            // A rejected move is recorded by the recorder; the agent simply stays.
-            let _ = recorder.submit_group(step, moves);
         }
-        recorder.end_step(step);
+        // Every agent of the group plans against the same snapshot.
+        let moves = turn
+            .agents()
+            .iter()
+            .filter(|&&agent| world.alive()[agent])
+            .map(|&agent| {
+                let others = world.others(agent);
+                let mates = self.controllers[agent].mate_views(agent, world.views());
+                let velocities = turn.velocities.map(|all| Velocities::of_agent(all, agent));
+                let mv = self.controllers[agent].plan(&TurnRequest {
+                    step,
+                    centre: *turn.centre,
+                    ahead: turn.ahead,
+                    me: world.bodies()[agent].position,
+                    heading_rad: world.headings()[agent],
+                    others: &others,
+                    mates: &mates,
+                    velocities: velocities.as_ref(),
+                });
+                (agent, mv)
+            })
+            .collect();
+        Ok(GroupMoves::Taken(moves))
     }
-    recorder.note_course(&course);
-    Ok(recorder.finish(!course.gave_up()))
 }

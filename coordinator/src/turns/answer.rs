@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use shared::record::FaultKind;
+use shared::record::{FaultKind, Recorder};
 use wire::{MalformedState, StateKind, StateMsg};
 
 use super::driver::Driver;
@@ -80,19 +80,22 @@ fn judge_answer(incoming: Incoming, grant: Grant, step: usize, pid: Option<u32>)
     }
 }
 
-impl Driver<'_, '_> {
+impl Driver<'_> {
     /// The next sample on `agent`'s channel published by the agent's own process (or one
     /// that could not be received at all); samples of any other process are recorded
     /// as `impersonation` on the way and dropped.
     pub(super) fn receive_own(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agent: usize,
     ) -> anyhow::Result<Option<Incoming>> {
         let pid = self.procs.pid(agent);
         while let Some(incoming) = self.ipc.receive(agent) {
             match incoming.publisher_pid {
-                Some(from) if Some(from) != pid => self.on_impersonation(step, agent, from)?,
+                Some(from) if Some(from) != pid => {
+                    self.on_impersonation(world, step, agent, from)?
+                }
                 _ => return Ok(Some(incoming)),
             }
         }
@@ -101,9 +104,14 @@ impl Driver<'_, '_> {
 
     /// Take in whatever `agent`'s channel holds between turns: none of it answers a
     /// turn. Recorded, never used.
-    pub(super) fn drain(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
+    pub(super) fn drain(
+        &mut self,
+        world: &mut Recorder<'_>,
+        step: usize,
+        agent: usize,
+    ) -> anyhow::Result<()> {
         let (mut extra, mut malformed) = (0usize, Vec::new());
-        while let Some(incoming) = self.receive_own(step, agent)? {
+        while let Some(incoming) = self.receive_own(world, step, agent)? {
             match incoming.msg {
                 Ok(msg) if msg.kind == StateKind::Echo => {}
                 Ok(_) => extra += 1,
@@ -117,7 +125,7 @@ impl Driver<'_, '_> {
             }
         }
         if extra > 0 {
-            self.recorder.note_fault(
+            world.note_fault(
                 step,
                 agent,
                 FaultKind::Unsolicited,
@@ -128,7 +136,7 @@ impl Driver<'_, '_> {
             );
         }
         if let Some(first) = malformed.first() {
-            self.recorder.note_fault(
+            world.note_fault(
                 step,
                 agent,
                 FaultKind::Malformed,
@@ -145,7 +153,12 @@ impl Driver<'_, '_> {
     /// Wait for the answer to `turn`, checking the agent's process every slice. A turn
     /// not rung (the agent was polling its world) is rung once the spin budget is spent,
     /// in case the agent stopped polling before the world came.
-    pub(super) fn wait_answer(&mut self, step: usize, turn: &Turn) -> anyhow::Result<Answer> {
+    pub(super) fn wait_answer(
+        &mut self,
+        world: &mut Recorder<'_>,
+        step: usize,
+        turn: &Turn,
+    ) -> anyhow::Result<Answer> {
         let (agent, grant, granted, mut rung) =
             (turn.agent, turn.grant, turn.granted_at, turn.rung);
         let deadline = granted + self.options.turn_deadline;
@@ -153,7 +166,7 @@ impl Driver<'_, '_> {
         let mut unsolicited = 0usize;
         let answer = loop {
             let mut found = None;
-            while let Some(incoming) = self.receive_own(step, agent)? {
+            while let Some(incoming) = self.receive_own(world, step, agent)? {
                 match judge_answer(incoming, grant, step, pid) {
                     Judged::Answer(a) => {
                         found = Some(a);
@@ -194,7 +207,7 @@ impl Driver<'_, '_> {
                 .wait_done(agent, (now + LIVENESS_SLICE).min(deadline));
         };
         if unsolicited > 0 {
-            self.recorder.note_fault(
+            world.note_fault(
                 step,
                 agent,
                 FaultKind::Unsolicited,

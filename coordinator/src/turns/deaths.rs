@@ -9,7 +9,7 @@
 
 use std::time::Duration;
 
-use shared::record::FaultKind;
+use shared::record::{FaultKind, Recorder};
 
 use super::driver::Driver;
 
@@ -17,13 +17,18 @@ use super::driver::Driver;
 /// death is then noticed a little later: during its turn, or at the next step).
 const DEATH_TIMEOUT: Duration = Duration::from_secs(5);
 
-impl Driver<'_, '_> {
+impl Driver<'_> {
     /// Kill those live agents of `group` that are to die at `step`, and wait until each
     /// process is gone (not reaped: waiting for its turn's answer finds it dead, as for
     /// any agent that dies during its turn). Recorded as a `killed` fault.
-    pub(super) fn kill_before_turns(&mut self, step: usize, group: &[usize]) {
+    pub(super) fn kill_before_turns(
+        &mut self,
+        world: &mut Recorder<'_>,
+        step: usize,
+        group: &[usize],
+    ) {
         for &agent in group {
-            if !self.options.deaths.contains(&(agent, step)) || !self.recorder.alive()[agent] {
+            if !self.options.deaths.contains(&(agent, step)) || !world.alive()[agent] {
                 continue;
             }
             let Some(pid) = self.procs.signal_kill(agent) else {
@@ -34,7 +39,7 @@ impl Driver<'_, '_> {
                     "step {step}: agent {agent} (process {pid}) still there {DEATH_TIMEOUT:?} after SIGKILL"
                 );
             }
-            self.recorder.note_fault(
+            world.note_fault(
                 step,
                 agent,
                 FaultKind::Killed,

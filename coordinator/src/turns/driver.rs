@@ -1,20 +1,22 @@
-//! The step loop: every live agent takes its turn, one group at a time (one agent a group
-//! in sequential mode); the answers are judged and checked before the recorder takes
-//! them. [`Driver`] is one run while it goes; its methods are spread over `turns/` by
-//! concern: the step loop here, a group's turns in `turn.rs`, waiting for an answer in
-//! `answer.rs`, handshakes in `startup.rs`, faults in `faults.rs` and `deaths.rs`.
+//! A run over agent processes while it goes ([`Driver`]): it starts the agents, then
+//! hands the steps to the step loop (`shared::step_loop::run_steps`, the reference
+//! simulation's too) as its source of moves, the monitor as an extra judge. Its methods
+//! are spread over `turns/` by concern: the run and its steps' edges here, a group's
+//! turns in `turn.rs`, waiting for an answer in `answer.rs`, handshakes in `startup.rs`,
+//! faults in `faults.rs` and `deaths.rs`, the monitor's judgement in `judge.rs`.
 
+use std::ops::ControlFlow;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::course::Course;
-use shared::geometry::{Point, Pose};
-use shared::groups::turn_groups_ordered;
+use shared::geometry::Pose;
 use shared::record::{Recorder, replay_course};
 use shared::scenario::Scenario;
-use shared::tracking::MAX_HORIZON_STEPS;
+use shared::step_loop::{GroupMoves, GroupTurn, MoveSource, run_steps};
 
 use super::hand_over::HandOver;
+use super::judge::MonitorJudge;
 use super::lateness::TurnHistory;
 use super::options::RunOptions;
 use super::outcome::Progress;
@@ -49,12 +51,11 @@ pub type BetweenStepsFn<'a> = dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()> 
 
 /// One run while it goes: the scenario and options, the ports and processes, the record
 /// and what the step loop has measured.
-pub(super) struct Driver<'a, 's> {
+pub(super) struct Driver<'a> {
     pub(super) scenario: &'a Scenario,
     pub(super) options: &'a RunOptions,
     pub(super) ipc: &'a mut CoordinatorIpc,
     pub(super) procs: &'a mut AgentProcesses,
-    pub(super) recorder: &'a mut Recorder<'s>,
     pub(super) progress: &'a mut Progress,
     /// How late every agent's last turns were.
     pub(super) history: TurnHistory,
@@ -75,9 +76,14 @@ pub(super) struct Driver<'a, 's> {
     pub(super) mission_digest: wire::MissionDigest,
     /// The agents already started, behind their gate (none over a network).
     pub(super) early: Option<EarlyStart>,
-    /// Called after every step.
     /// What the caller does after every step (benchmarks), if anything.
     pub(super) between_steps: Option<&'a mut BetweenStepsFn<'a>>,
+    /// How long the caller's hook took, seconds: not the step loop's time.
+    pub(super) between_s: f64,
+    /// The machine's CPU ticks (idle, all) during the caller's hook.
+    pub(super) between_ticks: (u64, u64),
+    /// The progress bar of the steps (hidden unless asked for).
+    pub(super) bar: ProgressBar,
 }
 
 /// The agents started before the run's channels existed, waiting behind a gate
@@ -126,7 +132,7 @@ pub(super) fn agent_args(
     extra
 }
 
-impl Driver<'_, '_> {
+impl<'a> Driver<'a> {
     /// Start `agent`'s process on its open channel; a replacement never misbehaves.
     pub(super) fn spawn(&mut self, agent: usize, replacement: bool) -> anyhow::Result<()> {
         let generation = self.ipc.generation(agent).unwrap_or(0);
@@ -144,12 +150,16 @@ impl Driver<'_, '_> {
     }
 
     /// Log the step just recorded, with what happened since the last one.
-    fn log_step(&mut self, course: Option<&Course<'_>>) -> anyhow::Result<()> {
+    fn log_step(
+        &mut self,
+        world: &Recorder<'_>,
+        course: Option<&Course<'_>>,
+    ) -> anyhow::Result<()> {
         let course = course.map(crate::run_log::CourseSoFar::of);
         let Some(log) = self.log.as_deref_mut() else {
             return Ok(());
         };
-        let Some(step) = self.recorder.steps().last() else {
+        let Some(step) = world.steps().last() else {
             return Ok(());
         };
         let turns = self.progress.turn_samples[self.turns_logged..]
@@ -161,7 +171,7 @@ impl Driver<'_, '_> {
                 compute_us: t.compute_us,
             })
             .collect();
-        log.log_step(step, self.recorder.faults(), course, turns)?;
+        log.log_step(step, world.faults(), course, turns)?;
         self.turns_logged = self.progress.turn_samples.len();
         Ok(())
     }
@@ -173,176 +183,44 @@ impl Driver<'_, '_> {
             .collect()
     }
 
-    /// Start every agent, then run every step of `centre_path`; a resumed run (its
-    /// recorder rebuilt from the log) starts the agents alive at its last step and goes
+    /// Start every agent, then run every step of `centre_path` in `world`; a resumed run
+    /// (its world rebuilt from the log) starts the agents alive at its last step and goes
     /// on from there, its course replayed through the steps logged.
-    pub(super) fn drive(mut self, centre_path: &[Pose], started: Instant) -> anyhow::Result<()> {
-        let n = self.scenario.agents.len();
-        let resumed_at = self
-            .options
-            .resume
-            .as_ref()
-            .and_then(|_| self.recorder.steps().last())
-            .map(|s| s.step);
-        let (mut course, mut step) = match resumed_at {
-            Some(last) => {
-                let course = replay_course(self.scenario, centre_path, self.recorder.steps())
-                    .map_err(|at| {
-                        anyhow::anyhow!("the log does not replay: step {at}'s centre differs")
-                    })?;
-                // The turns of the steps before the kill count in the run's timing.
-                if let Some(logged) = self.options.resume.as_deref() {
-                    let before = logged.turns.iter().filter(|t| t.step <= last);
-                    for t in before {
-                        self.progress.latency_us.push(t.latency_us);
-                        self.progress.compute_us.push(t.compute_us);
-                    }
-                }
-                self.progress.steps_before = last;
-                (course, last)
-            }
-            None => {
-                self.log_step(None)?;
-                (Course::new(self.scenario, centre_path), 0)
-            }
-        };
-        let to_start: Vec<usize> = (0..n).filter(|&i| self.recorder.alive()[i]).collect();
-        match self.early.take() {
-            Some(mut early) => {
-                // Started already, waiting for their channels, which exist now.
-                early.gate.open();
-                for (i, why) in early.failed {
-                    self.on_failed_start(step, i, &why)?;
-                }
-                self.progress.startup_phases.spawn = early.spawn_s;
-            }
-            None => {
-                let spawning = Instant::now();
-                for &i in &to_start {
-                    // A spawn that fails (the machine out of processes, say) fails that
-                    // agent alone: it is frozen where it starts, or replaced with
-                    // `--respawn`.
-                    if let Err(e) = self.spawn(i, false) {
-                        let why = format!("its process could not be started: {e:#}");
-                        self.on_failed_start(step, i, &why)?;
-                    }
-                }
-                self.progress.startup_phases.spawn = spawning.elapsed().as_secs_f64();
-            }
-        }
-        self.start_agents(
-            step,
-            &to_start,
-            self.options.startup_timeout_for(to_start.len()),
-            false,
-        )?;
-        self.progress.startup_s = started.elapsed().as_secs_f64();
-        self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
-            let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
-            IdleCpu::measure(&pids, hold)
-        });
-        self.progress.turn_samples.reserve(n * centre_path.len());
-
-        let mut monitor =
-            SafetyMonitor::new(self.scenario.field, &self.scenario.static_obstacles())
-                .with_polygons(&self.scenario.polygons);
-        let bar = progress_bar(
+    pub(super) fn drive(
+        mut self,
+        world: &mut Recorder<'_>,
+        centre_path: &[Pose],
+        started: Instant,
+    ) -> anyhow::Result<()> {
+        let (mut course, step) = self.course_so_far(world, centre_path)?;
+        self.start_all(world, step, started)?;
+        self.progress
+            .turn_samples
+            .reserve(self.scenario.agents.len() * centre_path.len());
+        let monitor = SafetyMonitor::new(self.scenario.field, &self.scenario.static_obstacles())
+            .with_polygons(&self.scenario.polygons);
+        self.bar = progress_bar(
             centre_path.len().saturating_sub(1),
             &self.scenario.name,
             self.options.progress,
         );
-        bar.set_position(step as u64);
+        self.bar.set_position(step as u64);
 
         let stepping = Instant::now();
+        let ticks_at_start = procfs::machine_cpu_ticks();
+        run_steps(
+            &mut course,
+            world,
+            step,
+            &mut self,
+            &mut MonitorJudge { monitor },
+        )?;
+        self.bar.finish_and_clear();
+        self.progress.gave_up = course.gave_up();
         // What the caller does between the steps (a benchmark's references) is not the
         // step loop's time.
-        let mut between_s = 0.0;
-        let mut between_ticks = (0, 0);
-        let ticks_at_start = procfs::machine_cpu_ticks();
-        'steps: while let Some(centre) =
-            course.advance(step + 1, self.recorder.bodies(), self.recorder.alive())
-        {
-            step += 1;
-            let centre = &centre;
-            let ahead = course.ahead(MAX_HORIZON_STEPS).to_vec();
-            self.begin_step(&mut monitor, step, centre);
-            if bar.position() + 1 >= bar.length().unwrap_or(0) {
-                // The course waited or was replanned: the path ahead is longer.
-                bar.inc_length(1);
-            }
-            // Agents that died while waiting for their turn are noticed now.
-            let checked = Instant::now();
-            // One wait call tells whether any child has exited (or an agent has no
-            // process any more); only then is each agent looked at (one call each).
-            let any_exited = self.procs.any_child_exited()
-                || (0..n).any(|a| self.recorder.alive()[a] && self.procs.pid(a).is_none());
-            for agent in (0..n).filter(|_| any_exited) {
-                if self.recorder.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
-                    // How it ended tells a crash (a signal) from an error (a code).
-                    let how = match self.procs.exit_status(agent) {
-                        Some(status) => format!("exited between turns ({status})"),
-                        None => "exited between turns".to_string(),
-                    };
-                    self.on_death(step, agent, checked.elapsed(), &how)?;
-                }
-            }
-            let groups = turn_groups_ordered(
-                self.scenario.turns,
-                self.scenario.turn_order,
-                centre.heading_rad,
-                &self.scenario.agents,
-                self.recorder.bodies(),
-                self.recorder.alive(),
-            );
-            self.recorder.note_groups(groups.len());
-            for (k, group) in groups.iter().enumerate() {
-                let next = self.hand_over.next_after(
-                    &groups,
-                    k,
-                    self.scenario.turns,
-                    self.recorder.alive(),
-                );
-                if self.take_group(&monitor, step, group, &next, centre, &ahead)? {
-                    break 'steps;
-                }
-            }
-            self.recorder.end_step(step);
-            self.log_step(Some(&course))?;
-            self.hand_over.end_step(self.ipc);
-            bar.inc(1);
-            // For whoever follows the run from outside (tests time their kills by it);
-            // with a log, its thread tells each step once it is in the file.
-            if self.log.is_none() {
-                tell_step_done(step);
-            }
-            let pids = self.between_steps.is_some().then(|| self.pids());
-            if let (Some(between_steps), Some(pids)) = (self.between_steps.as_mut(), pids) {
-                let ticks_before = procfs::machine_cpu_ticks();
-                let between = Instant::now();
-                between_steps(BetweenSteps {
-                    step,
-                    prefix: self.ipc.prefix(),
-                    ipc: self.ipc,
-                    alive: self.recorder.alive(),
-                    groups: &groups,
-                    pids: &pids,
-                })?;
-                let ticks_after = procfs::machine_cpu_ticks();
-                between_s += between.elapsed().as_secs_f64();
-                if let Some((from, to)) = ticks_before.zip(ticks_after) {
-                    between_ticks.0 += to.0.saturating_sub(from.0);
-                    between_ticks.1 += to.1.saturating_sub(from.1);
-                }
-            }
-            if self.ipc.termination_requested() {
-                self.progress.interrupted = true;
-                break;
-            }
-        }
-        bar.finish_and_clear();
-        self.recorder.note_course(&course);
-        self.progress.gave_up = course.gave_up();
-        self.progress.steps_s = stepping.elapsed().as_secs_f64() - between_s;
+        self.progress.steps_s = stepping.elapsed().as_secs_f64() - self.between_s;
+        let between_ticks = self.between_ticks;
         self.progress.loop_idle_share = ticks_at_start
             .map(|(idle, total)| (idle + between_ticks.0, total + between_ticks.1))
             .zip(procfs::machine_cpu_ticks())
@@ -356,37 +234,173 @@ impl Driver<'_, '_> {
         Ok(())
     }
 
-    /// Open `step`: the recorder and the monitor each move the moving obstacles and check
-    /// their motion against the agents standing still; a strike the monitor sees is
-    /// recorded as a fault of the agent struck (the recorder counts its own).
-    fn begin_step(&mut self, monitor: &mut SafetyMonitor, step: usize, centre: &Pose) {
-        self.recorder.begin_step(step, *centre);
-        if self.scenario.moving.is_empty() {
-            return;
+    /// The centre's course and the last step taken: a new course at step 0 (logged), or
+    /// a resumed run's course replayed through the steps of its log.
+    fn course_so_far(
+        &mut self,
+        world: &Recorder<'_>,
+        centre_path: &[Pose],
+    ) -> anyhow::Result<(Course<'a>, usize)> {
+        let resumed_at = self
+            .options
+            .resume
+            .as_ref()
+            .and_then(|_| world.steps().last())
+            .map(|s| s.step);
+        let Some(last) = resumed_at else {
+            self.log_step(world, None)?;
+            return Ok((Course::new(self.scenario, centre_path), 0));
+        };
+        let course = replay_course(self.scenario, centre_path, world.steps())
+            .map_err(|at| anyhow::anyhow!("the log does not replay: step {at}'s centre differs"))?;
+        // The turns of the steps before the kill count in the run's timing.
+        if let Some(logged) = self.options.resume.as_deref() {
+            for t in logged.turns.iter().filter(|t| t.step <= last) {
+                self.progress.latency_us.push(t.latency_us);
+                self.progress.compute_us.push(t.compute_us);
+            }
         }
-        let sweeps: Vec<(Vec<Point>, f64)> = self
-            .scenario
-            .moving
-            .iter()
-            .map(|m| (m.sweep(step), m.radius_m))
-            .collect();
-        // The recorder records each strike (as the reference does); the monitor's own
-        // check, independent of it, must agree.
-        let mut seen =
-            monitor.move_obstacles(&sweeps, self.recorder.bodies(), self.recorder.alive());
-        let mut recorded: Vec<(usize, usize)> = self
-            .recorder
-            .struck_now()
-            .iter()
-            .map(|&(m, a, _)| (m, a))
-            .collect();
-        seen.sort_unstable();
-        recorded.sort_unstable();
-        if seen != recorded {
-            tracing::warn!(
-                "step {step}: the monitor sees moving obstacles strike {seen:?}, the recorder {recorded:?}"
-            );
+        self.progress.steps_before = last;
+        Ok((course, last))
+    }
+
+    /// Start the process of every agent alive in `world` at `step` (or open the gate of
+    /// those started early) and wait for their handshakes; `started` is when the run began.
+    fn start_all(
+        &mut self,
+        world: &mut Recorder<'_>,
+        step: usize,
+        started: Instant,
+    ) -> anyhow::Result<()> {
+        let n = self.scenario.agents.len();
+        let to_start: Vec<usize> = (0..n).filter(|&i| world.alive()[i]).collect();
+        match self.early.take() {
+            Some(mut early) => {
+                // Started already, waiting for their channels, which exist now.
+                early.gate.open();
+                for (i, why) in early.failed {
+                    self.on_failed_start(world, step, i, &why)?;
+                }
+                self.progress.startup_phases.spawn = early.spawn_s;
+            }
+            None => {
+                let spawning = Instant::now();
+                for &i in &to_start {
+                    // A spawn that fails (the machine out of processes, say) fails that
+                    // agent alone: it is frozen where it starts, or replaced with
+                    // `--respawn`.
+                    if let Err(e) = self.spawn(i, false) {
+                        let why = format!("its process could not be started: {e:#}");
+                        self.on_failed_start(world, step, i, &why)?;
+                    }
+                }
+                self.progress.startup_phases.spawn = spawning.elapsed().as_secs_f64();
+            }
         }
+        let timeout = self.options.startup_timeout_for(to_start.len());
+        self.start_agents(world, step, &to_start, timeout, false)?;
+        self.progress.startup_s = started.elapsed().as_secs_f64();
+        self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
+            let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
+            IdleCpu::measure(&pids, hold)
+        });
+        Ok(())
+    }
+
+    /// Notice the agents that died while waiting for their turn (at `step`, before its
+    /// groups are formed).
+    fn notice_deaths(&mut self, world: &mut Recorder<'_>, step: usize) -> anyhow::Result<()> {
+        let n = self.scenario.agents.len();
+        let checked = Instant::now();
+        // One wait call tells whether any child has exited (or an agent has no process
+        // any more); only then is each agent looked at (one call each).
+        let any_exited = self.procs.any_child_exited()
+            || (0..n).any(|a| world.alive()[a] && self.procs.pid(a).is_none());
+        for agent in (0..n).filter(|_| any_exited) {
+            if world.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
+                // How it ended tells a crash (a signal) from an error (a code).
+                let how = match self.procs.exit_status(agent) {
+                    Some(status) => format!("exited between turns ({status})"),
+                    None => "exited between turns".to_string(),
+                };
+                self.on_death(world, step, agent, checked.elapsed(), &how)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// After `step` (recorded in `world`, its turns taken in `groups`): log it, tell it
+    /// done, call the caller's hook; `Break` if the run was asked to stop.
+    fn after_step(
+        &mut self,
+        world: &Recorder<'_>,
+        step: usize,
+        groups: &[Vec<usize>],
+        course: &Course<'_>,
+    ) -> anyhow::Result<ControlFlow<()>> {
+        self.log_step(world, Some(course))?;
+        self.hand_over.end_step(self.ipc);
+        self.bar.inc(1);
+        // For whoever follows the run from outside (tests time their kills by it); with
+        // a log, its thread tells each step once it is in the file.
+        if self.log.is_none() {
+            tell_step_done(step);
+        }
+        let pids = self.between_steps.is_some().then(|| self.pids());
+        if let (Some(between_steps), Some(pids)) = (self.between_steps.as_mut(), pids) {
+            let ticks_before = procfs::machine_cpu_ticks();
+            let between = Instant::now();
+            between_steps(BetweenSteps {
+                step,
+                prefix: self.ipc.prefix(),
+                ipc: self.ipc,
+                alive: world.alive(),
+                groups,
+                pids: &pids,
+            })?;
+            let ticks_after = procfs::machine_cpu_ticks();
+            self.between_s += between.elapsed().as_secs_f64();
+            if let Some((from, to)) = ticks_before.zip(ticks_after) {
+                self.between_ticks.0 += to.0.saturating_sub(from.0);
+                self.between_ticks.1 += to.1.saturating_sub(from.1);
+            }
+        }
+        if self.ipc.termination_requested() {
+            self.progress.interrupted = true;
+            return Ok(ControlFlow::Break(()));
+        }
+        Ok(ControlFlow::Continue(()))
+    }
+}
+
+/// The agent processes as the step loop's source of moves.
+impl MoveSource for Driver<'_> {
+    type Error = anyhow::Error;
+
+    fn open_step(&mut self, step: usize, world: &mut Recorder<'_>) -> anyhow::Result<()> {
+        if self.bar.position() + 1 >= self.bar.length().unwrap_or(0) {
+            // The course waited or was replanned: the path ahead is longer.
+            self.bar.inc_length(1);
+        }
+        self.notice_deaths(world, step)
+    }
+
+    fn take_group(
+        &mut self,
+        turn: &GroupTurn<'_>,
+        world: &mut Recorder<'_>,
+    ) -> anyhow::Result<GroupMoves> {
+        Driver::take_group(self, world, turn)
+    }
+
+    fn close_step(
+        &mut self,
+        step: usize,
+        groups: &[Vec<usize>],
+        course: &Course<'_>,
+        world: &Recorder<'_>,
+    ) -> anyhow::Result<ControlFlow<()>> {
+        self.after_step(world, step, groups, course)
     }
 }
 

@@ -3,29 +3,31 @@
 use std::time::Duration;
 
 use shared::geometry::Point;
-use shared::record::FaultKind;
+use shared::record::{FaultKind, Recorder};
 use shared::vocabulary::Kinematics;
 
 use super::driver::Driver;
 use super::lateness::{Lateness, Verdict};
 
-impl Driver<'_, '_> {
+impl Driver<'_> {
     /// A sample on `channel_agent`'s channel was published by process `publisher_pid`,
     /// not by the agent's own: the culprit, if it is one of the run's agents, is killed
     /// and frozen.
     pub(super) fn on_impersonation(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         channel_agent: usize,
         publisher_pid: u32,
     ) -> anyhow::Result<()> {
-        self.on_intruder(step, channel_agent, publisher_pid, "published on")
+        self.on_intruder(world, step, channel_agent, publisher_pid, "published on")
     }
 
     /// Process `pid` used `channel_agent`'s channel (`how`): recorded against the culprit
     /// agent, which is killed and frozen, or against the channel if it is no agent.
     pub(super) fn on_intruder(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         channel_agent: usize,
         pid: u32,
@@ -36,19 +38,25 @@ impl Driver<'_, '_> {
             "step {step}: process {pid} (agent {culprit:?}) {how} agent {channel_agent}'s channel"
         );
         match culprit {
-            Some(c) if self.recorder.alive()[c] && self.procs.pid(c) == Some(pid) => {
-                self.recorder.note_fault(
+            Some(c) if world.alive()[c] && self.procs.pid(c) == Some(pid) => {
+                world.note_fault(
                     step,
                     c,
                     FaultKind::Impersonation,
                     format!("process {pid} {how} agent {channel_agent}'s channel; killed"),
                     None,
                 );
-                self.on_death(step, c, Duration::ZERO, "was killed for impersonation")?;
+                self.on_death(
+                    world,
+                    step,
+                    c,
+                    Duration::ZERO,
+                    "was killed for impersonation",
+                )?;
             }
             // An earlier process of an agent, already killed and recorded.
             Some(_) => {}
-            None => self.recorder.note_fault(
+            None => world.note_fault(
                 step,
                 channel_agent,
                 FaultKind::Impersonation,
@@ -62,6 +70,7 @@ impl Driver<'_, '_> {
     /// Look for processes attached to the channels of `agents` that are not theirs.
     pub(super) fn scan_for_intruders(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agents: &[usize],
     ) -> anyhow::Result<()> {
@@ -70,13 +79,19 @@ impl Driver<'_, '_> {
                 continue;
             };
             for intruder in self.ipc.intruders(agent, pid) {
-                self.on_intruder(step, agent, intruder, "opened the services of")?;
+                self.on_intruder(world, step, agent, intruder, "opened the services of")?;
             }
         }
         // The shared done service: one notifier per agent process; more is hoarding.
         for pid in self.ipc.done_hoarders() {
             if let Some(culprit) = self.procs.agent_of_pid(pid) {
-                self.on_intruder(step, culprit, pid, "hoarded the done service's ports, as")?;
+                self.on_intruder(
+                    world,
+                    step,
+                    culprit,
+                    pid,
+                    "hoarded the done service's ports, as",
+                )?;
             }
         }
         Ok(())
@@ -85,6 +100,7 @@ impl Driver<'_, '_> {
     /// Freeze a dead agent, clean its shared-memory resources, and respawn it if asked.
     pub(super) fn on_death(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         after: Duration,
@@ -94,15 +110,14 @@ impl Driver<'_, '_> {
         tracing::warn!(
             "step {step}: agent {agent} {how}; frozen as an obstacle ({ms:.1} ms to notice)"
         );
-        self.recorder
-            .freeze_dead(step, agent, format!("the agent process {how}"), ms);
+        world.freeze_dead(step, agent, format!("the agent process {how}"), ms);
         self.procs.kill_now(agent);
         self.ipc.close_channel(agent);
         let cleaned = self.ipc.cleanup_dead_nodes();
         tracing::info!("cleaned the resources of {cleaned} dead node(s)");
         self.history.forget(agent);
         if self.options.respawn {
-            self.respawn(step, agent)?;
+            self.respawn(world, step, agent)?;
         }
         Ok(())
     }
@@ -111,12 +126,13 @@ impl Driver<'_, '_> {
     /// last turns it is declared hung, killed and frozen.
     pub(super) fn on_missed(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         slot: Point,
     ) -> anyhow::Result<()> {
         let verdict = self.history.record(agent, Lateness::Missed);
-        self.recorder.refuse(
+        world.refuse(
             step,
             agent,
             slot,
@@ -131,14 +147,14 @@ impl Driver<'_, '_> {
             tracing::warn!(
                 "step {step}: agent {agent} missed {missed} of its last {window} turns: killing it"
             );
-            self.recorder.note_fault(
+            world.note_fault(
                 step,
                 agent,
                 FaultKind::Hung,
                 format!("missed {missed} of its last {window} turns; killed"),
                 None,
             );
-            self.on_death(step, agent, Duration::ZERO, "was killed as hung")?;
+            self.on_death(world, step, agent, Duration::ZERO, "was killed as hung")?;
         }
         Ok(())
     }
@@ -148,6 +164,7 @@ impl Driver<'_, '_> {
     /// killed and frozen; true then.
     pub(super) fn on_late_answer(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         slot: Point,
@@ -169,7 +186,7 @@ impl Driver<'_, '_> {
         tracing::warn!(
             "step {step}: agent {agent} answered {late} of its last {window} turns later than {bound:?}: killing it"
         );
-        self.recorder.refuse(
+        world.refuse(
             step,
             agent,
             slot,
@@ -178,7 +195,7 @@ impl Driver<'_, '_> {
                 "answered {late} of its last {window} turns later than {bound:?} (this one after {latency:?}); killed"
             ),
         );
-        self.on_death(step, agent, Duration::ZERO, "was killed as slow")?;
+        self.on_death(world, step, agent, Duration::ZERO, "was killed as slow")?;
         Ok(true)
     }
 }

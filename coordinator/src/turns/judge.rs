@@ -1,192 +1,164 @@
-//! Judging a move's safety: each move alone with the monitor (parry), then a group's
-//! moves against each other, then the recorder's own checks (plain geometry).
+//! Judging a move's safety with the independent monitor (parry): each move alone, then a
+//! group's moves against each other; the world's own checks (plain geometry) come after,
+//! in the step loop (`shared::step_loop`).
 
-use shared::geometry::{DiskGrid, Point};
+use shared::geometry::Point;
 use shared::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
 use shared::record::{FaultKind, Recorder};
+use shared::step_loop::Judge;
 use shared::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
-use wire::StateMsg;
 
 use crate::monitor::{self, MoveUnderCheck, Refusal, SafetyMonitor, Standing};
 
-/// What the moves of one group are judged against, besides the bodies where they stand.
-#[derive(Clone, Copy, Debug, Default)]
-pub(super) struct Judging<'a> {
-    /// The agents taken as moving at the same time (`simultaneous` turns: the group's
-    /// agents; empty otherwise).
-    pub(super) passing: &'a [bool],
-    /// A grid over the bodies where they stand, built when the group's turns were
-    /// granted (no body moves before the group is settled); `None`: none was built.
-    pub(super) grid: Option<&'a DiskGrid>,
+/// The independent safety monitor (parry) as the step loop's judge: it sees the moving
+/// obstacles move, and judges every move alone and then a group's moves against each
+/// other before the world's own checks.
+pub(super) struct MonitorJudge {
+    /// The monitor, with the static obstacles and the moving ones where they stand.
+    pub(super) monitor: SafetyMonitor,
 }
 
-/// Check a published move with the monitor (parry) alone, against the bodies where they
-/// stand (but those `judging.passing` marks: in `simultaneous` turns, the group's agents,
-/// which move at the same time): the move if it passes, else `None` with the refusal recorded
-/// (the agent stays). The moves against each other, and the recorder's own checks, come
-/// when the group is settled ([`settle_group`]).
-pub(super) fn judge_move(
-    monitor: &SafetyMonitor,
-    recorder: &mut Recorder,
-    step: usize,
-    agent: usize,
-    slot: Point,
-    msg: StateMsg,
-    judging: Judging<'_>,
-) -> Option<Move> {
-    let from = recorder.bodies()[agent].position;
-    let max_step_m = recorder.scenario().agents[agent].max_step_m;
-    let verdict = match msg.move_status() {
-        None => Err(format!("unknown move status code {}", msg.status)),
-        Some(status) if !status.set_by_agent() => {
-            Err(format!("an agent may not report status {}", status.name()))
+impl Judge for MonitorJudge {
+    /// The monitor moves the moving obstacles too, and checks their motion against the
+    /// agents standing still, independently of the world: the strikes it sees must be
+    /// the ones the world recorded (a warning otherwise).
+    fn open_step(&mut self, step: usize, world: &Recorder<'_>) {
+        let scenario = world.scenario();
+        if scenario.moving.is_empty() {
+            return;
         }
-        Some(status) => monitor::check_kinematics(
-            recorder.scenario().agents[agent].kinematics,
-            recorder.headings()[agent],
-            &msg.waypoints,
-            msg.end_heading_rad,
-            max_step_m,
-        )
-        .and_then(|chord_errors_m| {
-            let mv = MoveUnderCheck {
-                agent,
-                from: &from,
-                waypoints: &msg.waypoints,
-                best: &msg.best,
-                under_way: status == MoveStatus::UnderWay,
-                chord_errors_m: &chord_errors_m,
-            };
-            let standing = Standing {
-                bodies: recorder.bodies(),
-                passing: judging.passing,
-                grid: judging.grid,
-            };
-            monitor.check(&mv, &standing, MAX_WAYPOINTS)
-        })
-        .and_then(|()| monitor::check_length(&msg.waypoints, max_step_m))
-        .map(|()| status)
-        .map_err(|r| r.to_string()),
-    };
-    match verdict {
-        Ok(status) => Some(Move {
-            end_heading_rad: msg.end_heading_rad,
-            slot: msg.slot,
-            best: msg.best,
-            status,
-            waypoints: msg.waypoints,
-        }),
-        Err(why) => {
-            tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
-            recorder.refuse(step, agent, slot, FaultKind::Rejected, why);
-            None
+        let sweeps: Vec<(Vec<Point>, f64)> = scenario
+            .moving
+            .iter()
+            .map(|m| (m.sweep(step), m.radius_m))
+            .collect();
+        let mut seen = self
+            .monitor
+            .move_obstacles(&sweeps, world.bodies(), world.alive());
+        let mut recorded: Vec<(usize, usize)> =
+            world.struck_now().iter().map(|&(m, a, _)| (m, a)).collect();
+        seen.sort_unstable();
+        recorded.sort_unstable();
+        if seen != recorded {
+            tracing::warn!(
+                "step {step}: the monitor sees moving obstacles strike {seen:?}, the recorder {recorded:?}"
+            );
         }
     }
-}
 
-/// Take the moves of one group that passed [`judge_move`]: the monitor checks every pair
-/// against each other's whole move (both refused if they meet), then the recorder checks
-/// and takes what is left.
-///
-/// In `simultaneous` turns, where every agent moves at once at a constant speed, two
-/// moves meet if they come close at the same time, and each move is also checked
-/// against every body that does not move this step (a mate whose answer was refused or
-/// missing stands where it is), again after each refusal
-/// ([`shared::groups::simultaneous_meetings`]). `judged_passing` are the agents taken as
-/// moving when each move was judged alone ([`judge_move`]).
-pub(super) fn settle_group(
-    monitor: &SafetyMonitor,
-    recorder: &mut Recorder,
-    step: usize,
-    moves: Vec<(usize, Move)>,
-    judged_passing: &[bool],
-) {
-    let simultaneous = recorder.scenario().turns == TurnMode::Simultaneous;
-    // Moving at once, a move was judged alone against the bodies of the agents not
-    // alive when the answers began to be collected. One that died since stands frozen:
-    // each move is judged alone against it now, as the reference judges a move alone
-    // against an agent frozen before the turns (a live mate whose move is refused, or
-    // who gave none, stands too: the rounds below look at it, as the reference does).
-    // If none died, each move was judged alone against these very bodies already.
-    let moves = if simultaneous && recorder.alive() != judged_passing {
-        let movers = recorder.alive().to_vec();
-        let mut kept = Vec::with_capacity(moves.len());
+    /// Each move alone ([`judge_alone`]), then every pair of the moves that passed
+    /// against each other's whole move: two that meet are both refused.
+    ///
+    /// In `simultaneous` turns, where every agent moves at once at a constant speed, a
+    /// move alone is checked against the bodies of the agents not alive (they stand),
+    /// and two moves meet if they come close at the same time; each move is also checked
+    /// against every body that does not move this step (a mate whose move was refused
+    /// stands where it is), again after each refusal
+    /// ([`shared::groups::simultaneous_meetings`]).
+    fn judge_group(
+        &mut self,
+        step: usize,
+        moves: Vec<(usize, Move)>,
+        world: &mut Recorder<'_>,
+    ) -> Vec<(usize, Move)> {
+        let simultaneous = world.scenario().turns == TurnMode::Simultaneous;
+        let passing = if simultaneous {
+            world.alive().to_vec()
+        } else {
+            Vec::new()
+        };
+        // A move is checked against the bodies near it, found with a grid over them, when
+        // there are enough moves to pay for building it (the verdicts are the same).
+        let grid = (moves.len() > 1).then(|| shared::safety::bodies_grid(world.bodies()));
+        let mut alone = Vec::with_capacity(moves.len());
         for (agent, mv) in moves {
-            let under_check = MoveUnderCheck {
-                agent,
-                from: &recorder.bodies()[agent].position,
-                waypoints: &mv.waypoints,
-                best: &mv.best,
-                under_way: mv.status == MoveStatus::UnderWay,
-                chord_errors_m: &[],
-            };
             let standing = Standing {
-                bodies: recorder.bodies(),
-                passing: &movers,
-                grid: None,
+                bodies: world.bodies(),
+                passing: &passing,
+                grid: grid.as_ref(),
             };
-            let verdict = monitor.check(&under_check, &standing, MAX_WAYPOINTS);
-            match verdict {
-                Ok(()) => kept.push((agent, mv)),
-                Err(r) => {
-                    let why = r.to_string();
-                    tracing::debug!(
-                        "step {step}: agent {agent}'s move rejected by the monitor: {why}"
-                    );
-                    recorder.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
+            match judge_alone(&self.monitor, world, agent, &mv, &standing) {
+                Ok(()) => alone.push((agent, mv)),
+                Err(why) => refuse(world, step, agent, &mv, why),
+            }
+        }
+        // Moves made at once at constant speeds (ORCA's own model) meet only if the
+        // agents are close at the same time; a parallel group's timing is not known:
+        // anywhere. Each meeting names the mate by its agent index.
+        let meetings = if simultaneous {
+            meetings_at_once(world.bodies(), &alone)
+        } else {
+            let group: Vec<GroupMove<'_>> = alone
+                .iter()
+                .map(|(agent, mv)| GroupMove {
+                    radius_m: world.bodies()[*agent].radius_m,
+                    waypoints: &mv.waypoints,
+                    refused: false,
+                })
+                .collect();
+            group_meetings(&group, monitor::distance_between_moves_m)
+                .into_iter()
+                .map(|m| {
+                    m.map(|m| Meeting {
+                        mate: alone[m.mate].0,
+                        ..m
+                    })
+                })
+                .collect()
+        };
+        let mut kept = Vec::with_capacity(alone.len());
+        for ((agent, mv), meeting) in alone.into_iter().zip(meetings) {
+            match meeting {
+                None => kept.push((agent, mv)),
+                Some(m) => {
+                    let why = Refusal::GroupMate {
+                        agent: m.mate,
+                        distance_m: m.distance_m,
+                        reach_m: m.reach_m,
+                    };
+                    refuse(world, step, agent, &mv, why);
                 }
             }
         }
         kept
-    } else {
-        moves
-    };
-    // Moves made at once at constant speeds (ORCA's own model) meet only if the agents
-    // are close at the same time; a parallel group's timing is not known: anywhere. Each
-    // meeting names the mate by its agent index.
-    let meetings = if simultaneous {
-        meetings_at_once(recorder.bodies(), &moves)
-    } else {
-        let group: Vec<GroupMove<'_>> = moves
-            .iter()
-            .map(|(agent, mv)| GroupMove {
-                radius_m: recorder.bodies()[*agent].radius_m,
-                waypoints: &mv.waypoints,
-                refused: false,
-            })
-            .collect();
-        group_meetings(&group, monitor::distance_between_moves_m)
-            .into_iter()
-            .map(|m| {
-                m.map(|m| Meeting {
-                    mate: moves[m.mate].0,
-                    ..m
-                })
-            })
-            .collect()
-    };
-    let mut kept = Vec::with_capacity(moves.len());
-    for ((agent, mv), meeting) in moves.into_iter().zip(meetings) {
-        match meeting {
-            None => kept.push((agent, mv)),
-            Some(m) => {
-                let why = Refusal::GroupMate {
-                    agent: m.mate,
-                    distance_m: m.distance_m,
-                    reach_m: m.reach_m,
-                }
-                .to_string();
-                tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
-                recorder.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
-            }
-        }
     }
-    let agents: Vec<usize> = kept.iter().map(|(a, _)| *a).collect();
-    for (agent, verdict) in agents.into_iter().zip(recorder.submit_group(step, kept)) {
-        if let Err(v) = verdict {
-            tracing::debug!("step {step}: agent {agent}'s move rejected: {v}");
-        }
-    }
+}
+
+/// Check `agent`'s move `mv` alone with the monitor: against its kinematic model, the
+/// bodies `standing` (but those it marks as moving at the same time), the obstacles
+/// and the field, and its top speed.
+fn judge_alone(
+    monitor: &SafetyMonitor,
+    world: &Recorder<'_>,
+    agent: usize,
+    mv: &Move,
+    standing: &Standing<'_>,
+) -> Result<(), Refusal> {
+    let spec = &world.scenario().agents[agent];
+    let chord_errors_m = monitor::check_kinematics(
+        spec.kinematics,
+        world.headings()[agent],
+        &mv.waypoints,
+        mv.end_heading_rad,
+        spec.max_step_m,
+    )?;
+    let under_check = MoveUnderCheck {
+        agent,
+        from: &world.bodies()[agent].position,
+        waypoints: &mv.waypoints,
+        best: &mv.best,
+        under_way: mv.status == MoveStatus::UnderWay,
+        chord_errors_m: &chord_errors_m,
+    };
+    monitor.check(&under_check, standing, MAX_WAYPOINTS)?;
+    monitor::check_length(&mv.waypoints, spec.max_step_m)
+}
+
+/// Record that the monitor refused `agent`'s move `mv` (`why`): it stays where it is.
+fn refuse(world: &mut Recorder<'_>, step: usize, agent: usize, mv: &Move, why: Refusal) {
+    let why = why.to_string();
+    tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
+    world.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
 }
 
 /// For each of `moves` (made at once), its meeting with a mate in time, the mate named by

@@ -5,6 +5,8 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::{Duration, Instant};
 
+use indicatif::ProgressBar;
+
 use shared::geometry::Pose;
 use shared::record::Recorder;
 use shared::scenario::Scenario;
@@ -213,7 +215,6 @@ fn run_scenario_between(
             options,
             ipc: &mut ipc,
             procs: &mut procs,
-            recorder: &mut recorder,
             progress: &mut progress,
             history: TurnHistory::new(
                 n,
@@ -231,8 +232,11 @@ fn run_scenario_between(
             // Reborrowed for the driver's lifetime (a trait object's bound shortens only
             // through a coercion, which an `Option` does not make by itself).
             between_steps: between_steps.map(|f| f as &mut BetweenStepsFn<'_>),
+            between_s: 0.0,
+            between_ticks: (0, 0),
+            bar: ProgressBar::hidden(),
         }
-        .drive(centre_path, started)
+        .drive(&mut recorder, centre_path, started)
     }));
 
     // Whatever happened, stop the agents and clean up before reporting.

@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
-use shared::record::{Fault, FaultKind};
+use shared::record::{Fault, FaultKind, Recorder};
 use wire::StateKind;
 
 use super::driver::Driver;
@@ -13,7 +13,7 @@ use crate::agents::Exit;
 /// How long a replacement process has to shake hands.
 const REPLACEMENT_TIMEOUT: Duration = Duration::from_secs(10);
 
-impl Driver<'_, '_> {
+impl Driver<'_> {
     /// Wait for the ready handshake of every agent in `agents` (their processes are
     /// started). An agent that exits first, sends a bad handshake or none in `timeout`
     /// is recorded `failed-to-start` and frozen (or replaced, with `respawn`). For
@@ -21,6 +21,7 @@ impl Driver<'_, '_> {
     /// never retried.
     pub(super) fn start_agents(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agents: &[usize],
         timeout: Duration,
@@ -44,7 +45,7 @@ impl Driver<'_, '_> {
                     pending.retain(|&a| a != agent);
                     continue;
                 }
-                while let Some(incoming) = self.receive_own(step, agent)? {
+                while let Some(incoming) = self.receive_own(world, step, agent)? {
                     match incoming.msg {
                         Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
                             pending.retain(|&a| a != agent);
@@ -52,8 +53,8 @@ impl Driver<'_, '_> {
                                 tracing::warn!("agent {agent}: {e:#}");
                             }
                             if replacements {
-                                self.recorder.mark_alive(agent);
-                                self.recorder.note_fault(
+                                world.mark_alive(agent);
+                                world.note_fault(
                                     step,
                                     agent,
                                     FaultKind::Respawned,
@@ -74,7 +75,7 @@ impl Driver<'_, '_> {
                             pending.retain(|&a| a != agent);
                             break;
                         }
-                        Ok(msg) => self.recorder.note_fault(
+                        Ok(msg) => world.note_fault(
                             step,
                             agent,
                             FaultKind::Unsolicited,
@@ -82,7 +83,7 @@ impl Driver<'_, '_> {
                             None,
                         ),
                         Err(why) => {
-                            self.recorder.note_fault(
+                            world.note_fault(
                                 step,
                                 agent,
                                 FaultKind::Malformed,
@@ -137,7 +138,7 @@ impl Driver<'_, '_> {
             .filter(|a| !failed.iter().any(|(f, _)| f == a))
             .collect();
         let scanning = Instant::now();
-        self.scan_for_intruders(step, &started)?;
+        self.scan_for_intruders(world, step, &started)?;
         if !replacements {
             let phases = &mut self.progress.startup_phases;
             phases.handshakes = (scanning - waiting).as_secs_f64();
@@ -149,10 +150,9 @@ impl Driver<'_, '_> {
                 self.procs.kill_now(agent);
                 self.ipc.close_channel(agent);
                 self.ipc.cleanup_dead_nodes();
-                self.recorder
-                    .note_fault(step, agent, FaultKind::RespawnFailed, why, None);
+                world.note_fault(step, agent, FaultKind::RespawnFailed, why, None);
             } else {
-                self.on_failed_start(step, agent, &why)?;
+                self.on_failed_start(world, step, agent, &why)?;
             }
         }
         Ok(())
@@ -161,6 +161,7 @@ impl Driver<'_, '_> {
     /// `agent` did not start: frozen where it stands, replaced if `respawn` asks.
     pub(super) fn on_failed_start(
         &mut self,
+        world: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         why: &str,
@@ -173,13 +174,13 @@ impl Driver<'_, '_> {
         // Whoever sat on its channel is named before the channel goes.
         if let Some(pid) = pid {
             for intruder in self.ipc.intruders(agent, pid) {
-                self.on_intruder(step, agent, intruder, "opened the services of")?;
+                self.on_intruder(world, step, agent, intruder, "opened the services of")?;
             }
         }
         self.ipc.close_channel(agent);
         self.ipc.cleanup_dead_nodes();
-        if self.recorder.alive()[agent] {
-            self.recorder.freeze(Fault {
+        if world.alive()[agent] {
+            world.freeze(Fault {
                 agent,
                 step,
                 kind: FaultKind::FailedToStart,
@@ -188,20 +189,25 @@ impl Driver<'_, '_> {
             });
         }
         if self.options.respawn {
-            self.respawn(step, agent)?;
+            self.respawn(world, step, agent)?;
         }
         Ok(())
     }
 
     /// Start a replacement process for `agent` on a channel of its own.
-    pub(super) fn respawn(&mut self, step: usize, agent: usize) -> anyhow::Result<()> {
+    pub(super) fn respawn(
+        &mut self,
+        world: &mut Recorder<'_>,
+        step: usize,
+        agent: usize,
+    ) -> anyhow::Result<()> {
         let opened = self
             .ipc
             .open_channel(agent)
             .and_then(|_| self.spawn(agent, true));
         if let Err(e) = opened {
             tracing::warn!("agent {agent}: the replacement did not start: {e:#}");
-            self.recorder.note_fault(
+            world.note_fault(
                 step,
                 agent,
                 FaultKind::RespawnFailed,
@@ -211,6 +217,6 @@ impl Driver<'_, '_> {
             return Ok(());
         }
         // The replacement's own failure is recorded, and not retried (no respawn loop).
-        self.start_agents(step, &[agent], REPLACEMENT_TIMEOUT, true)
+        self.start_agents(world, step, &[agent], REPLACEMENT_TIMEOUT, true)
     }
 }

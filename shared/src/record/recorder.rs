@@ -128,7 +128,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// The scenario being run.
-    pub fn scenario(&self) -> &Scenario {
+    pub fn scenario(&self) -> &'a Scenario {
         self.scenario
     }
 
