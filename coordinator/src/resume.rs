@@ -10,11 +10,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::turns::FaultInjection;
 use shared::geometry::DiskGrid;
 use shared::record::{Recorder, Step, replay_course};
 use shared::safety;
 use shared::scenario::Scenario;
-use wire::misbehave::Misbehave;
 
 use crate::error::CliError;
 use crate::run_log::{LOG_FORMAT_VERSION, LoggedRun, RUN_LOG_FILE, read_run_log};
@@ -43,12 +43,8 @@ pub struct RecordOptions {
     pub slow_turn: Option<Duration>,
     /// Whether dead agents are replaced.
     pub respawn: bool,
-    /// SIGKILL after the grant: `(agent, step)`.
-    pub kills: Vec<(usize, usize)>,
-    /// Killed before the group's turns: `(agent, step)`.
-    pub deaths: Vec<(usize, usize)>,
-    /// Test-mode misbehaviour.
-    pub misbehave: Vec<(usize, Misbehave)>,
+    /// The faults injected.
+    pub faults: FaultInjection,
 }
 
 /// Read the run killed in `dir` back from its log and check that it can go on:
@@ -119,9 +115,11 @@ pub fn load_resume(dir: &Path, scenario_file: Option<&Path>) -> Result<Resumed, 
         turn_deadline: Duration::from_millis(options.turn_deadline_ms.max(1)),
         slow_turn: options.slow_turn_ms.map(Duration::from_millis),
         respawn: options.respawn,
-        kills: options.kills.clone(),
-        deaths: options.deaths.clone(),
-        misbehave,
+        faults: FaultInjection {
+            kills: options.kills.clone(),
+            deaths: options.deaths.clone(),
+            misbehave,
+        },
     };
     check_agents_named(scenario.agents.len(), &record)
         .map_err(|e| usage(format!("{shown}: the options logged: {e}")))?;
@@ -195,18 +193,7 @@ fn check_where_agents_stand(scenario: &Scenario, last: &Step) -> Result<(), Stri
 
 /// Every agent named by the options is one of the scenario's `agents`.
 pub fn check_agents_named(agents: usize, record: &RecordOptions) -> Result<(), String> {
-    let named = record
-        .kills
-        .iter()
-        .chain(&record.deaths)
-        .map(|(a, _)| *a)
-        .chain(
-            record
-                .misbehave
-                .iter()
-                .flat_map(|(a, mode)| std::iter::once(*a).chain(mode.victim())),
-        );
-    for a in named {
+    for a in record.faults.agents_named() {
         if a >= agents {
             return Err(format!(
                 "agent {a} does not exist: the scenario has {agents} agents (0 to {})",

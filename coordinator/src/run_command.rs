@@ -13,7 +13,7 @@ use crate::error::CliError;
 use crate::output;
 use crate::resume::{RecordOptions, check_agents_named, load_resume};
 use crate::run_log::LoggedRun;
-use crate::turns::{RunOptions, run_scenario};
+use crate::turns::{FaultInjection, RunOptions, run_scenario};
 use crate::validate::load_and_plan;
 
 /// Carry out `run`: validate and plan (bad input exits 2 before anything is created),
@@ -66,9 +66,7 @@ pub fn execute(args: &RunArgs) -> Result<(), CliError> {
         turn_deadline: record.turn_deadline,
         slow_turn: record.slow_turn,
         respawn: record.respawn,
-        kills: record.kills,
-        deaths: record.deaths,
-        misbehave: record.misbehave,
+        faults: record.faults,
         progress: !args.quiet,
         wait: args.wait,
         wake: args.wake,
@@ -196,9 +194,11 @@ fn prepare_new(args: &RunArgs) -> Result<Prepared, CliError> {
         turn_deadline: Duration::from_millis(args.turn_deadline_ms.max(1)),
         slow_turn: args.slow_turn_ms.map(Duration::from_millis),
         respawn: args.respawn,
-        kills: args.kill_agent.clone(),
-        deaths: args.die_agent.clone(),
-        misbehave: args.misbehave.clone(),
+        faults: FaultInjection {
+            kills: args.kill_agent.clone(),
+            deaths: args.die_agent.clone(),
+            misbehave: args.misbehave.clone(),
+        },
     };
     check_agents_named(scenario.agents.len(), &record).map_err(CliError::Usage)?;
     Ok(Prepared {

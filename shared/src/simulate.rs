@@ -98,7 +98,7 @@ pub fn simulate_along(scenario: &Scenario, centre_path: &[Pose]) -> Result<Run, 
 /// step; its group mates still take their turns, planned against the same snapshot. A
 /// death of an agent already dead, or at a step without a turn, changes nothing.
 ///
-/// This is what the coordinator does with `RunOptions::deaths` (the agent's process is
+/// This is what the coordinator does with `FaultInjection::deaths` (the agent's process is
 /// killed before its group's turns are granted, so the death is always detected during
 /// its turn): the multi-process run equals this one to the bit, faults aside from their
 /// detail and detection time.

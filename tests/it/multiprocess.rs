@@ -4,7 +4,7 @@
 
 use crate::support;
 
-use coordinator::turns::{RunOptions, WaitMode, WakeMode, run_scenario};
+use coordinator::turns::{FaultInjection, RunOptions, WaitMode, WakeMode, run_scenario};
 use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along};
@@ -101,7 +101,10 @@ fn an_agent_deaf_to_the_prepare_notice_is_rung_after_the_spin_budget() {
     let path = plan_centre_path(&scenario).expect("centre path");
     let reference = simulate_along(&scenario, &path).expect("reference simulation");
     let options = RunOptions {
-        misbehave: vec![(2, Misbehave::DeafToPrepare), (5, Misbehave::DeafToPrepare)],
+        faults: FaultInjection {
+            misbehave: vec![(2, Misbehave::DeafToPrepare), (5, Misbehave::DeafToPrepare)],
+            ..FaultInjection::default()
+        },
         // Every turn of a deaf agent waits out the spin budget: a missed turn would show.
         turn_deadline: std::time::Duration::from_millis(500),
         ..options_waiting(WaitMode::Spin)

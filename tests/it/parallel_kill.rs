@@ -1,13 +1,13 @@
 //! Parallel turns over real processes: a small parallel swarm (16 agent processes) equals
 //! the reference simulation to the bit, also when an agent is killed in the middle of a
-//! step, in a group with others (`RunOptions::deaths`: killed before its group's turns
+//! step, in a group with others (`FaultInjection::deaths`: killed before its group's turns
 //! are granted, so the death is always detected during its turn, as
 //! `simulate_along_with_deaths` has it), and in a changing world (moving obstacles, the
 //! centre replanned). Nothing is left behind: no process, no shared-memory file.
 
 use crate::support;
 
-use coordinator::turns::{RunOptions, run_scenario};
+use coordinator::turns::{FaultInjection, RunOptions, run_scenario};
 use shared::groups::turn_groups_ordered;
 use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
@@ -22,7 +22,10 @@ fn options(deaths: &[(usize, usize)]) -> RunOptions {
         agent_bin: Some(support::agent_bin()),
         turn_deadline: std::time::Duration::from_secs(10),
         progress: false,
-        deaths: deaths.to_vec(),
+        faults: FaultInjection {
+            deaths: deaths.to_vec(),
+            ..FaultInjection::default()
+        },
         ..RunOptions::default()
     }
 }

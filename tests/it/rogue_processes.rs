@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use coordinator::turns::{BetweenSteps, RunOptions, run_scenario, run_scenario_with};
+use coordinator::turns::{
+    BetweenSteps, FaultInjection, RunOptions, run_scenario, run_scenario_with,
+};
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
@@ -88,10 +90,13 @@ fn options(misbehave: &[(usize, &str)]) -> RunOptions {
         // agent into a missed turn.
         turn_deadline: Duration::from_secs(10),
         progress: false,
-        misbehave: misbehave
-            .iter()
-            .map(|(a, m)| (*a, m.parse().expect("a misbehave mode")))
-            .collect(),
+        faults: FaultInjection {
+            misbehave: misbehave
+                .iter()
+                .map(|(a, m)| (*a, m.parse().expect("a misbehave mode")))
+                .collect(),
+            ..FaultInjection::default()
+        },
         ..RunOptions::default()
     }
 }

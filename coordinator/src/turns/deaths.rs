@@ -1,8 +1,8 @@
-//! Deterministic deaths ([`super::RunOptions::deaths`]): an agent killed before its
+//! Deterministic deaths ([`super::FaultInjection::deaths`]): an agent killed before its
 //! group's turns are granted, so its death is always detected during its turn, as the
 //! reference simulation has it (`shared::simulate::simulate_along_with_deaths`).
 //!
-//! The kill of [`super::RunOptions::kills`] comes right after the grant instead, and races
+//! The kill of [`super::FaultInjection::kills`] comes right after the grant instead, and races
 //! with the agent's answer: the move may get out first, and the death is then noticed at
 //! the next step. Here nothing races: the process is gone before any turn of its group is
 //! granted.
@@ -28,7 +28,7 @@ impl Driver<'_> {
         group: &[usize],
     ) {
         for &agent in group {
-            if !self.options.deaths.contains(&(agent, step)) || !world.alive()[agent] {
+            if !self.options.faults.dies_before_turn(agent, step) || !world.alive()[agent] {
                 continue;
             }
             let Some(pid) = self.procs.signal_kill(agent) else {

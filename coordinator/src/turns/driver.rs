@@ -117,7 +117,7 @@ pub(super) fn agent_args(
         "--mission-sha256".to_string(),
         mission_digest.to_string(),
     ];
-    if !replacement && let Some((_, mode)) = options.misbehave.iter().find(|(a, _)| *a == agent) {
+    if !replacement && let Some(mode) = options.faults.misbehaviour_of(agent) {
         extra.extend(["--misbehave".to_string(), mode.to_string()]);
     }
     // An agent this host starts is sandboxed when the run sandboxes, over Zenoh too:

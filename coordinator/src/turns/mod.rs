@@ -27,6 +27,7 @@
 mod answer;
 mod deaths;
 mod driver;
+mod fault_injection;
 mod faults;
 mod hand_over;
 mod judge;
@@ -38,6 +39,7 @@ mod startup;
 mod turn;
 
 pub use driver::{BetweenSteps, PROGRESS_TARGET};
+pub use fault_injection::FaultInjection;
 pub use options::{
     RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode, WakeMode, running_as_root,
 };

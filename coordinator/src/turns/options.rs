@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use super::fault_injection::FaultInjection;
 use shared::vocabulary::Kinematics;
-use wire::misbehave::Misbehave;
 
 use crate::network::NetworkOptions;
 
@@ -90,17 +90,8 @@ pub struct RunOptions {
     pub slow_turn: Option<Duration>,
     /// Start a replacement process for every agent that dies.
     pub respawn: bool,
-    /// Fault injection: kill agent `.0` with SIGKILL right after granting its turn at
-    /// step `.1`.
-    pub kills: Vec<(usize, usize)>,
-    /// Deterministic fault injection: agent `.0` dies at step `.1` before its turn. Its
-    /// process is killed with SIGKILL (and waited for) once the step's groups are formed,
-    /// just before its group's turns are granted, so the death is always detected during
-    /// its turn and its group mates still move: the run equals
-    /// [`shared::simulate::simulate_along_with_deaths`] to the bit.
-    pub deaths: Vec<(usize, usize)>,
-    /// Test mode: start agent `.0` with `--misbehave .1` (its replacements behave).
-    pub misbehave: Vec<(usize, Misbehave)>,
+    /// The faults injected on purpose (none by default).
+    pub faults: FaultInjection,
     /// Show a progress bar on stderr (only drawn on a terminal).
     pub progress: bool,
     /// How turns are handed over: sleeping, spinning, or chosen by the core count.
@@ -143,9 +134,10 @@ impl RunOptions {
                 .slow_turn
                 .map(|d| u64::try_from(d.as_millis()).unwrap_or(u64::MAX)),
             respawn: self.respawn,
-            kills: self.kills.clone(),
-            deaths: self.deaths.clone(),
+            kills: self.faults.kills.clone(),
+            deaths: self.faults.deaths.clone(),
             misbehave: self
+                .faults
                 .misbehave
                 .iter()
                 .map(|(agent, mode)| format!("{agent}={mode}"))
@@ -248,9 +240,7 @@ impl Default for RunOptions {
             late_window_turns: 10,
             slow_turn: None,
             respawn: false,
-            kills: Vec::new(),
-            deaths: Vec::new(),
-            misbehave: Vec::new(),
+            faults: FaultInjection::default(),
             progress: true,
             wait: WaitMode::default(),
             wake: WakeMode::default(),

@@ -93,7 +93,7 @@ impl Driver<'_> {
             if rung {
                 self.ipc.notify_turn(agent)?;
             }
-            if self.options.kills.contains(&(agent, step))
+            if self.options.faults.kills_during_turn(agent, step)
                 && let Some(killed) = self.procs.signal_kill(agent)
             {
                 world.note_fault(

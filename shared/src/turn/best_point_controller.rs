@@ -254,7 +254,6 @@ impl BestPointController {
     /// slot some steps ahead when the lead point is blocked, an intercept, did worse:
     /// the shortest path to a far slot's best point may start the other way round an
     /// obstacle, and the agent then turns back and forth between the two.)
-    #[allow(clippy::too_many_arguments)]
     pub fn plan_move_aiming(
         &self,
         centre: &Pose,

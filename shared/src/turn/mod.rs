@@ -373,15 +373,8 @@ impl TurnController {
             reverse,
         } = self.spec.kinematics
         {
-            return self.plan_car_turn(
-                centre,
-                aim,
-                me,
-                heading_rad,
-                others,
-                turning_radius_m,
-                reverse,
-            );
+            let start = Pose::new(me.x, me.y, heading_rad);
+            return self.plan_car_turn(centre, aim, &start, others, turning_radius_m, reverse);
         }
         let Kinematics::Unicycle {
             max_turn_rad,
@@ -452,19 +445,18 @@ impl TurnController {
     }
 
     /// A car's turn ([`car`]): the best point as for a holonomic agent, then the
-    /// shortest clear drivable path to it, cut at the top speed; standing when none is
-    /// clear.
-    #[allow(clippy::too_many_arguments)]
+    /// shortest clear drivable path to it from `start` (where the car stands and faces),
+    /// cut at the top speed; standing when none is clear.
     fn plan_car_turn(
         &self,
         centre: &Pose,
         aim: Option<&Aim>,
-        me: &Point,
-        heading_rad: f64,
+        start: &Pose,
         others: &[Body],
         turning_radius_m: f64,
         reverse: bool,
     ) -> Move {
+        let (me, heading_rad) = (&start.position(), start.heading_rad);
         let others = &*self.sensed_bodies(me, others);
         let mut mv = self.plan_move_within(centre, aim, me, others, None);
         let stand = |mut mv: Move| {
@@ -507,8 +499,7 @@ impl TurnController {
             reach_m: self.spec.radius_m + PLANNING_MARGIN_M,
             margin_m: PLANNING_MARGIN_M,
         };
-        let start = Pose::new(me.x, me.y, heading_rad);
-        let Some(drive) = car::plan_car_drive(&start, &goal, &goal_headings, 1, &limits, &world)
+        let Some(drive) = car::plan_car_drive(start, &goal, &goal_headings, 1, &limits, &world)
         else {
             return stand(mv);
         };

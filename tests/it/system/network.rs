@@ -51,7 +51,7 @@ fn an_agent_killed_over_zenoh_is_frozen_as_in_the_reference() {
     let reference = simulate_along_with_deaths(&scenario, &path, &deaths).expect("reference");
     let network = loopback();
     let mut opts = options(network.clone());
-    opts.deaths = deaths.to_vec();
+    opts.faults.deaths = deaths.to_vec();
     let outcome = run_scenario(&scenario, &path, &opts).expect("zenoh run");
     assert_equal_runs(&outcome.run, &reference, "paper with a death");
     assert_eq!(outcome.run.summary().collisions, 0);
