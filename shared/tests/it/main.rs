@@ -43,5 +43,6 @@ mod replan;
 mod resolved_round_trip;
 mod scenario_doc;
 mod simulate_scenarios;
+mod step_loop;
 mod turn_order;
 mod unicycle_scenarios;
