@@ -17,6 +17,7 @@ mod support;
 
 mod architecture_paths;
 mod bad_input;
+mod bad_maps;
 mod bench;
 mod bound;
 mod compare;
@@ -25,6 +26,7 @@ mod file_imports;
 mod multiprocess;
 mod outputs;
 mod parallel_kill;
+mod resume;
 mod rogue;
 mod rogue_parallel;
 mod rogue_processes;

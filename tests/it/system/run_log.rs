@@ -1,7 +1,8 @@
 //! The run log's kill campaigns: the fast tier's `run_log` tests over more seeded kills
 //! and more of what a run can hold.
 
-use crate::run_log::{coordinator_killed_at_seeded_moments, resumed_twice};
+use crate::resume::resumed_twice;
+use crate::run_log::coordinator_killed_at_seeded_moments;
 use crate::support;
 
 /// Eight more seeded kills of the paper example's coordinator, and ten (one during
