@@ -18,13 +18,15 @@ use shared::step_loop::{GroupMoves, GroupTurn, MoveSource, run_steps};
 use super::hand_over::HandOver;
 use super::judge::MonitorJudge;
 use super::lateness::TurnHistory;
+use super::launch::AgentLaunch;
 use super::options::RunOptions;
 use super::outcome::Progress;
-use crate::agents::{AgentProcesses, Exit, StartGate};
+use super::run_handle::{EarlyStart, RunHandle};
+use crate::agents::{AgentProcesses, Exit};
 use crate::ipc::CoordinatorIpc;
 use crate::monitor::SafetyMonitor;
-use crate::network::NetworkOptions;
 use crate::procfs::{self, IdleCpu};
+use crate::run_log::LogThread;
 
 /// The `tracing` target of the line logged when a step is done (`step N done`):
 /// `RUST_LOG=coordinator::progress=info` shows one such line per step on stderr.
@@ -63,17 +65,13 @@ pub(super) struct Driver<'a> {
     pub(super) hand_over: HandOver,
     /// Whether any agent has a sensing radius (then each world lists what it senses).
     pub(super) senses: bool,
-    /// Whether the run has a control group for its sandboxed agents.
-    pub(super) run_cgroup: bool,
-    /// How agents reach the router, as it was opened (the run's own TLS folder named).
-    pub(super) network: Option<&'a NetworkOptions>,
+    /// How an agent's process is started.
+    pub(super) launch: &'a AgentLaunch,
     /// The run's log, handed every step as it ends (written by a thread of its own,
     /// which also tells each step done once it is in the file).
-    pub(super) log: Option<&'a mut crate::run_log::LogThread>,
+    pub(super) log: Option<&'a mut LogThread>,
     /// How many of the turn samples are in the log.
     pub(super) turns_logged: usize,
-    /// The mission file's digest, handed to every process started.
-    pub(super) mission_digest: wire::MissionDigest,
     /// The agents already started, behind their gate (none over a network).
     pub(super) early: Option<EarlyStart>,
     /// What the caller does after every step (benchmarks), if anything.
@@ -86,65 +84,49 @@ pub(super) struct Driver<'a> {
     pub(super) bar: ProgressBar,
 }
 
-/// The agents started before the run's channels existed, waiting behind a gate
-/// ([`crate::agents::StartGate`]) that [`Driver::drive`] opens.
-pub(super) struct EarlyStart {
-    /// The gate they wait behind.
-    pub(super) gate: StartGate,
-    /// The agents whose process could not be started, and why.
-    pub(super) failed: Vec<(usize, String)>,
-    /// How long starting them took, seconds.
-    pub(super) spawn_s: f64,
-}
-
-/// The command-line arguments of agent `agent`'s process beyond its prefix and index:
-/// its channel's `generation`, the mission's digest, its test mode unless it is a
-/// `replacement` (a replacement never misbehaves), and its relay's settings: a sandbox
-/// relay for an agent this host starts when the run sandboxes (over Zenoh too), a
-/// network relay for the others over Zenoh.
-pub(super) fn agent_args(
-    options: &RunOptions,
-    agent: usize,
-    replacement: bool,
-    generation: u32,
-    mission_digest: &wire::MissionDigest,
-    network: Option<&NetworkOptions>,
-    run_cgroup: bool,
-) -> Vec<String> {
-    let mut extra = vec![
-        "--generation".to_string(),
-        generation.to_string(),
-        "--mission-sha256".to_string(),
-        mission_digest.to_string(),
-    ];
-    if !replacement && let Some(mode) = options.faults.misbehaviour_of(agent) {
-        extra.extend(["--misbehave".to_string(), mode.to_string()]);
-    }
-    // An agent this host starts is sandboxed when the run sandboxes, over Zenoh too:
-    // behind the sandbox's socket relay, with no key and no link of its own. An agent
-    // started elsewhere (`--remote`) has a network relay here.
-    let here = network.is_none_or(|n| n.starts_here(agent));
-    match (&options.sandbox, network) {
-        (Some(sandbox), _) if here => extra.extend(sandbox.relay_args(agent, run_cgroup)),
-        (_, Some(network)) => extra.extend(network.relay_args(agent)),
-        (_, None) => {}
-    }
-    extra
-}
-
 impl<'a> Driver<'a> {
+    /// The run of `scenario` as `options` has it, over the resources of `handle`, its
+    /// progress measured into `progress`, each step handed to `log` and then to
+    /// `between_steps`, if given.
+    pub(super) fn new(
+        scenario: &'a Scenario,
+        options: &'a RunOptions,
+        handle: &'a mut RunHandle,
+        progress: &'a mut Progress,
+        log: Option<&'a mut LogThread>,
+        between_steps: Option<&'a mut BetweenStepsFn<'_>>,
+    ) -> Self {
+        let n = scenario.agents.len();
+        Self {
+            scenario,
+            options,
+            ipc: &mut handle.ipc,
+            procs: &mut handle.agents.procs,
+            progress,
+            history: TurnHistory::new(
+                n,
+                options.max_missed_turns as usize,
+                options.late_window_turns as usize,
+            ),
+            hand_over: HandOver::new(options.wait.spins(), n),
+            senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
+            launch: &handle.launch,
+            log,
+            turns_logged: 0,
+            early: handle.early.take(),
+            // Reborrowed for the driver's lifetime (a trait object's bound shortens only
+            // through a coercion, which an `Option` does not make by itself).
+            between_steps: between_steps.map(|f| f as &mut BetweenStepsFn<'_>),
+            between_s: 0.0,
+            between_ticks: (0, 0),
+            bar: ProgressBar::hidden(),
+        }
+    }
+
     /// Start `agent`'s process on its open channel; a replacement never misbehaves.
     pub(super) fn spawn(&mut self, agent: usize, replacement: bool) -> anyhow::Result<()> {
         let generation = self.ipc.generation(agent).unwrap_or(0);
-        let extra = agent_args(
-            self.options,
-            agent,
-            replacement,
-            generation,
-            &self.mission_digest,
-            self.network,
-            self.run_cgroup,
-        );
+        let extra = self.launch.args(agent, replacement, generation);
         self.procs.spawn(agent, &extra)?;
         Ok(())
     }

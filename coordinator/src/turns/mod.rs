@@ -32,9 +32,11 @@ mod faults;
 mod hand_over;
 mod judge;
 mod lateness;
+mod launch;
 mod options;
 mod outcome;
 mod run;
+mod run_handle;
 mod startup;
 mod turn;
 
