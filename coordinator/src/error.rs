@@ -1,7 +1,7 @@
 //! The coordinator's errors and their exit codes (`docs/outputs.md`): 2 for bad input,
 //! 1 for anything else.
 
-use shared::occupancy::MapError;
+use shared::maps::MapError;
 use shared::scenario::ScenarioError;
 
 /// Why a command failed.

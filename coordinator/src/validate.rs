@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use shared::geometry::Pose;
-use shared::occupancy::{Cell, OccupancyGrid};
+use shared::maps::{Cell, OccupancyGrid};
 use shared::scenario::{Scenario, ScenarioError};
 use shared::simulate::plan_centre_path;
 

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use shared::geometry::Vector;
-use shared::occupancy::{Cell, OccupancyGrid};
+use shared::maps::{Cell, OccupancyGrid};
 
 fn depot() -> PathBuf {
     PathBuf::from(concat!(
@@ -28,13 +28,13 @@ fn bench(c: &mut Criterion) {
         rings.len(),
         rings.iter().map(Vec::len).sum::<usize>()
     );
-    c.bench_function("occupancy/load_depot", |b| {
+    c.bench_function("maps/load_depot", |b| {
         b.iter(|| OccupancyGrid::load(black_box(&yaml)).expect("the depot map"))
     });
-    c.bench_function("occupancy/outline_depot", |b| {
+    c.bench_function("maps/outline_depot", |b| {
         b.iter(|| black_box(&grid).outlines(|cell| cell != Cell::Free))
     });
-    c.bench_function("occupancy/load_and_outline_depot", |b| {
+    c.bench_function("maps/load_and_outline_depot", |b| {
         b.iter(|| {
             let (_, grid) = OccupancyGrid::load(black_box(&yaml)).expect("the depot map");
             grid.outlines(|cell| cell != Cell::Free)
@@ -44,13 +44,13 @@ fn bench(c: &mut Criterion) {
         "depot: {} pieces",
         grid.pieces(|cell| cell != Cell::Free).len()
     );
-    c.bench_function("occupancy/load_and_cut_depot_into_pieces", |b| {
+    c.bench_function("maps/load_and_cut_depot_into_pieces", |b| {
         b.iter(|| {
             let (_, grid) = OccupancyGrid::load(black_box(&yaml)).expect("the depot map");
             grid.pieces(|cell| cell != Cell::Free)
         })
     });
-    c.bench_function("occupancy/regions_depot", |b| {
+    c.bench_function("maps/regions_depot", |b| {
         b.iter(|| black_box(&grid).regions(|cell| cell != Cell::Free, 0.23, Vector::zeros()))
     });
 }

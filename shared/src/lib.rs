@@ -15,7 +15,7 @@
 //! - [`cbf`]: the control-barrier-function controllers and their exact 2-D QP;
 //! - [`orca`]: the reactive baseline ORCA (RVO2, on `dodgy_2d`), cut to stay safe;
 //! - [`moving_obstacle`]: obstacles driven along routes, and when they move;
-//! - [`occupancy`]: occupancy-grid maps (ROS map_server YAML with a PGM or PNG image) and
+//! - [`maps`]: occupancy-grid maps (ROS map_server YAML with a PGM or PNG image) and
 //!   their blocked cells merged into exact polygon outlines;
 //! - [`course`]: the centre's course in a changing world (obstacles found on the way,
 //!   online replanning, waits);
@@ -47,8 +47,8 @@ pub mod groups;
 pub mod hybrid_astar;
 pub mod input_file;
 pub mod kinematics;
+pub mod maps;
 pub mod moving_obstacle;
-pub mod occupancy;
 pub mod orca;
 mod ordered;
 pub mod output_file;

@@ -39,7 +39,7 @@ impl OccupancyGrid {
     /// Read the map whose YAML file is at `yaml_path`, and its image.
     ///
     /// ```
-    /// use shared::occupancy::{Cell, OccupancyGrid};
+    /// use shared::maps::{Cell, OccupancyGrid};
     /// let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/maps");
     /// let (yaml, depot) = OccupancyGrid::load(format!("{dir}/depot.yaml").as_ref()).unwrap();
     /// assert_eq!((depot.width, depot.height, yaml.resolution_m), (604, 307, 0.05));

@@ -17,7 +17,7 @@
 //! scenario's, so a cell's corners are `origin + index * resolution`.
 //!
 //! ```
-//! use shared::occupancy::{Cell, OccupancyGrid, ring_area2_cells, outline_cells};
+//! use shared::maps::{Cell, OccupancyGrid, ring_area2_cells, outline_cells};
 //! let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/maps");
 //! let (_, depot) = OccupancyGrid::load(format!("{dir}/depot.yaml").as_ref()).unwrap();
 //! // The outlines of the blocked cells enclose exactly their area.

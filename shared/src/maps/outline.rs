@@ -47,7 +47,7 @@ fn step(v: CellCorner, d: u8) -> CellCorner {
 /// one) is blocked; it is asked about every cell once or a few times.
 ///
 /// ```
-/// use shared::occupancy::outline_cells;
+/// use shared::maps::outline_cells;
 /// // An L of three cells: one ring of six corners, anticlockwise.
 /// let l = [[true, false], [true, true]]; // rows from the bottom
 /// let rings = outline_cells(2, 2, |x, y| l[y][x]);

@@ -25,7 +25,7 @@ impl OccupancyGrid {
     /// holes, in metres: exactly the blocked cells, tile by tile (see the module's doc).
     ///
     /// ```
-    /// use shared::occupancy::{Cell, OccupancyGrid};
+    /// use shared::maps::{Cell, OccupancyGrid};
     /// let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/maps");
     /// let (_, depot) = OccupancyGrid::load(format!("{dir}/depot.yaml").as_ref()).unwrap();
     /// let pieces = depot.pieces(|c| c != Cell::Free);

@@ -52,7 +52,7 @@ impl Raster {
     /// Decode a PGM or PNG image held in memory; the error is the reason alone.
     ///
     /// ```
-    /// use shared::occupancy::Raster;
+    /// use shared::maps::Raster;
     /// let pgm = b"P5\n# two by one\n2 1\n255\n\x00\xfe";
     /// let r = Raster::decode(pgm).unwrap();
     /// assert_eq!((r.width, r.height, r.samples.as_slice()), (2, 1, &[0u16, 254][..]));

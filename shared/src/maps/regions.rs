@@ -19,7 +19,7 @@ impl OccupancyGrid {
     ///
     /// ```
     /// use shared::geometry::{Point, Vector};
-    /// use shared::occupancy::{Cell, OccupancyGrid};
+    /// use shared::maps::{Cell, OccupancyGrid};
     /// // A 10 x 1 strip of 1 m cells with a wall in its middle cell.
     /// let cells = (0..10).map(|x| if x == 5 { Cell::Occupied } else { Cell::Free }).collect();
     /// let grid = OccupancyGrid::from_cells(10, 1, 1.0, [0.0, 0.0], cells);

@@ -86,7 +86,7 @@ impl MapYaml {
     ///
     /// ```
     /// use std::path::Path;
-    /// use shared::occupancy::{MapMode, MapYaml};
+    /// use shared::maps::{MapMode, MapYaml};
     /// let text = "image: depot.pgm\nresolution: 0.05\norigin: [1.0, 2.0, 0]\n\
     ///             negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.25\n";
     /// let map = MapYaml::parse(text, "maps/depot.yaml", Path::new("maps")).unwrap();

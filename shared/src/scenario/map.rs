@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::occupancy::{Cell, OccupancyGrid};
+use crate::maps::{Cell, OccupancyGrid};
 use crate::output_file::{real_folder, write_replacing};
 
 /// The occupancy map a scenario's obstacles come from (`[map]`).
@@ -70,7 +70,7 @@ impl ScenarioMap {
     /// count and a letter, `f` free, `o` occupied, `u` unknown (`604o1f...`).
     ///
     /// ```
-    /// use shared::occupancy::{Cell, OccupancyGrid};
+    /// use shared::maps::{Cell, OccupancyGrid};
     /// use shared::scenario::ScenarioMap;
     /// let cells = vec![Cell::Occupied, Cell::Occupied, Cell::Free, Cell::Unknown];
     /// let grid = OccupancyGrid::from_cells(2, 2, 0.5, [0.0, 0.0], cells);
@@ -105,7 +105,7 @@ impl ScenarioMap {
         height: usize,
     ) -> Result<Vec<Cell>, CellsTextError> {
         let expected = width.saturating_mul(height);
-        let mut cells = Vec::with_capacity(expected.min(crate::occupancy::MAX_MAP_CELLS));
+        let mut cells = Vec::with_capacity(expected.min(crate::maps::MAX_MAP_CELLS));
         let mut count: usize = 0;
         let mut run = 0;
         let mut digits = 0;

@@ -10,7 +10,7 @@ use rand::{Rng, SeedableRng};
 use shared::best_point::nearest_free_point;
 use shared::disk_path::{PathError, shortest_path};
 use shared::geometry::{DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Vector};
-use shared::occupancy::{Cell, OccupancyGrid};
+use shared::maps::{Cell, OccupancyGrid};
 
 const CELLS: usize = 10;
 const CELL_M: f64 = 0.5;

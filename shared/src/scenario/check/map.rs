@@ -5,8 +5,8 @@ use std::path::Path;
 
 use super::{Checker, MAX_FIELD_SIDE_M, num};
 use crate::geometry::{Field, Point, Polygon};
-use crate::occupancy::MAX_MAP_CELLS;
-use crate::occupancy::OccupancyGrid;
+use crate::maps::MAX_MAP_CELLS;
+use crate::maps::OccupancyGrid;
 use crate::scenario::ScenarioError;
 use crate::scenario::ScenarioMap;
 use crate::scenario::file::MapFile;
