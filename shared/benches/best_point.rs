@@ -156,8 +156,8 @@ fn recorded_turns(scenario: &Scenario, sampled: &[usize]) -> (Vec<BestPointContr
         .min(path.len() - 1);
     for (step, centre) in path.iter().enumerate().take(last + 1).skip(1) {
         for (agent, controller) in controllers.iter().enumerate() {
-            let me = recorder.bodies()[agent].position;
-            let others = recorder.others(agent);
+            let me = recorder.world().bodies()[agent].position;
+            let others = recorder.world().others(agent);
             if sampled.contains(&step) {
                 turns.push((agent, *centre, me, others.clone()));
             }

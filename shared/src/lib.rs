@@ -26,7 +26,8 @@
 //! - [`groups`]: parallel turns: which agents may move at once;
 //! - [`sensing`]: which agents an agent senses (limited sensing);
 //! - [`safety`]: the safety invariant checked with plain geometry;
-//! - [`record`]: the record of a run and its figures;
+//! - [`world`]: the world a turn reads: where every agent stands and faces, who is alive;
+//! - [`record`]: the record of a run and its figures, and its referee (the recorder);
 //! - [`step_loop`]: the step, written once for the reference simulation and the run over
 //!   agent processes;
 //! - [`simulate`]: the in-process reference simulation;
@@ -63,3 +64,4 @@ pub mod survival_grid;
 pub mod tracking;
 pub mod turn;
 pub mod vocabulary;
+pub mod world;

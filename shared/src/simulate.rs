@@ -126,15 +126,15 @@ pub fn simulate_along_with_deaths(
         deaths,
     };
     let mut course = Course::new(scenario, centre_path);
-    let mut world = Recorder::new(scenario, course.pose());
+    let mut recorder = Recorder::new(scenario, course.pose());
     let Ok(_) = run_steps(
         &mut course,
-        &mut world,
+        &mut recorder,
         0,
         &mut planners,
         &mut WorldChecksOnly,
     );
-    Ok(world.finish(!course.gave_up()))
+    Ok(recorder.finish(!course.gave_up()))
 }
 
 /// The moves of the reference simulation: every agent's controller in this process, and
@@ -152,19 +152,19 @@ impl MoveSource for InProcess<'_> {
     fn take_group(
         &mut self,
         turn: &GroupTurn<'_>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> Result<GroupMoves, Infallible> {
         let step = turn.step;
         for &agent in turn.agents() {
             if self.deaths.contains(&(agent, step)) {
-                world.note_fault(
+                recorder.note_fault(
                     step,
                     agent,
                     FaultKind::Killed,
                     "fault injection: killed before its group's turns".to_string(),
                     None,
                 );
-                world.freeze(Fault {
+                recorder.freeze(Fault {
                     agent,
                     step,
                     kind: FaultKind::Dead,
@@ -177,17 +177,17 @@ impl MoveSource for InProcess<'_> {
         let moves = turn
             .agents()
             .iter()
-            .filter(|&&agent| world.alive()[agent])
+            .filter(|&&agent| recorder.world().alive()[agent])
             .map(|&agent| {
-                let others = world.others(agent);
-                let mates = self.controllers[agent].mate_views(agent, world.views());
+                let others = recorder.world().others(agent);
+                let mates = self.controllers[agent].mate_views(agent, recorder.world().views());
                 let velocities = turn.velocities.map(|all| Velocities::of_agent(all, agent));
                 let mv = self.controllers[agent].plan(&TurnRequest {
                     step,
                     centre: *turn.centre,
                     ahead: turn.ahead,
-                    me: world.bodies()[agent].position,
-                    heading_rad: world.headings()[agent],
+                    me: recorder.world().bodies()[agent].position,
+                    heading_rad: recorder.world().headings()[agent],
                     others: &others,
                     mates: &mates,
                     velocities: velocities.as_ref(),

@@ -4,17 +4,18 @@
 //!
 //! One step, top to bottom:
 //! 1. the centre's [`Course`] advances (it may wait or replan in a changing world);
-//! 2. the world opens the step: the moving obstacles move ([`Recorder::begin_step`]), the
-//!    [`Judge`] sees them move, and the [`MoveSource`] notes what happened since the last
-//!    step (an agent process that died between turns);
+//! 2. the recorder opens the step: the moving obstacles move ([`Recorder::begin_step`]),
+//!    the [`Judge`] sees them move, and the [`MoveSource`] notes what happened since the
+//!    last step (an agent process that died between turns);
 //! 3. the live agents are formed into groups of turns ([`turn_groups_ordered`]: one agent
 //!    a group when turns are sequential);
 //! 4. for each group in order, the source takes the group's turns (plans them in
 //!    process, or grants them to agent processes and collects the answers), the judge
-//!    checks the moves, and the world takes those that also pass its own check of the
-//!    safety invariant ([`Recorder::submit_group`]); a refused move leaves its agent
-//!    where it stands, recorded as a fault;
-//! 5. the world closes the step ([`Recorder::end_step`]) and the source is told (a run
+//!    checks the moves, and the recorder takes into the world ([`crate::world::World`])
+//!    those that also pass its own check of the safety invariant
+//!    ([`Recorder::submit_group`]); a refused move leaves its agent where it stands,
+//!    recorded as a fault;
+//! 5. the recorder closes the step ([`Recorder::end_step`]) and the source is told (a run
 //!    logs the step there, and may stop).
 
 use std::ops::ControlFlow;
@@ -56,7 +57,7 @@ impl GroupTurn<'_> {
 #[derive(Clone, Debug, PartialEq)]
 pub enum GroupMoves {
     /// Each live agent's move, with the agent's index, in the order taken (an agent that
-    /// gave none stays where it is; its fault is recorded in the world).
+    /// gave none stays where it is; its fault is recorded in the recorder).
     Taken(Vec<(usize, Move)>),
     /// The run was interrupted: it stops at once, the step not closed.
     Interrupted,
@@ -65,69 +66,69 @@ pub enum GroupMoves {
 /// Where the moves of a run come from: the in-process controllers of the reference
 /// simulation, or the agent processes of a run.
 pub trait MoveSource {
-    /// Why the run cannot go on (not an agent's fault: those are recorded in the world).
+    /// Why the run cannot go on (not an agent's fault: those are recorded by the
+    /// recorder).
     type Error;
 
-    /// Step `step` is open, its groups not formed yet: record in `world` what happened
+    /// Step `step` is open, its groups not formed yet: record in `recorder` what happened
     /// since the last step (an agent process that died between turns, say).
-    fn open_step(&mut self, step: usize, world: &mut Recorder<'_>) -> Result<(), Self::Error> {
-        let _ = (step, world);
+    fn open_step(&mut self, step: usize, recorder: &mut Recorder<'_>) -> Result<(), Self::Error> {
+        let _ = (step, recorder);
         Ok(())
     }
 
-    /// Take the turns of `turn`'s group, every move planned against `world` as it
-    /// stands (faults recorded there).
+    /// Take the turns of `turn`'s group, every move planned against the world as it
+    /// stands ([`Recorder::world`]; faults recorded by the `recorder`).
     fn take_group(
         &mut self,
         turn: &GroupTurn<'_>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> Result<GroupMoves, Self::Error>;
 
-    /// Step `step` is closed and recorded in `world`, its turns taken in `groups`, the
+    /// Step `step` is closed and recorded in `recorder`, its turns taken in `groups`, the
     /// centre's `course` where it stands: `Break` ends the run after it.
     fn close_step(
         &mut self,
         step: usize,
         groups: &[Vec<usize>],
         course: &Course<'_>,
-        world: &Recorder<'_>,
+        recorder: &Recorder<'_>,
     ) -> Result<ControlFlow<()>, Self::Error> {
-        let _ = (step, groups, course, world);
+        let _ = (step, groups, course, recorder);
         Ok(ControlFlow::Continue(()))
     }
 }
 
-/// A check of the moves besides the world's own ([`Recorder::submit_group`]): the
-/// coordinator's independent safety monitor. It must not change the world but for
-/// refusals.
+/// A check of the moves besides the recorder's own ([`Recorder::submit_group`]): the
+/// coordinator's independent safety monitor. It changes nothing but by refusals.
 pub trait Judge {
-    /// Step `step` is open and its moving obstacles have moved in `world` (whom their
-    /// motion struck is recorded there: [`Recorder::struck_now`]).
-    fn open_step(&mut self, step: usize, world: &Recorder<'_>);
+    /// Step `step` is open and its moving obstacles have moved in the recorder's world
+    /// (whom their motion struck: [`crate::world::World::struck_now`]).
+    fn open_step(&mut self, step: usize, recorder: &Recorder<'_>);
 
-    /// Judge the `moves` of one group (live agents, each move planned against `world` as
-    /// it stands): the moves that pass, in order; each one refused is recorded in `world`
-    /// ([`Recorder::refuse`]), its agent staying where it is.
+    /// Judge the `moves` of one group (live agents, each move planned against the world
+    /// as it stands): the moves that pass, in order; each one refused is recorded by the
+    /// `recorder` ([`Recorder::refuse`]), its agent staying where it is.
     fn judge_group(
         &mut self,
         step: usize,
         moves: Vec<(usize, Move)>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> Vec<(usize, Move)>;
 }
 
-/// No judge but the world's own checks: the reference simulation's.
+/// No judge but the recorder's own checks: the reference simulation's.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct WorldChecksOnly;
 
 impl Judge for WorldChecksOnly {
-    fn open_step(&mut self, _step: usize, _world: &Recorder<'_>) {}
+    fn open_step(&mut self, _step: usize, _recorder: &Recorder<'_>) {}
 
     fn judge_group(
         &mut self,
         _step: usize,
         moves: Vec<(usize, Move)>,
-        _world: &mut Recorder<'_>,
+        _recorder: &mut Recorder<'_>,
     ) -> Vec<(usize, Move)> {
         moves
     }
@@ -135,7 +136,7 @@ impl Judge for WorldChecksOnly {
 
 /// Run every step after `step` (0 for a new run; a resumed run's last step) until the
 /// `course` ends, the `source` stops the run or fails: the moves from `source`, judged
-/// by `judge` and then by the world, recorded in `world`. The course is noted in `world`
+/// by `judge` and then by the recorder, recorded in `recorder`. The course is noted in `recorder`
 /// however the loop ends; the last step taken is returned.
 ///
 /// ```
@@ -155,11 +156,11 @@ impl Judge for WorldChecksOnly {
 ///     fn take_group(
 ///         &mut self,
 ///         turn: &GroupTurn<'_>,
-///         world: &mut Recorder<'_>,
+///         recorder: &mut Recorder<'_>,
 ///     ) -> Result<GroupMoves, Self::Error> {
 ///         let moves = turn.agents().iter().map(|&agent| {
-///             let others = world.others(agent);
-///             let me = world.bodies()[agent].position;
+///             let others = recorder.world().others(agent);
+///             let me = recorder.world().bodies()[agent].position;
 ///             let request = TurnRequest::new(*turn.centre, me, &others).at_step(turn.step);
 ///             (agent, self.0[agent].plan(&request))
 ///         });
@@ -170,31 +171,35 @@ impl Judge for WorldChecksOnly {
 /// let scenario = Scenario::paper();
 /// let path = plan_centre_path(&scenario).unwrap();
 /// let mut course = Course::new(&scenario, &path);
-/// let mut world = Recorder::new(&scenario, course.pose());
+/// let mut recorder = Recorder::new(&scenario, course.pose());
 /// let mut planners = Planners(agent_controllers(&scenario).unwrap());
-/// let last = run_steps(&mut course, &mut world, 0, &mut planners, &mut WorldChecksOnly);
+/// let last = run_steps(&mut course, &mut recorder, 0, &mut planners, &mut WorldChecksOnly);
 /// assert_eq!(last, Ok(path.len() - 1));
-/// assert_eq!(world.finish(true).summary().collisions, 0);
+/// assert_eq!(recorder.finish(true).summary().collisions, 0);
 /// ```
 pub fn run_steps<S: MoveSource, J: Judge>(
     course: &mut Course<'_>,
-    world: &mut Recorder<'_>,
+    recorder: &mut Recorder<'_>,
     mut step: usize,
     source: &mut S,
     judge: &mut J,
 ) -> Result<usize, S::Error> {
     let ended = loop {
-        let Some(centre) = course.advance(step + 1, world.bodies(), world.alive()) else {
+        let Some(centre) = course.advance(
+            step + 1,
+            recorder.world().bodies(),
+            recorder.world().alive(),
+        ) else {
             break Ok(step);
         };
         step += 1;
-        match take_step(step, &centre, course, world, source, judge) {
+        match take_step(step, &centre, course, recorder, source, judge) {
             Ok(ControlFlow::Continue(())) => {}
             Ok(ControlFlow::Break(())) => break Ok(step),
             Err(e) => break Err(e),
         }
     };
-    world.note_course(course);
+    recorder.note_course(course);
     ended
 }
 
@@ -204,25 +209,26 @@ fn take_step<S: MoveSource, J: Judge>(
     step: usize,
     centre: &Pose,
     course: &Course<'_>,
-    world: &mut Recorder<'_>,
+    recorder: &mut Recorder<'_>,
     source: &mut S,
     judge: &mut J,
 ) -> Result<ControlFlow<()>, S::Error> {
-    let scenario = world.scenario();
-    world.begin_step(step, *centre);
-    judge.open_step(step, world);
-    source.open_step(step, world)?;
+    let scenario = recorder.scenario();
+    recorder.begin_step(step, *centre);
+    judge.open_step(step, recorder);
+    source.open_step(step, recorder)?;
     let groups = turn_groups_ordered(
         scenario.turns,
         scenario.turn_order,
         centre.heading_rad,
         &scenario.agents,
-        world.bodies(),
-        world.alive(),
+        recorder.world().bodies(),
+        recorder.world().alive(),
     );
-    world.note_groups(groups.len());
+    recorder.note_groups(groups.len());
     // Every agent moving at once knows how each body moved over the last step.
-    let velocities = (scenario.turns == TurnMode::Simultaneous).then(|| world.velocities());
+    let velocities =
+        (scenario.turns == TurnMode::Simultaneous).then(|| recorder.world().velocities());
     for index in 0..groups.len() {
         let turn = GroupTurn {
             step,
@@ -232,16 +238,16 @@ fn take_step<S: MoveSource, J: Judge>(
             index,
             velocities: velocities.as_deref(),
         };
-        let GroupMoves::Taken(mut moves) = source.take_group(&turn, world)? else {
+        let GroupMoves::Taken(mut moves) = source.take_group(&turn, recorder)? else {
             return Ok(ControlFlow::Break(()));
         };
         // An agent frozen after its move was planned (killed for intruding while a
         // group mate's answer was awaited, say) does not move.
-        moves.retain(|(agent, _)| world.alive()[*agent]);
-        let passed = judge.judge_group(step, moves, world);
-        // A refused move is recorded by the world; its agent simply stays.
-        let _ = world.submit_group(step, passed);
+        moves.retain(|(agent, _)| recorder.world().alive()[*agent]);
+        let passed = judge.judge_group(step, moves, recorder);
+        // A refused move is recorded by the recorder; its agent simply stays.
+        let _ = recorder.submit_group(step, passed);
     }
-    world.end_step(step);
-    source.close_step(step, &groups, course, world)
+    recorder.end_step(step);
+    source.close_step(step, &groups, course, recorder)
 }

@@ -25,7 +25,7 @@ pub(super) struct Turn {
     pub(super) granted_at: Instant,
     /// The same moment on the monotonic clock the agents stamp their states with, ns.
     pub(super) granted_ns: u64,
-    /// Whether the turn was rung (else the agent was polling its world).
+    /// Whether the turn was rung (else the agent was polling its recorder).
     pub(super) rung: bool,
 }
 
@@ -63,7 +63,10 @@ fn judge_answer(incoming: Incoming, grant: Grant, step: usize, pid: Option<u32>)
         StateKind::Echo => Judged::Ignore,
         StateKind::Move if msg.token == grant.token => {
             let bad = if msg.seq != grant.seq {
-                Some(format!("answers world {} in turn {}", msg.seq, grant.seq))
+                Some(format!(
+                    "answers recorder {} in turn {}",
+                    msg.seq, grant.seq
+                ))
             } else if msg.step != step as u64 {
                 Some(format!("answers step {} at step {step}", msg.step))
             } else if Some(msg.pid) != pid {
@@ -86,7 +89,7 @@ impl Driver<'_> {
     /// as `impersonation` on the way and dropped.
     pub(super) fn receive_own(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
     ) -> anyhow::Result<Option<Incoming>> {
@@ -94,7 +97,7 @@ impl Driver<'_> {
         while let Some(incoming) = self.ipc.receive(agent) {
             match incoming.publisher_pid {
                 Some(from) if Some(from) != pid => {
-                    self.on_impersonation(world, step, agent, from)?
+                    self.on_impersonation(recorder, step, agent, from)?
                 }
                 _ => return Ok(Some(incoming)),
             }
@@ -106,12 +109,12 @@ impl Driver<'_> {
     /// turn. Recorded, never used.
     pub(super) fn drain(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
     ) -> anyhow::Result<()> {
         let (mut extra, mut malformed) = (0usize, Vec::new());
-        while let Some(incoming) = self.receive_own(world, step, agent)? {
+        while let Some(incoming) = self.receive_own(recorder, step, agent)? {
             match incoming.msg {
                 Ok(msg) if msg.kind == StateKind::Echo => {}
                 Ok(_) => extra += 1,
@@ -125,7 +128,7 @@ impl Driver<'_> {
             }
         }
         if extra > 0 {
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Unsolicited,
@@ -136,7 +139,7 @@ impl Driver<'_> {
             );
         }
         if let Some(first) = malformed.first() {
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Malformed,
@@ -151,11 +154,11 @@ impl Driver<'_> {
     }
 
     /// Wait for the answer to `turn`, checking the agent's process every slice. A turn
-    /// not rung (the agent was polling its world) is rung once the spin budget is spent,
+    /// not rung (the agent was polling its recorder) is rung once the spin budget is spent,
     /// in case the agent stopped polling before the world came.
     pub(super) fn wait_answer(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         turn: &Turn,
     ) -> anyhow::Result<Answer> {
@@ -166,7 +169,7 @@ impl Driver<'_> {
         let mut unsolicited = 0usize;
         let answer = loop {
             let mut found = None;
-            while let Some(incoming) = self.receive_own(world, step, agent)? {
+            while let Some(incoming) = self.receive_own(recorder, step, agent)? {
                 match judge_answer(incoming, grant, step, pid) {
                     Judged::Answer(a) => {
                         found = Some(a);
@@ -207,7 +210,7 @@ impl Driver<'_> {
                 .wait_done(agent, (now + LIVENESS_SLICE).min(deadline));
         };
         if unsolicited > 0 {
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Unsolicited,

@@ -23,12 +23,14 @@ impl Driver<'_> {
     /// any agent that dies during its turn). Recorded as a `killed` fault.
     pub(super) fn kill_before_turns(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         group: &[usize],
     ) {
         for &agent in group {
-            if !self.options.faults.dies_before_turn(agent, step) || !world.alive()[agent] {
+            if !self.options.faults.dies_before_turn(agent, step)
+                || !recorder.world().alive()[agent]
+            {
                 continue;
             }
             let Some(pid) = self.procs.signal_kill(agent) else {
@@ -39,7 +41,7 @@ impl Driver<'_> {
                     "step {step}: agent {agent} (process {pid}) still there {DEATH_TIMEOUT:?} after SIGKILL"
                 );
             }
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Killed,

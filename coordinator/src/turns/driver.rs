@@ -134,14 +134,14 @@ impl<'a> Driver<'a> {
     /// Log the step just recorded, with what happened since the last one.
     fn log_step(
         &mut self,
-        world: &Recorder<'_>,
+        recorder: &Recorder<'_>,
         course: Option<&Course<'_>>,
     ) -> anyhow::Result<()> {
         let course = course.map(crate::run_log::CourseSoFar::of);
         let Some(log) = self.log.as_deref_mut() else {
             return Ok(());
         };
-        let Some(step) = world.steps().last() else {
+        let Some(step) = recorder.steps().last() else {
             return Ok(());
         };
         let turns = self.progress.turn_samples[self.turns_logged..]
@@ -153,7 +153,7 @@ impl<'a> Driver<'a> {
                 compute_us: t.compute_us,
             })
             .collect();
-        log.log_step(step, world.faults(), course, turns)?;
+        log.log_step(step, recorder.faults(), course, turns)?;
         self.turns_logged = self.progress.turn_samples.len();
         Ok(())
     }
@@ -165,17 +165,17 @@ impl<'a> Driver<'a> {
             .collect()
     }
 
-    /// Start every agent, then run every step of `centre_path` in `world`; a resumed run
+    /// Start every agent, then run every step of `centre_path` in `recorder`; a resumed run
     /// (its world rebuilt from the log) starts the agents alive at its last step and goes
     /// on from there, its course replayed through the steps logged.
     pub(super) fn drive(
         mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         centre_path: &[Pose],
         started: Instant,
     ) -> anyhow::Result<()> {
-        let (mut course, step) = self.course_so_far(world, centre_path)?;
-        self.start_all(world, step, started)?;
+        let (mut course, step) = self.course_so_far(recorder, centre_path)?;
+        self.start_all(recorder, step, started)?;
         self.progress
             .turn_samples
             .reserve(self.scenario.agents.len() * centre_path.len());
@@ -192,7 +192,7 @@ impl<'a> Driver<'a> {
         let ticks_at_start = procfs::machine_cpu_ticks();
         run_steps(
             &mut course,
-            world,
+            recorder,
             step,
             &mut self,
             &mut MonitorJudge { monitor },
@@ -220,20 +220,20 @@ impl<'a> Driver<'a> {
     /// a resumed run's course replayed through the steps of its log.
     fn course_so_far(
         &mut self,
-        world: &Recorder<'_>,
+        recorder: &Recorder<'_>,
         centre_path: &[Pose],
     ) -> anyhow::Result<(Course<'a>, usize)> {
         let resumed_at = self
             .options
             .resume
             .as_ref()
-            .and_then(|_| world.steps().last())
+            .and_then(|_| recorder.steps().last())
             .map(|s| s.step);
         let Some(last) = resumed_at else {
-            self.log_step(world, None)?;
+            self.log_step(recorder, None)?;
             return Ok((Course::new(self.scenario, centre_path), 0));
         };
-        let course = replay_course(self.scenario, centre_path, world.steps())
+        let course = replay_course(self.scenario, centre_path, recorder.steps())
             .map_err(|at| anyhow::anyhow!("the log does not replay: step {at}'s centre differs"))?;
         // The turns of the steps before the kill count in the run's timing.
         if let Some(logged) = self.options.resume.as_deref() {
@@ -246,22 +246,22 @@ impl<'a> Driver<'a> {
         Ok((course, last))
     }
 
-    /// Start the process of every agent alive in `world` at `step` (or open the gate of
+    /// Start the process of every agent alive in `recorder` at `step` (or open the gate of
     /// those started early) and wait for their handshakes; `started` is when the run began.
     fn start_all(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         started: Instant,
     ) -> anyhow::Result<()> {
         let n = self.scenario.agents.len();
-        let to_start: Vec<usize> = (0..n).filter(|&i| world.alive()[i]).collect();
+        let to_start: Vec<usize> = (0..n).filter(|&i| recorder.world().alive()[i]).collect();
         match self.early.take() {
             Some(mut early) => {
                 // Started already, waiting for their channels, which exist now.
                 early.gate.open();
                 for (i, why) in early.failed {
-                    self.on_failed_start(world, step, i, &why)?;
+                    self.on_failed_start(recorder, step, i, &why)?;
                 }
                 self.progress.startup_phases.spawn = early.spawn_s;
             }
@@ -273,14 +273,14 @@ impl<'a> Driver<'a> {
                     // `--respawn`.
                     if let Err(e) = self.spawn(i, false) {
                         let why = format!("its process could not be started: {e:#}");
-                        self.on_failed_start(world, step, i, &why)?;
+                        self.on_failed_start(recorder, step, i, &why)?;
                     }
                 }
                 self.progress.startup_phases.spawn = spawning.elapsed().as_secs_f64();
             }
         }
         let timeout = self.options.startup_timeout_for(to_start.len());
-        self.start_agents(world, step, &to_start, timeout, false)?;
+        self.start_agents(recorder, step, &to_start, timeout, false)?;
         self.progress.startup_s = started.elapsed().as_secs_f64();
         self.progress.idle_cpu = self.options.idle_probe.map(|hold| {
             let pids: Vec<u32> = self.pids().into_iter().flatten().collect();
@@ -291,36 +291,36 @@ impl<'a> Driver<'a> {
 
     /// Notice the agents that died while waiting for their turn (at `step`, before its
     /// groups are formed).
-    fn notice_deaths(&mut self, world: &mut Recorder<'_>, step: usize) -> anyhow::Result<()> {
+    fn notice_deaths(&mut self, recorder: &mut Recorder<'_>, step: usize) -> anyhow::Result<()> {
         let n = self.scenario.agents.len();
         let checked = Instant::now();
         // One wait call tells whether any child has exited (or an agent has no process
         // any more); only then is each agent looked at (one call each).
         let any_exited = self.procs.any_child_exited()
-            || (0..n).any(|a| world.alive()[a] && self.procs.pid(a).is_none());
+            || (0..n).any(|a| recorder.world().alive()[a] && self.procs.pid(a).is_none());
         for agent in (0..n).filter(|_| any_exited) {
-            if world.alive()[agent] && self.procs.poll(agent) == Exit::Exited {
+            if recorder.world().alive()[agent] && self.procs.poll(agent) == Exit::Exited {
                 // How it ended tells a crash (a signal) from an error (a code).
                 let how = match self.procs.exit_status(agent) {
                     Some(status) => format!("exited between turns ({status})"),
                     None => "exited between turns".to_string(),
                 };
-                self.on_death(world, step, agent, checked.elapsed(), &how)?;
+                self.on_death(recorder, step, agent, checked.elapsed(), &how)?;
             }
         }
         Ok(())
     }
 
-    /// After `step` (recorded in `world`, its turns taken in `groups`): log it, tell it
+    /// After `step` (recorded in `recorder`, its turns taken in `groups`): log it, tell it
     /// done, call the caller's hook; `Break` if the run was asked to stop.
     fn after_step(
         &mut self,
-        world: &Recorder<'_>,
+        recorder: &Recorder<'_>,
         step: usize,
         groups: &[Vec<usize>],
         course: &Course<'_>,
     ) -> anyhow::Result<ControlFlow<()>> {
-        self.log_step(world, Some(course))?;
+        self.log_step(recorder, Some(course))?;
         self.hand_over.end_step(self.ipc);
         self.bar.inc(1);
         // For whoever follows the run from outside (tests time their kills by it); with
@@ -336,7 +336,7 @@ impl<'a> Driver<'a> {
                 step,
                 prefix: self.ipc.prefix(),
                 ipc: self.ipc,
-                alive: world.alive(),
+                alive: recorder.world().alive(),
                 groups,
                 pids: &pids,
             })?;
@@ -359,20 +359,20 @@ impl<'a> Driver<'a> {
 impl MoveSource for Driver<'_> {
     type Error = anyhow::Error;
 
-    fn open_step(&mut self, step: usize, world: &mut Recorder<'_>) -> anyhow::Result<()> {
+    fn open_step(&mut self, step: usize, recorder: &mut Recorder<'_>) -> anyhow::Result<()> {
         if self.bar.position() + 1 >= self.bar.length().unwrap_or(0) {
             // The course waited or was replanned: the path ahead is longer.
             self.bar.inc_length(1);
         }
-        self.notice_deaths(world, step)
+        self.notice_deaths(recorder, step)
     }
 
     fn take_group(
         &mut self,
         turn: &GroupTurn<'_>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> anyhow::Result<GroupMoves> {
-        Driver::take_group(self, world, turn)
+        Driver::take_group(self, recorder, turn)
     }
 
     fn close_step(
@@ -380,9 +380,9 @@ impl MoveSource for Driver<'_> {
         step: usize,
         groups: &[Vec<usize>],
         course: &Course<'_>,
-        world: &Recorder<'_>,
+        recorder: &Recorder<'_>,
     ) -> anyhow::Result<ControlFlow<()>> {
-        self.after_step(world, step, groups, course)
+        self.after_step(recorder, step, groups, course)
     }
 }
 

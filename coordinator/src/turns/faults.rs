@@ -15,19 +15,19 @@ impl Driver<'_> {
     /// and frozen.
     pub(super) fn on_impersonation(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         channel_agent: usize,
         publisher_pid: u32,
     ) -> anyhow::Result<()> {
-        self.on_intruder(world, step, channel_agent, publisher_pid, "published on")
+        self.on_intruder(recorder, step, channel_agent, publisher_pid, "published on")
     }
 
     /// Process `pid` used `channel_agent`'s channel (`how`): recorded against the culprit
     /// agent, which is killed and frozen, or against the channel if it is no agent.
     pub(super) fn on_intruder(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         channel_agent: usize,
         pid: u32,
@@ -38,8 +38,8 @@ impl Driver<'_> {
             "step {step}: process {pid} (agent {culprit:?}) {how} agent {channel_agent}'s channel"
         );
         match culprit {
-            Some(c) if world.alive()[c] && self.procs.pid(c) == Some(pid) => {
-                world.note_fault(
+            Some(c) if recorder.world().alive()[c] && self.procs.pid(c) == Some(pid) => {
+                recorder.note_fault(
                     step,
                     c,
                     FaultKind::Impersonation,
@@ -47,7 +47,7 @@ impl Driver<'_> {
                     None,
                 );
                 self.on_death(
-                    world,
+                    recorder,
                     step,
                     c,
                     Duration::ZERO,
@@ -56,7 +56,7 @@ impl Driver<'_> {
             }
             // An earlier process of an agent, already killed and recorded.
             Some(_) => {}
-            None => world.note_fault(
+            None => recorder.note_fault(
                 step,
                 channel_agent,
                 FaultKind::Impersonation,
@@ -70,7 +70,7 @@ impl Driver<'_> {
     /// Look for processes attached to the channels of `agents` that are not theirs.
     pub(super) fn scan_for_intruders(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agents: &[usize],
     ) -> anyhow::Result<()> {
@@ -79,14 +79,14 @@ impl Driver<'_> {
                 continue;
             };
             for intruder in self.ipc.intruders(agent, pid) {
-                self.on_intruder(world, step, agent, intruder, "opened the services of")?;
+                self.on_intruder(recorder, step, agent, intruder, "opened the services of")?;
             }
         }
         // The shared done service: one notifier per agent process; more is hoarding.
         for pid in self.ipc.done_hoarders() {
             if let Some(culprit) = self.procs.agent_of_pid(pid) {
                 self.on_intruder(
-                    world,
+                    recorder,
                     step,
                     culprit,
                     pid,
@@ -100,7 +100,7 @@ impl Driver<'_> {
     /// Freeze a dead agent, clean its shared-memory resources, and respawn it if asked.
     pub(super) fn on_death(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         after: Duration,
@@ -110,14 +110,14 @@ impl Driver<'_> {
         tracing::warn!(
             "step {step}: agent {agent} {how}; frozen as an obstacle ({ms:.1} ms to notice)"
         );
-        world.freeze_dead(step, agent, format!("the agent process {how}"), ms);
+        recorder.freeze_dead(step, agent, format!("the agent process {how}"), ms);
         self.procs.kill_now(agent);
         self.ipc.close_channel(agent);
         let cleaned = self.ipc.cleanup_dead_nodes();
         tracing::info!("cleaned the resources of {cleaned} dead node(s)");
         self.history.forget(agent);
         if self.options.respawn {
-            self.respawn(world, step, agent)?;
+            self.respawn(recorder, step, agent)?;
         }
         Ok(())
     }
@@ -126,13 +126,13 @@ impl Driver<'_> {
     /// last turns it is declared hung, killed and frozen.
     pub(super) fn on_missed(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         slot: Point,
     ) -> anyhow::Result<()> {
         let verdict = self.history.record(agent, Lateness::Missed);
-        world.refuse(
+        recorder.refuse(
             step,
             agent,
             slot,
@@ -147,14 +147,14 @@ impl Driver<'_> {
             tracing::warn!(
                 "step {step}: agent {agent} missed {missed} of its last {window} turns: killing it"
             );
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Hung,
                 format!("missed {missed} of its last {window} turns; killed"),
                 None,
             );
-            self.on_death(world, step, agent, Duration::ZERO, "was killed as hung")?;
+            self.on_death(recorder, step, agent, Duration::ZERO, "was killed as hung")?;
         }
         Ok(())
     }
@@ -164,7 +164,7 @@ impl Driver<'_> {
     /// killed and frozen; true then.
     pub(super) fn on_late_answer(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         slot: Point,
@@ -186,7 +186,7 @@ impl Driver<'_> {
         tracing::warn!(
             "step {step}: agent {agent} answered {late} of its last {window} turns later than {bound:?}: killing it"
         );
-        world.refuse(
+        recorder.refuse(
             step,
             agent,
             slot,
@@ -195,7 +195,7 @@ impl Driver<'_> {
                 "answered {late} of its last {window} turns later than {bound:?} (this one after {latency:?}); killed"
             ),
         );
-        self.on_death(world, step, agent, Duration::ZERO, "was killed as slow")?;
+        self.on_death(recorder, step, agent, Duration::ZERO, "was killed as slow")?;
         Ok(true)
     }
 }

@@ -20,10 +20,10 @@ pub(super) struct MonitorJudge {
 
 impl Judge for MonitorJudge {
     /// The monitor moves the moving obstacles too, and checks their motion against the
-    /// agents standing still, independently of the world: the strikes it sees must be
+    /// agents standing still, independently of the recorder: the strikes it sees must be
     /// the ones the world recorded (a warning otherwise).
-    fn open_step(&mut self, step: usize, world: &Recorder<'_>) {
-        let scenario = world.scenario();
+    fn open_step(&mut self, step: usize, recorder: &Recorder<'_>) {
+        let scenario = recorder.scenario();
         if scenario.moving.is_empty() {
             return;
         }
@@ -32,11 +32,17 @@ impl Judge for MonitorJudge {
             .iter()
             .map(|m| (m.sweep(step), m.radius_m))
             .collect();
-        let mut seen = self
-            .monitor
-            .move_obstacles(&sweeps, world.bodies(), world.alive());
-        let mut recorded: Vec<(usize, usize)> =
-            world.struck_now().iter().map(|&(m, a, _)| (m, a)).collect();
+        let mut seen = self.monitor.move_obstacles(
+            &sweeps,
+            recorder.world().bodies(),
+            recorder.world().alive(),
+        );
+        let mut recorded: Vec<(usize, usize)> = recorder
+            .world()
+            .struck_now()
+            .iter()
+            .map(|&(m, a, _)| (m, a))
+            .collect();
         seen.sort_unstable();
         recorded.sort_unstable();
         if seen != recorded {
@@ -59,39 +65,40 @@ impl Judge for MonitorJudge {
         &mut self,
         step: usize,
         moves: Vec<(usize, Move)>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> Vec<(usize, Move)> {
-        let simultaneous = world.scenario().turns == TurnMode::Simultaneous;
+        let simultaneous = recorder.scenario().turns == TurnMode::Simultaneous;
         let passing = if simultaneous {
-            world.alive().to_vec()
+            recorder.world().alive().to_vec()
         } else {
             Vec::new()
         };
         // A move is checked against the bodies near it, found with a grid over them, when
         // there are enough moves to pay for building it (the verdicts are the same).
-        let grid = (moves.len() > 1).then(|| shared::safety::bodies_grid(world.bodies()));
+        let grid =
+            (moves.len() > 1).then(|| shared::safety::bodies_grid(recorder.world().bodies()));
         let mut alone = Vec::with_capacity(moves.len());
         for (agent, mv) in moves {
             let standing = Standing {
-                bodies: world.bodies(),
+                bodies: recorder.world().bodies(),
                 passing: &passing,
                 grid: grid.as_ref(),
             };
-            match judge_alone(&self.monitor, world, agent, &mv, &standing) {
+            match judge_alone(&self.monitor, recorder, agent, &mv, &standing) {
                 Ok(()) => alone.push((agent, mv)),
-                Err(why) => refuse(world, step, agent, &mv, why),
+                Err(why) => refuse(recorder, step, agent, &mv, why),
             }
         }
         // Moves made at once at constant speeds (ORCA's own model) meet only if the
         // agents are close at the same time; a parallel group's timing is not known:
         // anywhere. Each meeting names the mate by its agent index.
         let meetings = if simultaneous {
-            meetings_at_once(world.bodies(), &alone)
+            meetings_at_once(recorder.world().bodies(), &alone)
         } else {
             let group: Vec<GroupMove<'_>> = alone
                 .iter()
                 .map(|(agent, mv)| GroupMove {
-                    radius_m: world.bodies()[*agent].radius_m,
+                    radius_m: recorder.world().bodies()[*agent].radius_m,
                     waypoints: &mv.waypoints,
                     refused: false,
                 })
@@ -116,7 +123,7 @@ impl Judge for MonitorJudge {
                         distance_m: m.distance_m,
                         reach_m: m.reach_m,
                     };
-                    refuse(world, step, agent, &mv, why);
+                    refuse(recorder, step, agent, &mv, why);
                 }
             }
         }
@@ -129,22 +136,22 @@ impl Judge for MonitorJudge {
 /// and the field, and its top speed.
 fn judge_alone(
     monitor: &SafetyMonitor,
-    world: &Recorder<'_>,
+    recorder: &Recorder<'_>,
     agent: usize,
     mv: &Move,
     standing: &Standing<'_>,
 ) -> Result<(), Refusal> {
-    let spec = &world.scenario().agents[agent];
+    let spec = &recorder.scenario().agents[agent];
     let chord_errors_m = monitor::check_kinematics(
         spec.kinematics,
-        world.headings()[agent],
+        recorder.world().headings()[agent],
         &mv.waypoints,
         mv.end_heading_rad,
         spec.max_step_m,
     )?;
     let under_check = MoveUnderCheck {
         agent,
-        from: &world.bodies()[agent].position,
+        from: &recorder.world().bodies()[agent].position,
         waypoints: &mv.waypoints,
         best: &mv.best,
         under_way: mv.status == MoveStatus::UnderWay,
@@ -155,10 +162,10 @@ fn judge_alone(
 }
 
 /// Record that the monitor refused `agent`'s move `mv` (`why`): it stays where it is.
-fn refuse(world: &mut Recorder<'_>, step: usize, agent: usize, mv: &Move, why: Refusal) {
+fn refuse(recorder: &mut Recorder<'_>, step: usize, agent: usize, mv: &Move, why: Refusal) {
     let why = why.to_string();
     tracing::debug!("step {step}: agent {agent}'s move rejected by the monitor: {why}");
-    world.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
+    recorder.refuse(step, agent, mv.slot, FaultKind::Rejected, why);
 }
 
 /// For each of `moves` (made at once), its meeting with a mate in time, the mate named by

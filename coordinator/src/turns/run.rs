@@ -48,17 +48,22 @@ fn run_scenario_between(
     let started = Instant::now();
     let start = centre_path.first().copied().unwrap_or(scenario.path.start);
     let mut progress = Progress::default();
-    let fail = |error: anyhow::Error, world: &Recorder, progress: Progress| RunFailure {
+    let fail = |error: anyhow::Error, recorder: &Recorder, progress: Progress| RunFailure {
         error,
-        partial: Box::new(outcome(world.snapshot(), progress, String::new(), started)),
+        partial: Box::new(outcome(
+            recorder.snapshot(),
+            progress,
+            String::new(),
+            started,
+        )),
     };
     // A resumed run goes on from its log's last step (checked by `run --resume`).
-    let mut world = match options.resume.as_deref() {
+    let mut recorder = match options.resume.as_deref() {
         None => Recorder::new(scenario, start),
         Some(logged) => {
             let run = logged.to_run(&scenario.name, scenario.unknown.len());
             match Recorder::resume(scenario, run) {
-                Some(world) => world,
+                Some(recorder) => recorder,
                 None => {
                     let error = anyhow::anyhow!("the log's last step does not fit the scenario");
                     return Err(fail(error, &Recorder::new(scenario, start), progress));
@@ -67,11 +72,11 @@ fn run_scenario_between(
         }
     };
     let opened = RunBuilder { scenario, options }
-        .open(world.alive())
+        .open(recorder.world().alive())
         .and_then(|handle| Ok((open_log(options, scenario, centre_path)?, handle)));
     let (mut log, mut handle) = match opened {
         Ok(opened) => opened,
-        Err(e) => return Err(fail(e, &world, progress)),
+        Err(e) => return Err(fail(e, &recorder, progress)),
     };
     let spawn_s = handle.early.as_ref().map_or(0.0, |e| e.spawn_s);
     progress.startup_phases.prepare = started.elapsed().as_secs_f64() - spawn_s;
@@ -85,7 +90,7 @@ fn run_scenario_between(
             log.as_mut(),
             between_steps,
         )
-        .drive(&mut world, centre_path, started)
+        .drive(&mut recorder, centre_path, started)
     }));
 
     // Whatever happened, stop the agents and clean up before reporting.
@@ -109,9 +114,9 @@ fn run_scenario_between(
         _ => error,
     };
     let run = if completed {
-        world.finish(true)
+        recorder.finish(true)
     } else {
-        world.snapshot()
+        recorder.snapshot()
     };
     let result = outcome(run, progress, prefix, started);
     match error {

@@ -21,7 +21,7 @@ impl Driver<'_> {
     /// never retried.
     pub(super) fn start_agents(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agents: &[usize],
         timeout: Duration,
@@ -45,7 +45,7 @@ impl Driver<'_> {
                     pending.retain(|&a| a != agent);
                     continue;
                 }
-                while let Some(incoming) = self.receive_own(world, step, agent)? {
+                while let Some(incoming) = self.receive_own(recorder, step, agent)? {
                     match incoming.msg {
                         Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
                             pending.retain(|&a| a != agent);
@@ -53,8 +53,8 @@ impl Driver<'_> {
                                 tracing::warn!("agent {agent}: {e:#}");
                             }
                             if replacements {
-                                world.mark_alive(agent);
-                                world.note_fault(
+                                recorder.mark_alive(agent);
+                                recorder.note_fault(
                                     step,
                                     agent,
                                     FaultKind::Respawned,
@@ -75,7 +75,7 @@ impl Driver<'_> {
                             pending.retain(|&a| a != agent);
                             break;
                         }
-                        Ok(msg) => world.note_fault(
+                        Ok(msg) => recorder.note_fault(
                             step,
                             agent,
                             FaultKind::Unsolicited,
@@ -83,7 +83,7 @@ impl Driver<'_> {
                             None,
                         ),
                         Err(why) => {
-                            world.note_fault(
+                            recorder.note_fault(
                                 step,
                                 agent,
                                 FaultKind::Malformed,
@@ -138,7 +138,7 @@ impl Driver<'_> {
             .filter(|a| !failed.iter().any(|(f, _)| f == a))
             .collect();
         let scanning = Instant::now();
-        self.scan_for_intruders(world, step, &started)?;
+        self.scan_for_intruders(recorder, step, &started)?;
         if !replacements {
             let phases = &mut self.progress.startup_phases;
             phases.handshakes = (scanning - waiting).as_secs_f64();
@@ -150,9 +150,9 @@ impl Driver<'_> {
                 self.procs.kill_now(agent);
                 self.ipc.close_channel(agent);
                 self.ipc.cleanup_dead_nodes();
-                world.note_fault(step, agent, FaultKind::RespawnFailed, why, None);
+                recorder.note_fault(step, agent, FaultKind::RespawnFailed, why, None);
             } else {
-                self.on_failed_start(world, step, agent, &why)?;
+                self.on_failed_start(recorder, step, agent, &why)?;
             }
         }
         Ok(())
@@ -161,7 +161,7 @@ impl Driver<'_> {
     /// `agent` did not start: frozen where it stands, replaced if `respawn` asks.
     pub(super) fn on_failed_start(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
         why: &str,
@@ -174,13 +174,13 @@ impl Driver<'_> {
         // Whoever sat on its channel is named before the channel goes.
         if let Some(pid) = pid {
             for intruder in self.ipc.intruders(agent, pid) {
-                self.on_intruder(world, step, agent, intruder, "opened the services of")?;
+                self.on_intruder(recorder, step, agent, intruder, "opened the services of")?;
             }
         }
         self.ipc.close_channel(agent);
         self.ipc.cleanup_dead_nodes();
-        if world.alive()[agent] {
-            world.freeze(Fault {
+        if recorder.world().alive()[agent] {
+            recorder.freeze(Fault {
                 agent,
                 step,
                 kind: FaultKind::FailedToStart,
@@ -189,7 +189,7 @@ impl Driver<'_> {
             });
         }
         if self.options.respawn {
-            self.respawn(world, step, agent)?;
+            self.respawn(recorder, step, agent)?;
         }
         Ok(())
     }
@@ -197,7 +197,7 @@ impl Driver<'_> {
     /// Start a replacement process for `agent` on a channel of its own.
     pub(super) fn respawn(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         agent: usize,
     ) -> anyhow::Result<()> {
@@ -207,7 +207,7 @@ impl Driver<'_> {
             .and_then(|_| self.spawn(agent, true));
         if let Err(e) = opened {
             tracing::warn!("agent {agent}: the replacement did not start: {e:#}");
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::RespawnFailed,
@@ -217,6 +217,6 @@ impl Driver<'_> {
             return Ok(());
         }
         // The replacement's own failure is recorded, and not retried (no respawn loop).
-        self.start_agents(world, step, &[agent], REPLACEMENT_TIMEOUT, true)
+        self.start_agents(recorder, step, &[agent], REPLACEMENT_TIMEOUT, true)
     }
 }

@@ -19,25 +19,28 @@ use super::outcome::{GroupSample, TurnSample};
 use crate::ipc::{TurnSplit, TurnWorld};
 
 impl Driver<'_> {
-    /// Take the turns of `turn`'s group in `world`, and tell the first live agent of the
+    /// Take the turns of `turn`'s group in `recorder`, and tell the first live agent of the
     /// next group that its turn comes next: the moves that came back well formed (the
     /// step loop has them judged), unless the run was interrupted.
     pub(super) fn take_group(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         turn: &GroupTurn<'_>,
     ) -> anyhow::Result<GroupMoves> {
         let (step, group) = (turn.step, turn.agents());
-        let next =
-            self.hand_over
-                .next_after(turn.groups, turn.index, self.scenario.turns, world.alive());
-        self.kill_before_turns(world, step, group);
+        let next = self.hand_over.next_after(
+            turn.groups,
+            turn.index,
+            self.scenario.turns,
+            recorder.world().alive(),
+        );
+        self.kill_before_turns(recorder, step, group);
         let began = Instant::now();
-        let turns = self.grant_group(world, turn)?;
+        let turns = self.grant_group(recorder, turn)?;
         let size = turns.len();
         self.hand_over
-            .tell_next(self.ipc, self.procs, world.alive(), group, &next);
-        let Some(moves) = self.collect_group(world, step, turns, turn.centre)? else {
+            .tell_next(self.ipc, self.procs, recorder.world().alive(), group, &next);
+        let Some(moves) = self.collect_group(recorder, step, turns, turn.centre)? else {
             self.progress.interrupted = true;
             return Ok(GroupMoves::Interrupted);
         };
@@ -52,21 +55,23 @@ impl Driver<'_> {
 
     /// Grant each live agent of `turn`'s group its turn: whatever its channel holds is
     /// taken in first (none of it answers this turn), then its world (what it senses of
-    /// `world`) is published and its turn rung, unless it polls its world
+    /// `recorder`) is published and its turn rung, unless it polls its world
     /// ([`super::hand_over::HandOver::polls_world`]).
     fn grant_group(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         turn: &GroupTurn<'_>,
     ) -> anyhow::Result<Vec<Turn>> {
         let (step, group, ahead) = (turn.step, turn.agents(), turn.ahead);
         // The bodies where they stand, in a grid, for sensing (no body moves before the
         // group is settled).
-        let sensing = self.senses.then(|| SensedAgents::new(world.bodies()));
+        let sensing = self
+            .senses
+            .then(|| SensedAgents::new(recorder.world().bodies()));
         let mut turns = Vec::with_capacity(group.len());
         for &agent in group {
-            self.drain(world, step, agent)?;
-            if !world.alive()[agent] {
+            self.drain(recorder, step, agent)?;
+            if !recorder.world().alive()[agent] {
                 continue;
             }
             let spec = &self.scenario.agents[agent];
@@ -77,9 +82,9 @@ impl Driver<'_> {
             let granted_ns = monotonic_ns();
             let view = TurnWorld {
                 centre: turn.centre,
-                heading_rad: world.headings()[agent],
-                bodies: world.bodies(),
-                alive: world.alive(),
+                heading_rad: recorder.world().headings()[agent],
+                bodies: recorder.world().bodies(),
+                alive: recorder.world().alive(),
                 visible: visible.as_deref(),
                 // As far as the agent looks ahead, and only with a top speed.
                 ahead: match spec.max_step_m {
@@ -96,7 +101,7 @@ impl Driver<'_> {
             if self.options.faults.kills_during_turn(agent, step)
                 && let Some(killed) = self.procs.signal_kill(agent)
             {
-                world.note_fault(
+                recorder.note_fault(
                     step,
                     agent,
                     FaultKind::Killed,
@@ -120,7 +125,7 @@ impl Driver<'_> {
     /// formed, or `None` if the run was interrupted.
     fn collect_group(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         turns: Vec<Turn>,
         centre: &Pose,
@@ -130,7 +135,7 @@ impl Driver<'_> {
             let agent = turn.agent;
             // Handled already while a group mate's answer was awaited (killed for
             // intruding, say, and maybe replaced): not this turn's agent any more.
-            if !world.alive()[agent] || self.procs.pid(agent) != turn.pid {
+            if !recorder.world().alive()[agent] || self.procs.pid(agent) != turn.pid {
                 continue;
             }
             let slot = self.scenario.agents[agent].slot.ideal_position(centre);
@@ -139,26 +144,26 @@ impl Driver<'_> {
             // longer (the answer may have waited in its queue meanwhile: an agent is
             // never counted late for a mate's slowness).
             let waiting_from_ns = monotonic_ns().max(turn.granted_ns);
-            match self.wait_answer(world, step, &turn)? {
+            match self.wait_answer(recorder, step, &turn)? {
                 Answer::Move(msg) => {
                     let latency =
                         Duration::from_nanos(monotonic_ns().saturating_sub(waiting_from_ns));
-                    if self.on_late_answer(world, step, agent, slot, latency)? {
+                    if self.on_late_answer(recorder, step, agent, slot, latency)? {
                         continue;
                     }
-                    if let Some(mv) = self.take_move(world, step, &turn, slot, *msg) {
+                    if let Some(mv) = self.take_move(recorder, step, &turn, slot, *msg) {
                         moves.push((agent, mv));
                     }
                 }
                 Answer::Malformed(why) => {
                     self.history.record(agent, Lateness::OnTime);
                     tracing::debug!("step {step}: agent {agent}'s answer refused: {why}");
-                    world.refuse(step, agent, slot, FaultKind::Malformed, why);
+                    recorder.refuse(step, agent, slot, FaultKind::Malformed, why);
                 }
                 Answer::Dead(after) => {
-                    self.on_death(world, step, agent, after, "died during its turn")?;
+                    self.on_death(recorder, step, agent, after, "died during its turn")?;
                 }
-                Answer::Missed => self.on_missed(world, step, agent, slot)?,
+                Answer::Missed => self.on_missed(recorder, step, agent, slot)?,
                 Answer::Interrupted => return Ok(None),
             }
         }
@@ -169,7 +174,7 @@ impl Driver<'_> {
     /// is one an agent may report (else it is refused, the agent staying).
     fn take_move(
         &mut self,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
         step: usize,
         turn: &Turn,
         slot: Point,
@@ -179,7 +184,7 @@ impl Driver<'_> {
         let agent = turn.agent;
         let latency_ns = held_ns.saturating_sub(turn.granted_ns);
         if msg.compute_ns > latency_ns {
-            world.note_fault(
+            recorder.note_fault(
                 step,
                 agent,
                 FaultKind::Malformed,
@@ -205,7 +210,7 @@ impl Driver<'_> {
             Ok(mv) => Some(mv),
             Err(why) => {
                 tracing::debug!("step {step}: agent {agent}'s move rejected: {why}");
-                world.refuse(step, agent, slot, FaultKind::Rejected, why);
+                recorder.refuse(step, agent, slot, FaultKind::Rejected, why);
                 None
             }
         }

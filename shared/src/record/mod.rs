@@ -3,9 +3,11 @@
 //!
 //! One concept a file: the record itself here ([`Run`], [`Step`], [`AgentStep`]), the
 //! faults and their kinds in `fault.rs`, the figures of a run in `summary.rs` (those of
-//! agents with a heading in `headings.rs`), and in `recorder.rs` the [`Recorder`], which
-//! holds the world state during a run and is shared by the reference simulation and the
-//! coordinator, so both keep their books the same way.
+//! agents with a heading in `headings.rs`), and in `recorder.rs` the [`Recorder`], the
+//! run's referee: it owns the world every turn reads ([`crate::world::World`]), changes
+//! it only by the moves that keep the safety invariant, and keeps this record; the step
+//! loop ([`crate::step_loop`]) drives it for the reference simulation and the coordinator
+//! alike.
 
 use crate::course::{Course, Replan, Wait};
 use crate::geometry::{Point, Pose, polyline_length_m};

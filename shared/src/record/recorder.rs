@@ -1,37 +1,31 @@
-//! The world during a run: where every agent stands, who is alive, which moves the
-//! safety invariant lets through, and the record so far.
+//! The referee and the record of a run: which moves the safety invariant lets through
+//! into the world ([`World`]), and the record of what happened so far.
 
 use super::{AgentStep, CourseRecord, Fault, FaultKind, Run, Step};
 use crate::course::Course;
 use crate::geometry::{
-    DiskGrid, Point, Pose, Vector, distance_at_the_same_time_m, distance_polyline_polyline,
-    wrap_angle_rad,
+    DiskGrid, Point, Pose, distance_at_the_same_time_m, distance_polyline_polyline,
 };
 use crate::groups::{GroupMove, group_meetings, simultaneous_meetings};
 use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
-use crate::turn::MateView;
-use crate::vocabulary::{Body, Move, MoveStatus, TurnMode};
+use crate::vocabulary::{Move, MoveStatus, TurnMode};
+use crate::world::World;
 
 mod check;
 
-/// The world during a run: where every agent stands, who is alive, and the record so far.
+/// The referee of a run and its record: it owns the [`World`] every turn reads, moves an
+/// agent only by a move that keeps the safety invariant, and records every step and fault.
 #[derive(Debug)]
 pub struct Recorder<'a> {
     scenario: &'a Scenario,
+    /// The world every turn reads.
+    world: World<'a>,
     /// Every static obstacle, known to the centre or not, with its true radius, for the
     /// safety check and clearances.
     obstacles: DiskGrid,
     /// The moving obstacles where they stand now, true radii.
     moving_now: DiskGrid,
-    /// Where each moving obstacle stands now.
-    moving: Vec<Point>,
-    /// The agents a moving obstacle's motion struck at the start of this step.
-    struck: Vec<(usize, usize, f64)>,
-    bodies: Vec<Body>,
-    /// Where each agent with a heading faces (`None` for a holonomic agent).
-    headings: Vec<Option<f64>>,
-    alive: Vec<bool>,
     /// This step's moves, one per agent, until the step ends.
     pending: Vec<Option<Move>>,
     /// Groups of turns of this step ([`Self::note_groups`]).
@@ -43,34 +37,12 @@ impl<'a> Recorder<'a> {
     /// Start a run of `scenario` with the centre at `start`: every agent at its ideal
     /// slot, every moving obstacle at its first waypoint, recorded as step 0.
     pub fn new(scenario: &'a Scenario, start: Pose) -> Self {
-        let bodies: Vec<Body> = scenario
-            .agents
-            .iter()
-            .map(|a| Body {
-                position: a.slot.ideal_position(&start),
-                radius_m: a.radius_m,
-            })
-            .collect();
-        let n = bodies.len();
-        let headings = scenario
-            .agents
-            .iter()
-            .map(|a| {
-                a.kinematics
-                    .has_heading()
-                    .then(|| wrap_angle_rad(start.heading_rad + a.heading_offset_rad))
-            })
-            .collect();
-        let moving: Vec<Point> = scenario.moving.iter().map(|m| m.position_at(0)).collect();
+        let world = World::new(scenario, start);
+        let n = scenario.agents.len();
         let mut recorder = Self {
             scenario,
             obstacles: DiskGrid::new(scenario.static_obstacles()),
             moving_now: Self::moving_at(scenario, 0),
-            moving,
-            struck: Vec::new(),
-            bodies,
-            headings,
-            alive: vec![true; n],
             pending: vec![None; n],
             groups: 0,
             run: Run {
@@ -81,8 +53,9 @@ impl<'a> Recorder<'a> {
                 completed: false,
                 course: CourseRecord::default(),
             },
+            world,
         };
-        for (i, b) in recorder.bodies.clone().iter().enumerate() {
+        for (i, b) in recorder.world.bodies().iter().enumerate() {
             recorder.pending[i] = Some(Move {
                 end_heading_rad: None,
                 slot: b.position,
@@ -106,25 +79,37 @@ impl<'a> Recorder<'a> {
         {
             return None;
         }
-        let bodies = last.bodies(scenario);
-        let n = bodies.len();
+        let from = run.steps.len().saturating_sub(2);
+        let world = World::resumed(
+            scenario,
+            last.bodies(scenario),
+            last.agents.iter().map(|a| a.heading_rad).collect(),
+            last.agents.iter().map(|a| a.alive).collect(),
+            last.moving.clone(),
+            run.steps[from..]
+                .iter()
+                .map(|s| s.agents.iter().map(|a| a.position).collect())
+                .collect(),
+        );
+        let last = last.step;
         Some(Self {
             scenario,
             obstacles: DiskGrid::new(scenario.static_obstacles()),
-            moving_now: Self::moving_at(scenario, last.step),
-            moving: last.moving.clone(),
-            struck: Vec::new(),
-            alive: last.agents.iter().map(|a| a.alive).collect(),
-            headings: last.agents.iter().map(|a| a.heading_rad).collect(),
-            bodies,
-            pending: vec![None; n],
+            moving_now: Self::moving_at(scenario, last),
+            pending: vec![None; scenario.agents.len()],
             groups: 0,
             run: Run {
                 centre_path: run.steps.iter().map(|s| s.centre).collect(),
                 completed: false,
                 ..run
             },
+            world,
         })
+    }
+
+    /// The world every turn reads.
+    pub fn world(&self) -> &World<'a> {
+        &self.world
     }
 
     /// The scenario being run.
@@ -147,16 +132,17 @@ impl<'a> Recorder<'a> {
         if self.scenario.moving.is_empty() {
             return;
         }
+        let mut struck = Vec::new();
         for (m, obstacle) in self.scenario.moving.iter().enumerate() {
             let sweep = obstacle.sweep(step);
-            for (a, body) in self.bodies.iter().enumerate() {
-                if !self.alive[a] {
+            for (a, body) in self.world.bodies().iter().enumerate() {
+                if !self.world.alive()[a] {
                     continue;
                 }
                 let reach_m = obstacle.radius_m + body.radius_m;
                 let distance_m = distance_polyline_polyline(&sweep, &[body.position]);
                 if distance_m < reach_m - SAFETY_TOLERANCE_M {
-                    self.struck.push((m, a, distance_m));
+                    struck.push((m, a, distance_m));
                     self.run.faults.push(Fault {
                         agent: a,
                         step,
@@ -168,76 +154,14 @@ impl<'a> Recorder<'a> {
                     });
                 }
             }
-            self.moving[m] = obstacle.position_at(step);
+        }
+        for (m, a, distance_m) in struck {
+            self.world.note_strike(m, a, distance_m);
+        }
+        for (m, obstacle) in self.scenario.moving.iter().enumerate() {
+            self.world.place_moving(m, obstacle.position_at(step));
         }
         self.moving_now = Self::moving_at(self.scenario, step);
-    }
-
-    /// `(moving obstacle, agent, distance in metres)` for each strike of this step's
-    /// obstacle motion ([`Self::begin_step`]), each also recorded as a fault `struck`.
-    pub fn struck_now(&self) -> &[(usize, usize, f64)] {
-        &self.struck
-    }
-
-    /// Where each moving obstacle stands now, in scenario order.
-    pub fn moving_positions(&self) -> &[Point] {
-        &self.moving
-    }
-
-    /// Every agent's body, in agent order.
-    pub fn bodies(&self) -> &[Body] {
-        &self.bodies
-    }
-
-    /// Where each agent faces, in agent order: `None` for a holonomic agent.
-    pub fn headings(&self) -> &[Option<f64>] {
-        &self.headings
-    }
-
-    /// Whether each agent is alive, in agent order.
-    pub fn alive(&self) -> &[bool] {
-        &self.alive
-    }
-
-    /// Every body but `agent`'s: the other agents, dead or alive, which stand still.
-    pub fn others(&self, agent: usize) -> Vec<Body> {
-        self.bodies
-            .iter()
-            .enumerate()
-            .filter(|(j, _)| *j != agent)
-            .map(|(_, b)| *b)
-            .collect()
-    }
-
-    /// Every agent as the world shows it to its mates ([`MateView`]), in index order
-    /// (for [`crate::turn::TurnController::mate_views`]).
-    pub fn views(&self) -> impl Iterator<Item = MateView> + '_ {
-        self.bodies
-            .iter()
-            .zip(&self.alive)
-            .enumerate()
-            .map(|(agent, (b, &alive))| MateView {
-                agent,
-                position: b.position,
-                alive,
-            })
-    }
-
-    /// How far each agent moved over the last recorded step (metres per step: its
-    /// velocity), from the positions recorded at the end of the last two steps; zero
-    /// before two steps are recorded. What agents moving simultaneously know of each
-    /// other ([`crate::vocabulary::TurnMode::Simultaneous`]).
-    pub fn velocities(&self) -> Vec<Vector> {
-        let steps = &self.run.steps;
-        match steps.len() {
-            0 | 1 => vec![Vector::zeros(); self.bodies.len()],
-            n => steps[n - 1]
-                .agents
-                .iter()
-                .zip(&steps[n - 2].agents)
-                .map(|(now, before)| now.position - before.position)
-                .collect(),
-        }
     }
 
     /// The steps recorded so far.
@@ -292,16 +216,16 @@ impl<'a> Recorder<'a> {
         let simultaneous = self.scenario.turns == TurnMode::Simultaneous;
         let mut passing = Vec::new();
         if simultaneous {
-            passing = vec![false; self.bodies.len()];
+            passing = vec![false; self.world.bodies().len()];
             for (agent, _) in &moves {
                 passing[*agent] = true;
             }
         }
         // Each move against the bodies near it, found with a grid over them, when there
         // are enough moves to pay for building it (the verdicts are the same).
-        let grid = (moves.len() > 1).then(|| safety::bodies_grid(&self.bodies));
+        let grid = (moves.len() > 1).then(|| safety::bodies_grid(self.world.bodies()));
         let others = safety::Others {
-            bodies: &self.bodies,
+            bodies: self.world.bodies(),
             passing: &passing,
             grid: grid.as_ref(),
         };
@@ -312,14 +236,14 @@ impl<'a> Recorder<'a> {
         // A move refused on its own leaves its agent where it stands.
         let starts: Vec<[Point; 1]> = moves
             .iter()
-            .map(|(agent, _)| [self.bodies[*agent].position])
+            .map(|(agent, _)| [self.world.bodies()[*agent].position])
             .collect();
         let group: Vec<GroupMove<'_>> = moves
             .iter()
             .zip(&verdicts)
             .zip(&starts)
             .map(|(((agent, mv), verdict), start)| GroupMove {
-                radius_m: self.bodies[*agent].radius_m,
+                radius_m: self.world.bodies()[*agent].radius_m,
                 waypoints: if simultaneous && verdict.is_err() {
                     start
                 } else {
@@ -345,10 +269,7 @@ impl<'a> Recorder<'a> {
         for ((agent, mv), verdict) in moves.into_iter().zip(&verdicts) {
             match verdict {
                 Ok(()) => {
-                    self.bodies[agent].position = mv.end();
-                    if self.headings[agent].is_some() {
-                        self.headings[agent] = mv.end_heading_rad.map(wrap_angle_rad);
-                    }
+                    self.world.take_move(agent, &mv);
                     self.pending[agent] = Some(mv);
                 }
                 Err(v) => {
@@ -377,7 +298,7 @@ impl<'a> Recorder<'a> {
         } else {
             MoveStatus::Rejected
         };
-        let here = self.bodies[agent].position;
+        let here = self.world.bodies()[agent].position;
         self.pending[agent] = Some(Move {
             end_heading_rad: None,
             slot,
@@ -425,7 +346,7 @@ impl<'a> Recorder<'a> {
     /// [`FaultKind::FailedToStart`], ...).
     pub fn freeze(&mut self, fault: Fault) {
         let (step, agent) = (fault.step, fault.agent);
-        let here = self.bodies[agent].position;
+        let here = self.world.bodies()[agent].position;
         let centre = self
             .run
             .centre_path
@@ -439,13 +360,13 @@ impl<'a> Recorder<'a> {
             status: MoveStatus::Dead,
             waypoints: vec![here],
         });
-        self.alive[agent] = false;
+        self.world.set_alive(agent, false);
         self.run.faults.push(fault);
     }
 
     /// Put `agent` back into the formation (a replacement process took its place).
     pub fn mark_alive(&mut self, agent: usize) {
-        self.alive[agent] = true;
+        self.world.set_alive(agent, true);
     }
 
     /// Close step `step`: record every agent's row with its deviation and clearance.
@@ -460,17 +381,22 @@ impl<'a> Recorder<'a> {
             .obstacles
             .max_radius_m()
             .max(self.moving_now.max_radius_m())
-            + self.bodies.iter().map(|b| b.radius_m).fold(0.0, f64::max);
-        let mut agents = Vec::with_capacity(self.bodies.len());
-        let grid = safety::bodies_grid(&self.bodies);
-        for i in 0..self.bodies.len() {
-            let body = self.bodies[i];
+            + self
+                .world
+                .bodies()
+                .iter()
+                .map(|b| b.radius_m)
+                .fold(0.0, f64::max);
+        let mut agents = Vec::with_capacity(self.world.bodies().len());
+        let grid = safety::bodies_grid(self.world.bodies());
+        for i in 0..self.world.bodies().len() {
+            let body = self.world.bodies()[i];
             let slot = self.scenario.agents[i].slot.ideal_position(&centre);
             let mv = self.pending[i].take().unwrap_or(Move {
                 end_heading_rad: None,
                 slot,
                 best: body.position,
-                status: if self.alive[i] {
+                status: if self.world.alive()[i] {
                     MoveStatus::Stayed
                 } else {
                     MoveStatus::Dead
@@ -480,7 +406,7 @@ impl<'a> Recorder<'a> {
             // Obstacles farther than the largest radii sum cannot be the nearest overlap;
             // look a little farther so clearance is reported for near misses too.
             let (to_static, _) = safety::clearances_m(&body, &self.obstacles, &[], reach_m + 10.0);
-            let to_other = safety::clearance_to_others_m(&self.bodies, i, &grid);
+            let to_other = safety::clearance_to_others_m(self.world.bodies(), i, &grid);
             let to_static = to_static.min(safety::clearance_to_polygons_m(
                 &body,
                 &self.scenario.polygons,
@@ -499,9 +425,9 @@ impl<'a> Recorder<'a> {
                 deviation_m: (body.position - slot).norm(),
                 clearance_m: to_obstacle.min(to_other),
                 status: mv.status,
-                alive: self.alive[i],
+                alive: self.world.alive()[i],
                 waypoints: mv.waypoints,
-                heading_rad: self.headings[i],
+                heading_rad: self.world.headings()[i],
             });
         }
         self.run.steps.push(Step {
@@ -509,8 +435,8 @@ impl<'a> Recorder<'a> {
             centre,
             agents,
             groups: std::mem::take(&mut self.groups),
-            moving: self.moving.clone(),
-            struck: std::mem::take(&mut self.struck),
+            moving: self.world.moving_positions().to_vec(),
+            struck: self.world.end_step(),
         });
     }
 

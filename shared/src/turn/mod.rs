@@ -65,7 +65,7 @@ pub struct Velocities {
 
 impl Velocities {
     /// Agent `agent`'s view of `all` (every agent's, by index): its own, and the others'
-    /// in index order, as [`crate::record::Recorder::others`] lists their bodies.
+    /// in index order, as [`crate::world::World::others`] lists their bodies.
     pub fn of_agent(all: &[Vector], agent: usize) -> Self {
         Self {
             me: all.get(agent).copied().unwrap_or_default(),

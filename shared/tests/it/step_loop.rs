@@ -40,14 +40,14 @@ impl MoveSource for Planners {
     fn take_group(
         &mut self,
         turn: &GroupTurn<'_>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> Result<GroupMoves, String> {
         if self.interrupt_at == Some(turn.step) {
             return Ok(GroupMoves::Interrupted);
         }
         let moves = turn.agents().iter().map(|&agent| {
-            let others = world.others(agent);
-            let me = world.bodies()[agent].position;
+            let others = recorder.world().others(agent);
+            let me = recorder.world().bodies()[agent].position;
             let request = TurnRequest::new(*turn.centre, me, &others).at_step(turn.step);
             (agent, self.controllers[agent].plan(&request))
         });
@@ -85,11 +85,11 @@ impl Judge for RefuseAll {
         &mut self,
         step: usize,
         moves: Vec<(usize, Move)>,
-        world: &mut Recorder<'_>,
+        recorder: &mut Recorder<'_>,
     ) -> Vec<(usize, Move)> {
         for (agent, mv) in moves {
             self.shown += 1;
-            world.refuse(step, agent, mv.slot, FaultKind::Rejected, "refused".into());
+            recorder.refuse(step, agent, mv.slot, FaultKind::Rejected, "refused".into());
         }
         Vec::new()
     }
@@ -105,11 +105,11 @@ fn paper() -> (Scenario, Vec<Pose>) {
 fn a_source_of_plain_turns_reproduces_the_reference_on_the_paper() {
     let (scenario, path) = paper();
     let mut course = Course::new(&scenario, &path);
-    let mut world = Recorder::new(&scenario, course.pose());
+    let mut recorder = Recorder::new(&scenario, course.pose());
     let mut planners = Planners::of(&scenario);
     let last = run_steps(
         &mut course,
-        &mut world,
+        &mut recorder,
         0,
         &mut planners,
         &mut WorldChecksOnly,
@@ -117,19 +117,24 @@ fn a_source_of_plain_turns_reproduces_the_reference_on_the_paper() {
     assert_eq!(last, Ok(path.len() - 1));
     assert_eq!(planners.closed, (1..path.len()).collect::<Vec<_>>());
     let reference = simulate_along(&scenario, &path).expect("reference");
-    assert_eq!(world.finish(true), reference);
+    assert_eq!(recorder.finish(true), reference);
 }
 
 #[test]
 fn a_judge_that_refuses_every_move_leaves_every_agent_where_it_started() {
     let (scenario, path) = paper();
     let mut course = Course::new(&scenario, &path);
-    let mut world = Recorder::new(&scenario, course.pose());
-    let start: Vec<_> = world.bodies().iter().map(|b| b.position).collect();
+    let mut recorder = Recorder::new(&scenario, course.pose());
+    let start: Vec<_> = recorder
+        .world()
+        .bodies()
+        .iter()
+        .map(|b| b.position)
+        .collect();
     let mut judge = RefuseAll::default();
     let last = run_steps(
         &mut course,
-        &mut world,
+        &mut recorder,
         0,
         &mut Planners::of(&scenario),
         &mut judge,
@@ -139,7 +144,7 @@ fn a_judge_that_refuses_every_move_leaves_every_agent_where_it_started() {
     assert_eq!(judge.steps_opened, (1..=steps).collect::<Vec<_>>());
     // Every live agent's move was shown to the judge, and nothing else moved anyone.
     assert_eq!(judge.shown, steps * scenario.agents.len());
-    let run = world.finish(true);
+    let run = recorder.finish(true);
     for step in &run.steps {
         let now: Vec<_> = step.agents.iter().map(|a| a.position).collect();
         assert_eq!(now, start, "step {}", step.step);
@@ -157,21 +162,21 @@ fn a_judge_that_refuses_every_move_leaves_every_agent_where_it_started() {
 fn an_interrupted_group_stops_the_loop_with_its_step_left_open() {
     let (scenario, path) = paper();
     let mut course = Course::new(&scenario, &path);
-    let mut world = Recorder::new(&scenario, course.pose());
+    let mut recorder = Recorder::new(&scenario, course.pose());
     let mut planners = Planners {
         interrupt_at: Some(5),
         ..Planners::of(&scenario)
     };
     let last = run_steps(
         &mut course,
-        &mut world,
+        &mut recorder,
         0,
         &mut planners,
         &mut WorldChecksOnly,
     );
     assert_eq!(last, Ok(5));
     assert_eq!(planners.closed, [1, 2, 3, 4]);
-    let recorded: Vec<usize> = world.steps().iter().map(|s| s.step).collect();
+    let recorded: Vec<usize> = recorder.steps().iter().map(|s| s.step).collect();
     assert_eq!(recorded, [0, 1, 2, 3, 4], "step 5 is not closed");
 }
 
@@ -179,30 +184,30 @@ fn an_interrupted_group_stops_the_loop_with_its_step_left_open() {
 fn a_source_that_stops_after_a_step_ends_the_run_there_with_the_step_closed() {
     let (scenario, path) = paper();
     let mut course = Course::new(&scenario, &path);
-    let mut world = Recorder::new(&scenario, course.pose());
+    let mut recorder = Recorder::new(&scenario, course.pose());
     let mut planners = Planners {
         stop_after: Some(7),
         ..Planners::of(&scenario)
     };
     let last = run_steps(
         &mut course,
-        &mut world,
+        &mut recorder,
         0,
         &mut planners,
         &mut WorldChecksOnly,
     );
     assert_eq!(last, Ok(7));
-    assert_eq!(world.steps().last().map(|s| s.step), Some(7));
+    assert_eq!(recorder.steps().last().map(|s| s.step), Some(7));
     // Resumed from there, the loop goes on to the end, as the reference does.
     planners.stop_after = None;
     let last = run_steps(
         &mut course,
-        &mut world,
+        &mut recorder,
         7,
         &mut planners,
         &mut WorldChecksOnly,
     );
     assert_eq!(last, Ok(path.len() - 1));
     let reference = simulate_along(&scenario, &path).expect("reference");
-    assert_eq!(world.finish(true), reference);
+    assert_eq!(recorder.finish(true), reference);
 }

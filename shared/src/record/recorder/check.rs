@@ -21,10 +21,10 @@ impl Recorder<'_> {
         mv: &Move,
         others: &safety::Others<'_>,
     ) -> Result<(), Violation> {
-        let body = self.bodies[agent];
+        let body = self.world.bodies()[agent];
         let spec = &self.scenario.agents[agent];
         // A car's chords stand for arcs: read them back, and grow each by its bulge.
-        let chord_errors_m = match (self.headings[agent], spec.kinematics) {
+        let chord_errors_m = match (self.world.headings()[agent], spec.kinematics) {
             (
                 Some(heading_rad),
                 Kinematics::Car {
@@ -71,7 +71,7 @@ impl Recorder<'_> {
                 max_turn_rad,
                 reverse,
             },
-        ) = (self.headings[agent], spec.kinematics)
+        ) = (self.world.headings()[agent], spec.kinematics)
         {
             let Some(end_rad) = mv.end_heading_rad.filter(|h| h.is_finite()) else {
                 return Err(Violation::NoHeading);
