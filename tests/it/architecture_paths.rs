@@ -1,8 +1,8 @@
 //! ARCHITECTURE.md's "Where each concept lives" table against the repository: every path
 //! the table names exists. A path is a backticked span in the table's `file` column
 //! outside parentheses (those name items inside a file, such as `TurnController::plan_turn`);
-//! `{a,b,c}` lists expand to one path each (`shared/src/geometry/{pose,disk}.rs` is
-//! `shared/src/geometry/pose.rs` and `shared/src/geometry/disk.rs`), and a path ending in
+//! `{a,b,c}` lists expand to one path each (`shared/core/src/geometry/{pose,disk}.rs` is
+//! `shared/core/src/geometry/pose.rs` and `shared/core/src/geometry/disk.rs`), and a path ending in
 //! `/` names a folder.
 
 use std::path::Path;
@@ -163,8 +163,11 @@ fn every_path_in_the_concept_table_exists() {
 #[test]
 fn brace_lists_expand_to_one_path_per_choice() {
     assert_eq!(
-        expand_braces("shared/src/geometry/{pose,disk}.rs"),
-        ["shared/src/geometry/pose.rs", "shared/src/geometry/disk.rs"]
+        expand_braces("shared/core/src/geometry/{pose,disk}.rs"),
+        [
+            "shared/core/src/geometry/pose.rs",
+            "shared/core/src/geometry/disk.rs"
+        ]
     );
     assert_eq!(
         expand_braces("a/{b,c}/{d,e}.rs"),
@@ -176,8 +179,8 @@ fn brace_lists_expand_to_one_path_per_choice() {
 #[test]
 fn items_in_parentheses_are_not_paths() {
     assert_eq!(
-        paths_in_cell("`shared/src/turn.rs` (`TurnController::plan_turn`)"),
-        ["shared/src/turn.rs"]
+        paths_in_cell("`shared/core/src/turn.rs` (`TurnController::plan_turn`)"),
+        ["shared/core/src/turn.rs"]
     );
     assert_eq!(
         paths_in_cell("`shared/wire/src/misbehave.rs`, `agent/src/{misbehave,rogue}.rs`"),
@@ -194,10 +197,10 @@ fn a_wrong_path_is_reported_with_its_line() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let table = format!(
         "{SECTION}\n\n| concept | file |\n|---|---|\n\
-         | exists | `shared/src/{{lib,sensing}}.rs` |\n\
-         | a folder | `shared/src/vocabulary/` |\n\
-         | wrong | `shared/src/{{sensing,no_such_module}}.rs` |\n\
-         | a file named as a folder | `shared/src/lib.rs/` |\n"
+         | exists | `shared/core/src/{{lib,sensing}}.rs` |\n\
+         | a folder | `shared/core/src/vocabulary/` |\n\
+         | wrong | `shared/core/src/{{sensing,no_such_module}}.rs` |\n\
+         | a file named as a folder | `shared/core/src/lib.rs/` |\n"
     );
     let paths: Vec<(usize, String)> = file_cells(&table)
         .iter()
@@ -207,8 +210,8 @@ fn a_wrong_path_is_reported_with_its_line() {
     assert_eq!(
         missing(root, &paths),
         [
-            "ARCHITECTURE.md:7: shared/src/no_such_module.rs",
-            "ARCHITECTURE.md:8: shared/src/lib.rs/"
+            "ARCHITECTURE.md:7: shared/core/src/no_such_module.rs",
+            "ARCHITECTURE.md:8: shared/core/src/lib.rs/"
         ]
     );
 }

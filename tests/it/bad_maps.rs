@@ -13,7 +13,7 @@ use crate::support;
 /// naming the file and the field, as a scenario is.
 #[test]
 fn coordinator_validate_reads_a_real_map_and_refuses_bad_ones_with_one_line() {
-    let maps = support::repo_root().join("shared/tests/data/maps");
+    let maps = support::repo_root().join("shared/core/tests/data/maps");
     let mut cmd = Command::new(support::coordinator_bin());
     cmd.arg("validate").arg(maps.join("depot.yaml"));
     let output = support::run_bounded(cmd).unwrap_or_else(|e| panic!("{e}"));

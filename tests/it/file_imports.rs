@@ -19,7 +19,7 @@ use testkit::rust_source::{code_only, is_ident_char, rust_files};
 fn source_dirs() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     [
-        "shared",
+        "shared/core",
         "shared/wire",
         "shared/net",
         "shared/testkit",

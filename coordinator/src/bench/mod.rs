@@ -24,7 +24,7 @@
 //! second, turn groups per step and turn latency side by side. With `--log-scenario
 //! FILE`, the step loop with the run log and without ([`log_cost`]).
 //!
-//! The compute side alone is measured by the Criterion benchmarks in `shared/benches`.
+//! The compute side alone is measured by the Criterion benchmarks in `shared/core/benches`.
 //! JSON goes to stdout (and `--out`), the table to stderr, the histogram to an SVG file.
 //! Speed is reported, never asserted.
 

@@ -19,7 +19,7 @@
 //! not positive is an error naming the line.
 //!
 //! The six instances the tests and benchmarks use are copied into this repository, with
-//! CL-CBS's MIT licence beside them, in `shared/tests/data/clcbs`: see
+//! CL-CBS's MIT licence beside them, in `shared/core/tests/data/clcbs`: see
 //! [`default_clcbs_dir`].
 //!
 //! ```
@@ -53,11 +53,14 @@ pub const CLCBS_INSTANCE_FILES: [&str; 6] = [
 pub const CLCBS_DIR_ENV: &str = "FORMATION_CLCBS_DIR";
 
 /// Folder holding the CL-CBS instances: the environment variable `FORMATION_CLCBS_DIR`
-/// when set and not empty, else the copy in this repository, `shared/tests/data/clcbs`.
+/// when set and not empty, else the copy in this repository, `shared/core/tests/data/clcbs`.
 pub fn default_clcbs_dir() -> PathBuf {
     match std::env::var_os(CLCBS_DIR_ENV) {
         Some(dir) if !dir.is_empty() => PathBuf::from(dir),
-        _ => PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/clcbs")),
+        _ => PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../core/tests/data/clcbs"
+        )),
     }
 }
 
