@@ -13,6 +13,16 @@ use crate::agents::Exit;
 /// How long a replacement process has to shake hands.
 const REPLACEMENT_TIMEOUT: Duration = Duration::from_secs(10);
 
+/// Where an agent's ready handshake stands ([`Driver::read_handshake`]).
+enum Handshake {
+    /// Not there yet.
+    Waiting,
+    /// Received, naming the agent's own process.
+    Done,
+    /// Wrong or malformed: why.
+    Failed(String),
+}
+
 impl Driver<'_> {
     /// Wait for the ready handshake of every agent in `agents` (their processes are
     /// started). An agent that exits first, sends a bad handshake or none in `timeout`
@@ -45,55 +55,12 @@ impl Driver<'_> {
                     pending.retain(|&a| a != agent);
                     continue;
                 }
-                while let Some(incoming) = self.receive_own(recorder, step, agent)? {
-                    match incoming.msg {
-                        Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
-                            pending.retain(|&a| a != agent);
-                            if let Err(e) = self.ipc.update_connections(agent) {
-                                tracing::warn!("agent {agent}: {e:#}");
-                            }
-                            if replacements {
-                                recorder.mark_alive(agent);
-                                recorder.note_fault(
-                                    step,
-                                    agent,
-                                    FaultKind::Respawned,
-                                    format!(
-                                        "replacement process {} takes the slot from the last position",
-                                        msg.pid
-                                    ),
-                                    None,
-                                );
-                            }
-                            break;
-                        }
-                        Ok(msg) if msg.kind == StateKind::Ready => {
-                            failed.push((
-                                agent,
-                                format!("its handshake claims process {}, not {pid:?}", msg.pid),
-                            ));
-                            pending.retain(|&a| a != agent);
-                            break;
-                        }
-                        Ok(msg) => recorder.note_fault(
-                            step,
-                            agent,
-                            FaultKind::Unsolicited,
-                            format!("a {:?} message before its handshake; ignored", msg.kind),
-                            None,
-                        ),
-                        Err(why) => {
-                            recorder.note_fault(
-                                step,
-                                agent,
-                                FaultKind::Malformed,
-                                format!("handshake: {why}"),
-                                None,
-                            );
-                            failed.push((agent, format!("a malformed handshake ({why})")));
-                            pending.retain(|&a| a != agent);
-                            break;
-                        }
+                match self.read_handshake(recorder, step, agent, replacements)? {
+                    Handshake::Waiting => {}
+                    Handshake::Done => pending.retain(|&a| a != agent),
+                    Handshake::Failed(why) => {
+                        failed.push((agent, why));
+                        pending.retain(|&a| a != agent);
                     }
                 }
             }
@@ -144,6 +111,78 @@ impl Driver<'_> {
             phases.handshakes = (scanning - waiting).as_secs_f64();
             phases.intruder_scan = scanning.elapsed().as_secs_f64();
         }
+        self.settle_failed_starts(recorder, step, failed, replacements)
+    }
+
+    /// Take in what `agent`'s channel holds before its handshake: `Done` once its ready
+    /// handshake names its own process (a replacement is then recorded `respawned` and
+    /// put back into the formation), `Failed` with why for a handshake that is wrong or
+    /// malformed, `Waiting` while there is none yet.
+    fn read_handshake(
+        &mut self,
+        recorder: &mut Recorder<'_>,
+        step: usize,
+        agent: usize,
+        replacements: bool,
+    ) -> anyhow::Result<Handshake> {
+        let pid = self.procs.pid(agent);
+        while let Some(incoming) = self.receive_own(recorder, step, agent)? {
+            match incoming.msg {
+                Ok(msg) if msg.kind == StateKind::Ready && Some(msg.pid) == pid => {
+                    if let Err(e) = self.ipc.update_connections(agent) {
+                        tracing::warn!("agent {agent}: {e:#}");
+                    }
+                    if replacements {
+                        recorder.mark_alive(agent);
+                        recorder.note_fault(
+                            step,
+                            agent,
+                            FaultKind::Respawned,
+                            format!(
+                                "replacement process {} takes the slot from the last position",
+                                msg.pid
+                            ),
+                            None,
+                        );
+                    }
+                    return Ok(Handshake::Done);
+                }
+                Ok(msg) if msg.kind == StateKind::Ready => {
+                    let why = format!("its handshake claims process {}, not {pid:?}", msg.pid);
+                    return Ok(Handshake::Failed(why));
+                }
+                Ok(msg) => recorder.note_fault(
+                    step,
+                    agent,
+                    FaultKind::Unsolicited,
+                    format!("a {:?} message before its handshake; ignored", msg.kind),
+                    None,
+                ),
+                Err(why) => {
+                    recorder.note_fault(
+                        step,
+                        agent,
+                        FaultKind::Malformed,
+                        format!("handshake: {why}"),
+                        None,
+                    );
+                    return Ok(Handshake::Failed(format!("a malformed handshake ({why})")));
+                }
+            }
+        }
+        Ok(Handshake::Waiting)
+    }
+
+    /// Record the agents that did not start (`failed`, with why): a replacement as
+    /// `respawn_failed`, its process and channel gone (never retried); any other frozen
+    /// where it stands, or replaced with `respawn`.
+    fn settle_failed_starts(
+        &mut self,
+        recorder: &mut Recorder<'_>,
+        step: usize,
+        failed: Vec<(usize, String)>,
+        replacements: bool,
+    ) -> anyhow::Result<()> {
         for (agent, why) in failed {
             if replacements {
                 tracing::warn!("agent {agent}: the replacement did not start: {why}");
