@@ -3,12 +3,12 @@
 //! simulation's too) as its source of moves, the monitor as an extra judge. Its methods
 //! are spread over `turns/` by concern: the run and its steps' edges here, a group's
 //! turns in `turn.rs`, waiting for an answer in `answer.rs`, handshakes in `startup.rs`,
-//! faults in `faults.rs` and `deaths.rs`, the monitor's judgement in `judge.rs`.
+//! faults in `faults.rs` and `deaths.rs`, the monitor's judgement in `judge.rs`, what
+//! follows each step in `step_report.rs`.
 
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use shared::course::Course;
 use shared::geometry::Pose;
 use shared::record::{Recorder, replay_course};
@@ -22,34 +22,12 @@ use super::launch::AgentLaunch;
 use super::options::RunOptions;
 use super::outcome::Progress;
 use super::run_handle::{EarlyStart, RunHandle};
+use super::step_report::{BetweenStepsFn, StepReport, StepSeen};
 use crate::agents::{AgentProcesses, Exit};
 use crate::ipc::CoordinatorIpc;
 use crate::monitor::SafetyMonitor;
 use crate::procfs::{self, IdleCpu};
 use crate::run_log::LogThread;
-
-/// The `tracing` target of the line logged when a step is done (`step N done`):
-/// `RUST_LOG=coordinator::progress=info` shows one such line per step on stderr.
-pub const PROGRESS_TARGET: &str = "coordinator::progress";
-
-/// What the hook of [`super::run_scenario_with`] sees between two steps.
-pub struct BetweenSteps<'a> {
-    /// The step just finished.
-    pub step: usize,
-    /// The run's prefix (every resource of the run starts with it).
-    pub prefix: &'a str,
-    /// The run's ports (benchmarks ring the agents' echo through them).
-    pub(crate) ipc: &'a CoordinatorIpc,
-    /// Which agents are alive.
-    pub alive: &'a [bool],
-    /// The step's groups of turns (agents granted together), in the order taken.
-    pub groups: &'a [Vec<usize>],
-    /// Each agent's process id, if it has a process.
-    pub pids: &'a [Option<u32>],
-}
-
-/// What a caller does after every step ([`super::run_scenario_with`]).
-pub type BetweenStepsFn<'a> = dyn FnMut(BetweenSteps<'_>) -> anyhow::Result<()> + 'a;
 
 /// One run while it goes: the scenario and options, the ports and processes, the record
 /// and what the step loop has measured.
@@ -67,21 +45,10 @@ pub(super) struct Driver<'a> {
     pub(super) senses: bool,
     /// How an agent's process is started.
     pub(super) launch: &'a AgentLaunch,
-    /// The run's log, handed every step as it ends (written by a thread of its own,
-    /// which also tells each step done once it is in the file).
-    pub(super) log: Option<&'a mut LogThread>,
-    /// How many of the turn samples are in the log.
-    pub(super) turns_logged: usize,
     /// The agents already started, behind their gate (none over a network).
     pub(super) early: Option<EarlyStart>,
-    /// What the caller does after every step (benchmarks), if anything.
-    pub(super) between_steps: Option<&'a mut BetweenStepsFn<'a>>,
-    /// How long the caller's hook took, seconds: not the step loop's time.
-    pub(super) between_s: f64,
-    /// The machine's CPU ticks (idle, all) during the caller's hook.
-    pub(super) between_ticks: (u64, u64),
-    /// The progress bar of the steps (hidden unless asked for).
-    pub(super) bar: ProgressBar,
+    /// What follows each step: the log, the progress bar, the caller's hook.
+    pub(super) report: StepReport<'a>,
 }
 
 impl<'a> Driver<'a> {
@@ -111,15 +78,8 @@ impl<'a> Driver<'a> {
             hand_over: HandOver::new(options.wait.spins(), n),
             senses: scenario.agents.iter().any(|a| a.sensing_radius_m.is_some()),
             launch: &handle.launch,
-            log,
-            turns_logged: 0,
             early: handle.early.take(),
-            // Reborrowed for the driver's lifetime (a trait object's bound shortens only
-            // through a coercion, which an `Option` does not make by itself).
-            between_steps: between_steps.map(|f| f as &mut BetweenStepsFn<'_>),
-            between_s: 0.0,
-            between_ticks: (0, 0),
-            bar: ProgressBar::hidden(),
+            report: StepReport::new(log, between_steps),
         }
     }
 
@@ -128,33 +88,6 @@ impl<'a> Driver<'a> {
         let generation = self.ipc.generation(agent).unwrap_or(0);
         let extra = self.launch.args(agent, replacement, generation);
         self.procs.spawn(agent, &extra)?;
-        Ok(())
-    }
-
-    /// Log the step just recorded, with what happened since the last one.
-    fn log_step(
-        &mut self,
-        recorder: &Recorder<'_>,
-        course: Option<&Course<'_>>,
-    ) -> anyhow::Result<()> {
-        let course = course.map(crate::run_log::CourseSoFar::of);
-        let Some(log) = self.log.as_deref_mut() else {
-            return Ok(());
-        };
-        let Some(step) = recorder.steps().last() else {
-            return Ok(());
-        };
-        let turns = self.progress.turn_samples[self.turns_logged..]
-            .iter()
-            .map(|t| crate::run_log::TurnMessage {
-                step: t.step,
-                agent: t.agent,
-                latency_us: t.latency_us,
-                compute_us: t.compute_us,
-            })
-            .collect();
-        log.log_step(step, recorder.faults(), course, turns)?;
-        self.turns_logged = self.progress.turn_samples.len();
         Ok(())
     }
 
@@ -181,12 +114,12 @@ impl<'a> Driver<'a> {
             .reserve(self.scenario.agents.len() * centre_path.len());
         let monitor = SafetyMonitor::new(self.scenario.field, &self.scenario.static_obstacles())
             .with_polygons(&self.scenario.polygons);
-        self.bar = progress_bar(
+        self.report.show_progress(
             centre_path.len().saturating_sub(1),
             &self.scenario.name,
             self.options.progress,
+            step,
         );
-        self.bar.set_position(step as u64);
 
         let stepping = Instant::now();
         let ticks_at_start = procfs::machine_cpu_ticks();
@@ -197,12 +130,11 @@ impl<'a> Driver<'a> {
             &mut self,
             &mut MonitorJudge { monitor },
         )?;
-        self.bar.finish_and_clear();
-        self.progress.gave_up = course.gave_up();
         // What the caller does between the steps (a benchmark's references) is not the
         // step loop's time.
-        self.progress.steps_s = stepping.elapsed().as_secs_f64() - self.between_s;
-        let between_ticks = self.between_ticks;
+        let (between_s, between_ticks) = self.report.finish();
+        self.progress.gave_up = course.gave_up();
+        self.progress.steps_s = stepping.elapsed().as_secs_f64() - between_s;
         self.progress.loop_idle_share = ticks_at_start
             .map(|(idle, total)| (idle + between_ticks.0, total + between_ticks.1))
             .zip(procfs::machine_cpu_ticks())
@@ -230,7 +162,8 @@ impl<'a> Driver<'a> {
             .and_then(|_| recorder.steps().last())
             .map(|s| s.step);
         let Some(last) = resumed_at else {
-            self.log_step(recorder, None)?;
+            self.report
+                .log_step(recorder, None, &self.progress.turn_samples)?;
             return Ok((Course::new(self.scenario, centre_path), 0));
         };
         let course = replay_course(self.scenario, centre_path, recorder.steps())
@@ -311,8 +244,9 @@ impl<'a> Driver<'a> {
         Ok(())
     }
 
-    /// After `step` (recorded in `recorder`, its turns taken in `groups`): log it, tell it
-    /// done, call the caller's hook; `Break` if the run was asked to stop.
+    /// After `step` (recorded in `recorder`, its turns taken in `groups`): log it, hand
+    /// the turns over to the next step, report it done; `Break` if the run was asked to
+    /// stop.
     fn after_step(
         &mut self,
         recorder: &Recorder<'_>,
@@ -320,33 +254,17 @@ impl<'a> Driver<'a> {
         groups: &[Vec<usize>],
         course: &Course<'_>,
     ) -> anyhow::Result<ControlFlow<()>> {
-        self.log_step(recorder, Some(course))?;
+        self.report
+            .log_step(recorder, Some(course), &self.progress.turn_samples)?;
         self.hand_over.end_step(self.ipc);
-        self.bar.inc(1);
-        // For whoever follows the run from outside (tests time their kills by it); with
-        // a log, its thread tells each step once it is in the file.
-        if self.log.is_none() {
-            tell_step_done(step);
-        }
-        let pids = self.between_steps.is_some().then(|| self.pids());
-        if let (Some(between_steps), Some(pids)) = (self.between_steps.as_mut(), pids) {
-            let ticks_before = procfs::machine_cpu_ticks();
-            let between = Instant::now();
-            between_steps(BetweenSteps {
-                step,
-                prefix: self.ipc.prefix(),
-                ipc: self.ipc,
-                alive: recorder.world().alive(),
-                groups,
-                pids: &pids,
-            })?;
-            let ticks_after = procfs::machine_cpu_ticks();
-            self.between_s += between.elapsed().as_secs_f64();
-            if let Some((from, to)) = ticks_before.zip(ticks_after) {
-                self.between_ticks.0 += to.0.saturating_sub(from.0);
-                self.between_ticks.1 += to.1.saturating_sub(from.1);
-            }
-        }
+        let pids = self.report.has_hook().then(|| self.pids());
+        let seen = StepSeen {
+            step,
+            alive: recorder.world().alive(),
+            groups,
+            pids: pids.as_deref(),
+        };
+        self.report.step_done(&seen, self.ipc)?;
         if self.ipc.termination_requested() {
             self.progress.interrupted = true;
             return Ok(ControlFlow::Break(()));
@@ -360,10 +278,7 @@ impl MoveSource for Driver<'_> {
     type Error = anyhow::Error;
 
     fn open_step(&mut self, step: usize, recorder: &mut Recorder<'_>) -> anyhow::Result<()> {
-        if self.bar.position() + 1 >= self.bar.length().unwrap_or(0) {
-            // The course waited or was replanned: the path ahead is longer.
-            self.bar.inc_length(1);
-        }
+        self.report.step_opened();
         self.notice_deaths(recorder, step)
     }
 
@@ -384,28 +299,4 @@ impl MoveSource for Driver<'_> {
     ) -> anyhow::Result<ControlFlow<()>> {
         self.after_step(recorder, step, groups, course)
     }
-}
-
-/// Tell that `step` is done: the `step N done` line of [`PROGRESS_TARGET`] (not for step
-/// 0, the start).
-pub(super) fn tell_step_done(step: usize) {
-    if step > 0 {
-        tracing::info!(target: PROGRESS_TARGET, "step {step} done");
-    }
-}
-
-/// The progress bar of a run of `steps` steps of scenario `name` (hidden unless
-/// `enabled`; drawn only on a terminal).
-fn progress_bar(steps: usize, name: &str, enabled: bool) -> ProgressBar {
-    if !enabled {
-        return ProgressBar::hidden();
-    }
-    let bar = ProgressBar::with_draw_target(Some(steps as u64), ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} steps, {elapsed} (eta {eta})")
-    {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_message(name.to_string());
-    bar
 }

@@ -38,9 +38,9 @@ mod outcome;
 mod run;
 mod run_handle;
 mod startup;
+mod step_report;
 mod turn;
 
-pub use driver::{BetweenSteps, PROGRESS_TARGET};
 pub use fault_injection::FaultInjection;
 pub use options::{
     RunOptions, SPIN_BUDGET, STARTUP_PER_AGENT, SandboxOptions, WaitMode, WakeMode, running_as_root,
@@ -48,5 +48,6 @@ pub use options::{
 pub(crate) use outcome::TurnSample;
 pub use outcome::{RunFailure, RunOutcome};
 pub use run::{run_scenario, run_scenario_with};
+pub use step_report::{BetweenSteps, PROGRESS_TARGET};
 
 pub use crate::network::NetworkOptions;

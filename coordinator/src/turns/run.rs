@@ -10,10 +10,11 @@ use shared::geometry::Pose;
 use shared::record::Recorder;
 use shared::scenario::Scenario;
 
-use super::driver::{BetweenSteps, BetweenStepsFn, Driver, tell_step_done};
+use super::driver::Driver;
 use super::options::RunOptions;
 use super::outcome::{Progress, RunFailure, RunOutcome, outcome};
 use super::run_handle::RunBuilder;
+use super::step_report::{BetweenSteps, BetweenStepsFn, tell_step_done};
 use crate::run_log::{LogThread, RunLogWriter};
 
 /// Run `scenario` along `centre_path` with one agent process per agent.
