@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use net::{Down, Up};
 
+use crate::args::Args;
 use crate::ipc::{IpcTransport, Mission};
 use crate::link::{move_of, net_turn};
 use crate::transport::{Command, Reply, Transport};
@@ -30,7 +31,24 @@ pub struct RelayedChannel<'a> {
     pub liveness: Duration,
 }
 
-impl RelayedChannel<'_> {
+impl<'a> RelayedChannel<'a> {
+    /// The channel of agent `args.agent` in run `prefix`, as its relay opens it: checking
+    /// the coordinator every `liveness`, `mission` read.
+    pub fn for_agent(
+        args: &Args,
+        prefix: &'a str,
+        liveness: Duration,
+        mission: &'a Mission,
+    ) -> Self {
+        Self {
+            prefix,
+            agent: args.agent,
+            generation: args.generation,
+            mission,
+            liveness,
+        }
+    }
+
     /// Open the agent's channel; with it, the mission file's text the agent is handed,
     /// as the coordinator wrote it.
     pub fn open(&self) -> anyhow::Result<(IpcTransport, String)> {

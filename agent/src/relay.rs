@@ -20,7 +20,9 @@ use net::zenoh::pubsub::{Publisher, Subscriber};
 use net::zenoh::sample::{Sample, SampleKind};
 use net::{Down, Endpoint, Security, Up};
 
+use crate::args::Args;
 use crate::forward::{AgentLink, RelayedChannel, forward_turns};
+use crate::ipc::Mission;
 use crate::transport::Transport;
 
 /// How often the relay probes for its agent until it answers.
@@ -227,6 +229,32 @@ fn spawn_agent(settings: &RelaySettings, extra: &[String]) -> anyhow::Result<Spa
     }
     let child = command.spawn().context("starting the agent")?;
     Ok(SpawnedAgent(child))
+}
+
+/// Serve as the relay of agent `args.agent` ([`serve_relay`]); with `--spawn-agent`, the
+/// agent is started here, with this agent's test mode and settings.
+pub(crate) fn run_relay(
+    args: &Args,
+    prefix: &str,
+    connect: &net::Endpoint,
+    security: &net::Security,
+    liveness: Duration,
+    mission: &Mission,
+) -> anyhow::Result<()> {
+    let mut extra = vec!["--die-with-parent".to_string()];
+    if let Some(mode) = args.misbehave {
+        extra.extend(["--misbehave".to_string(), mode.to_string()]);
+    }
+    if args.allow_plain_tcp {
+        extra.push("--allow-plain-tcp".to_string());
+    }
+    serve_relay(&RelaySettings {
+        channel: RelayedChannel::for_agent(args, prefix, liveness, mission),
+        connect,
+        security,
+        tls_dir: args.tls_dir.as_deref(),
+        spawn_agent: args.spawn_agent.then_some(extra),
+    })
 }
 
 #[cfg(test)]

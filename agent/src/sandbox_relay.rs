@@ -16,7 +16,11 @@ use std::time::Duration;
 use anyhow::{Context, bail};
 use net::{Down, Up};
 
+use wire::cgroup::Limits;
+
+use crate::args::Args;
 use crate::forward::{AgentLink, RelayedChannel, forward_turns};
+use crate::ipc::Mission;
 use crate::sandbox::{AGENT_SOCKET_FD, Sandbox, adopt_orphans, spawn_sandboxed};
 use crate::socket_link::{MAX_UP_FRAME_BYTES, SocketLink};
 use crate::transport::Transport;
@@ -90,4 +94,39 @@ pub fn serve_sandboxed(settings: &SandboxRelaySettings) -> anyhow::Result<()> {
     }
     ipc.announce_ready()?;
     forward_turns(&mut ipc, &mut link, agent).with_context(|| format!("agent {agent}"))
+}
+
+/// Serve as the sandbox relay of agent `args.agent` ([`serve_sandboxed`]):
+/// the agent is started here as user `uid`, with this agent's test mode.
+pub(crate) fn run_sandbox_relay(
+    args: &Args,
+    prefix: &str,
+    uid: u32,
+    liveness: Duration,
+    mission: &Mission,
+) -> anyhow::Result<()> {
+    let limits = Limits {
+        pids_max: args.pids_max,
+        memory_mib: args.memory_mib,
+        cpu_percent: args.cpu_percent,
+    };
+    let cgroup = if args.cgroup {
+        let run = wire::cgroup::CgroupDirs::for_run(prefix).context("the run's control group")?;
+        Some(run.child(&format!("agent-{}-{}", args.agent, args.generation)))
+    } else {
+        None
+    };
+    let agent_args = match args.misbehave {
+        Some(mode) => vec!["--misbehave".to_string(), mode.to_string()],
+        None => Vec::new(),
+    };
+    serve_sandboxed(&SandboxRelaySettings {
+        channel: RelayedChannel::for_agent(args, prefix, liveness, mission),
+        sandbox: Sandbox {
+            uid,
+            cgroup,
+            limits,
+        },
+        agent_args,
+    })
 }
