@@ -101,19 +101,23 @@ fn paper() -> (Scenario, Vec<Pose>) {
     (scenario, path)
 }
 
+/// Run the steps after `from` of `course` with `planners` and no extra judge.
+fn run_planners(
+    course: &mut Course<'_>,
+    recorder: &mut Recorder<'_>,
+    from: usize,
+    planners: &mut Planners,
+) -> Result<usize, String> {
+    run_steps(course, recorder, from, planners, &mut WorldChecksOnly)
+}
+
 #[test]
 fn a_source_of_plain_turns_reproduces_the_reference_on_the_paper() {
     let (scenario, path) = paper();
     let mut course = Course::new(&scenario, &path);
     let mut recorder = Recorder::new(&scenario, course.pose());
     let mut planners = Planners::of(&scenario);
-    let last = run_steps(
-        &mut course,
-        &mut recorder,
-        0,
-        &mut planners,
-        &mut WorldChecksOnly,
-    );
+    let last = run_planners(&mut course, &mut recorder, 0, &mut planners);
     assert_eq!(last, Ok(path.len() - 1));
     assert_eq!(planners.closed, (1..path.len()).collect::<Vec<_>>());
     let reference = simulate_along(&scenario, &path).expect("reference");
@@ -167,13 +171,7 @@ fn an_interrupted_group_stops_the_loop_with_its_step_left_open() {
         interrupt_at: Some(5),
         ..Planners::of(&scenario)
     };
-    let last = run_steps(
-        &mut course,
-        &mut recorder,
-        0,
-        &mut planners,
-        &mut WorldChecksOnly,
-    );
+    let last = run_planners(&mut course, &mut recorder, 0, &mut planners);
     assert_eq!(last, Ok(5));
     assert_eq!(planners.closed, [1, 2, 3, 4]);
     let recorded: Vec<usize> = recorder.steps().iter().map(|s| s.step).collect();
@@ -189,24 +187,12 @@ fn a_source_that_stops_after_a_step_ends_the_run_there_with_the_step_closed() {
         stop_after: Some(7),
         ..Planners::of(&scenario)
     };
-    let last = run_steps(
-        &mut course,
-        &mut recorder,
-        0,
-        &mut planners,
-        &mut WorldChecksOnly,
-    );
+    let last = run_planners(&mut course, &mut recorder, 0, &mut planners);
     assert_eq!(last, Ok(7));
     assert_eq!(recorder.steps().last().map(|s| s.step), Some(7));
     // Resumed from there, the loop goes on to the end, as the reference does.
     planners.stop_after = None;
-    let last = run_steps(
-        &mut course,
-        &mut recorder,
-        7,
-        &mut planners,
-        &mut WorldChecksOnly,
-    );
+    let last = run_planners(&mut course, &mut recorder, 7, &mut planners);
     assert_eq!(last, Ok(path.len() - 1));
     let reference = simulate_along(&scenario, &path).expect("reference");
     assert_eq!(recorder.finish(true), reference);
