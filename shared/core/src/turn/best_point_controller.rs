@@ -76,6 +76,20 @@ struct PolygonObstacles {
     regions: Option<RegionGrid>,
 }
 
+/// The move an agent would make anyway, and what it was made from
+/// ([`BestPointController::plan_move_aiming`]).
+#[derive(Clone, Copy)]
+struct Followed<'m> {
+    /// Its path to the best point, cut at its top speed.
+    mv: &'m Move,
+    /// The best point (planning frame) when the agent is not on it.
+    best_p: Option<Point>,
+    /// Where the agent stands (world coordinates).
+    me: &'m Point,
+    /// Its top speed, metres per step.
+    max_step_m: f64,
+}
+
 impl BestPointController {
     /// The controller of agent `spec` in `field` among `obstacles` (true radii).
     pub fn new(field: Field, obstacles: &[Disk], spec: &AgentSpec) -> Self {
@@ -309,28 +323,34 @@ impl BestPointController {
             regions: self.polygons.regions.as_ref(),
             others,
         };
-        self.aimed_move(
-            aim, &space, &statics, &planning, best_p, &followed, me, max_step_m,
-        )
-        .unwrap_or(followed)
+        let anyway = Followed {
+            mv: &followed,
+            best_p,
+            me,
+            max_step_m,
+        };
+        self.aimed_move(aim, &space, &statics, &planning, anyway)
+            .unwrap_or(followed)
     }
 
-    /// The move an agent with `aim` takes instead of `followed` (its path to the best
-    /// point, cut at its top speed), if any: see [`Self::plan_move_aiming`]. `space` is
-    /// this turn's free space (mates included), `statics` the same without the mates;
-    /// `best_p` the best point (planning frame) when the agent is not on it.
-    #[allow(clippy::too_many_arguments)]
+    /// The move an agent with `aim` takes instead of the one it would make `anyway` (its
+    /// path to the best point, cut at its top speed), if any: see
+    /// [`Self::plan_move_aiming`]. `space` is this turn's free space (mates included),
+    /// `statics` the same without the mates.
     fn aimed_move(
         &self,
         aim: &Aim,
         space: &FreeSpace<'_>,
         statics: &FreeSpace<'_>,
         planning: &Planning<'_>,
-        best_p: Option<Point>,
-        followed: &Move,
-        me: &Point,
-        max_step_m: f64,
+        anyway: Followed<'_>,
     ) -> Option<Move> {
+        let Followed {
+            mv: followed,
+            best_p,
+            me,
+            max_step_m,
+        } = anyway;
         let slot = followed.slot;
         // The straight move to `best` (world coordinates).
         let straight_to = |best: Point| Move {
