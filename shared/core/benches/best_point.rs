@@ -19,7 +19,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
-use shared::disk_path::{PathsFrom, shortest_path};
+use shared::paths::disk_path::{PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
 use shared::record::Recorder;
 use shared::scenario::Scenario;

@@ -10,7 +10,7 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::disk_path::{PathError, shortest_path};
+use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 
 const RADIUS_M: f64 = 1.3;

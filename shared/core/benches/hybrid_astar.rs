@@ -20,8 +20,8 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use shared::geometry::{Disk, Field, Pose};
-use shared::hybrid_astar::{HybridAStarSettings, PlanError, plan};
-use shared::reeds_shepp;
+use shared::paths::hybrid_astar::{HybridAStarSettings, PlanError, plan};
+use shared::paths::reeds_shepp;
 use testkit::clcbs::{ClcbsInstance, default_clcbs_dir};
 
 const TURNING_RADIUS_M: f64 = 2.5;

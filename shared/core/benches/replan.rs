@@ -19,7 +19,7 @@ use std::hint::black_box;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use shared::geometry::{Disk, Pose};
-use shared::hybrid_astar::{HybridAStarSettings, Replanner, first_blocked_pose, plan};
+use shared::paths::hybrid_astar::{HybridAStarSettings, Replanner, first_blocked_pose, plan};
 use testkit::clcbs::{CLCBS_OBSTACLE_RADIUS_M, ClcbsInstance, default_clcbs_dir};
 
 const TURNING_RADIUS_M: f64 = 2.5;

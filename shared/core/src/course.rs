@@ -30,7 +30,7 @@
 use std::time::Instant;
 
 use crate::geometry::{Disk, Pose};
-use crate::hybrid_astar::{self, HybridAStarSettings, PlanError, Replanner, first_blocked_pose};
+use crate::paths::hybrid_astar::{self, HybridAStarSettings, PlanError, Replanner, first_blocked_pose};
 use crate::scenario::Scenario;
 use crate::vocabulary::Body;
 

@@ -13,7 +13,7 @@ use std::convert::Infallible;
 
 use crate::course::Course;
 use crate::geometry::Pose;
-use crate::hybrid_astar::{self, HybridAStarSettings, PlanError};
+use crate::paths::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
 use crate::step_loop::{GroupMoves, GroupTurn, MoveSource, WorldChecksOnly, run_steps};

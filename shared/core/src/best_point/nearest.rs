@@ -65,7 +65,7 @@ pub fn nearest_free_point(space: &FreeSpace, query: &Point) -> Result<Point, Bes
 /// use std::f64::consts::{FRAC_PI_4, PI};
 ///
 /// use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
-/// use shared::disk_path::PathsFrom;
+/// use shared::paths::disk_path::PathsFrom;
 /// use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 ///
 /// // Eight overlapping disks ring the slot: the slot is free, but closed off.

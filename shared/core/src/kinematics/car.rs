@@ -12,7 +12,7 @@
 //! of at most [`CAR_CHORD_TURN_RAD`] of turning and a chord error of at most the one asked
 //! for ([`car_waypoints`]).
 
-use crate::curve::{CurvePath, Segment, Steer};
+use crate::paths::curve::{CurvePath, Segment, Steer};
 use crate::geometry::{Point, Pose, wrap_angle_rad};
 
 /// Segments shorter than this are left out when a path is drawn: a chord of a few
@@ -232,7 +232,7 @@ pub fn check_car_move(
 /// The first `max_length_m` of `path` (all of it if shorter).
 ///
 /// ```
-/// use shared::curve::{CurvePath, Segment, Steer};
+/// use shared::paths::curve::{CurvePath, Segment, Steer};
 /// use shared::kinematics::curve_prefix;
 /// let path = CurvePath {
 ///     segments: vec![
@@ -272,7 +272,7 @@ pub fn curve_prefix(path: &CurvePath, max_length_m: f64) -> CurvePath {
 /// out; and the heading at the end (of the path so drawn).
 ///
 /// ```
-/// use shared::curve::{CurvePath, Segment, Steer};
+/// use shared::paths::curve::{CurvePath, Segment, Steer};
 /// use shared::geometry::Pose;
 /// use shared::kinematics::{CarLimits, car_waypoints, check_car_move};
 /// let path = CurvePath {

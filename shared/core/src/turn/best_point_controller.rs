@@ -2,7 +2,7 @@
 //! it.
 
 use crate::best_point::{self, BestPointError};
-use crate::disk_path::{self, DiskPath};
+use crate::paths::disk_path::{self, DiskPath};
 use crate::formation::Slot;
 use crate::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer, Pose,

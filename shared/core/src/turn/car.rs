@@ -17,12 +17,12 @@
 
 use std::ops::ControlFlow;
 
-use crate::curve::CurvePath;
+use crate::paths::curve::CurvePath;
 use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, distance_point_segment};
-use crate::hybrid_astar::{self, HybridAStarSettings};
+use crate::paths::hybrid_astar::{self, HybridAStarSettings};
 use crate::kinematics::{CarLimits, CarPiece, car_piece, car_waypoints, curve_prefix};
 use crate::vocabulary::Body;
-use crate::{dubins, reeds_shepp};
+use crate::paths::{dubins, reeds_shepp};
 
 /// The world headings a car tries to reach its best point with (besides the centre's
 /// and its own): every eighth of a turn.
@@ -395,13 +395,13 @@ mod tests {
     fn dense(heading_rad: f64, a: &Point, b: &Point) -> Vec<Point> {
         let piece = car_piece(heading_rad, a, b);
         let path = CurvePath {
-            segments: vec![crate::curve::Segment {
+            segments: vec![crate::paths::curve::Segment {
                 steer: if piece.turn_rad.abs() < 1e-15 {
-                    crate::curve::Steer::Straight
+                    crate::paths::curve::Steer::Straight
                 } else if (piece.turn_rad > 0.0) != piece.reverse {
-                    crate::curve::Steer::Left
+                    crate::paths::curve::Steer::Left
                 } else {
-                    crate::curve::Steer::Right
+                    crate::paths::curve::Steer::Right
                 },
                 length_m: if piece.reverse {
                     -piece.length_m

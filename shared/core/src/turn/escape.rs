@@ -1,7 +1,7 @@
 //! A turn among moving obstacles: the escape of an agent that starts its turn inside an
 //! obstacle's reach, and the plan round the reach disks with a step to spare.
 
-use crate::disk_path;
+use crate::paths::disk_path;
 use crate::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
     distance_point_segment, polyline_length_m,

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use shared::geometry::{Disk, Field, Pose, distance_point_segment, wrap_angle_rad};
-use shared::hybrid_astar::{
+use shared::paths::hybrid_astar::{
     HybridAStarSettings, PlanError, path_length_m, plan, plan_with_stats, resample,
 };
 use testkit::clcbs::{CLCBS_DIR_ENV, CLCBS_INSTANCE_FILES, ClcbsInstance, default_clcbs_dir};

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 use shared::geometry::Pose;
-use shared::reeds_shepp::{shortest_length_m, shortest_path};
+use shared::paths::reeds_shepp::{shortest_length_m, shortest_path};
 
 /// One oracle case and where it came from.
 struct Case {

@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 use proptest::prelude::*;
 use shared::geometry::Pose;
 use shared::kinematics::{CarLimits, CarMoveError, car_waypoints, check_car_move, curve_prefix};
-use shared::{dubins, reeds_shepp};
+use shared::paths::{dubins, reeds_shepp};
 
 fn pose() -> impl Strategy<Value = Pose> {
     (-4.0..4.0, -4.0..4.0, -PI..PI).prop_map(|(x, y, h)| Pose::new(x, y, h))
@@ -52,7 +52,7 @@ proptest! {
         let turns = cut
             .segments
             .iter()
-            .any(|s| s.steer != shared::curve::Steer::Straight && s.length_m.abs() > 1e-3);
+            .any(|s| s.steer != shared::paths::curve::Steer::Straight && s.length_m.abs() > 1e-3);
         if turns {
             let wider = CarLimits { turning_radius_m: rho_m * 1.01, ..limits };
             let tight = check_car_move(from.heading_rad, &points, Some(end_rad), &wider);

@@ -3,9 +3,9 @@
 use std::f64::consts::{FRAC_PI_4, PI, TAU};
 
 use proptest::prelude::*;
-use shared::curve::{CurvePath, Steer};
+use shared::paths::curve::{CurvePath, Steer};
 use shared::geometry::Pose;
-use shared::{dubins, reeds_shepp};
+use shared::paths::{dubins, reeds_shepp};
 
 /// Relative tolerance for comparing lengths.
 fn tolerance_m(length_m: f64) -> f64 {

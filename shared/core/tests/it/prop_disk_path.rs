@@ -1,4 +1,4 @@
-//! Property tests for `shared::disk_path::shortest_path`, checked independently of the
+//! Property tests for `shared::paths::disk_path::shortest_path`, checked independently of the
 //! controller's own geometry:
 //!
 //! - validity: continuity, exact end points, brute-force clearance of dense samples
@@ -22,7 +22,7 @@ use std::f64::consts::TAU;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use shared::best_point::nearest_reachable_free_point;
-use shared::disk_path::{DiskPath, PathError, PathPiece, PathsFrom, shortest_path};
+use shared::paths::disk_path::{DiskPath, PathError, PathPiece, PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 
 const TOL_M: f64 = 1e-9;

@@ -6,7 +6,7 @@
 use proptest::prelude::*;
 
 use shared::geometry::{Disk, Field, Pose, distance_point_segment, wrap_angle_rad};
-use shared::hybrid_astar::{HybridAStarSettings, PlanError, plan, resample};
+use shared::paths::hybrid_astar::{HybridAStarSettings, PlanError, plan, resample};
 
 #[derive(Clone, Debug)]
 struct Case {

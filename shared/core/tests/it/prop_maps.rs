@@ -8,7 +8,7 @@
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use shared::best_point::nearest_free_point;
-use shared::disk_path::{PathError, shortest_path};
+use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Vector};
 use shared::maps::{Cell, OccupancyGrid};
 
@@ -115,7 +115,7 @@ proptest! {
                 .map(|p| InflatedPolygon::from_polygon(p, RADIUS_M))
                 .collect(),
         );
-        let regions = grid.regions(blocked, RADIUS_M - shared::disk_path::FREE_TOLERANCE_M, Vector::zeros());
+        let regions = grid.regions(blocked, RADIUS_M - shared::paths::disk_path::FREE_TOLERANCE_M, Vector::zeros());
         let field = Field::new(CELLS as f64 * CELL_M, CELLS as f64 * CELL_M);
         let none = DiskGrid::new(Vec::new());
         let layers = [&none];

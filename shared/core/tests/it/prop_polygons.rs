@@ -15,7 +15,7 @@
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use shared::best_point::nearest_free_point;
-use shared::disk_path::{PathError, shortest_path};
+use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer,
 };

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use proptest::prelude::*;
 use shared::geometry::{Disk, Field, Pose, distance_point_segment};
-use shared::hybrid_astar::{
+use shared::paths::hybrid_astar::{
     HybridAStarSettings, PlanError, Replanner, first_blocked_pose, path_length_m, plan,
 };
 use testkit::clcbs::{CLCBS_DIR_ENV, CLCBS_OBSTACLE_RADIUS_M, ClcbsInstance, default_clcbs_dir};

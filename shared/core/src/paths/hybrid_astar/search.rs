@@ -13,10 +13,10 @@ use super::heuristic::Holonomic;
 use super::primitive::{Piece, Primitive, dense_path};
 use super::resample::path_length_m;
 use super::settings::HybridAStarSettings;
-use crate::dubins;
+use crate::paths::dubins;
 use crate::geometry::{Field, Pose};
 use crate::ordered::TotalF64;
-use crate::reeds_shepp;
+use crate::paths::reeds_shepp;
 use rustc_hash::FxHashMap;
 
 /// Figures of one successful search.

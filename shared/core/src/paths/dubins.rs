@@ -10,12 +10,12 @@
 //!   circles), useful only when the poses are close.
 //!
 //! All six are evaluated in closed form (Shkel & Lumelsky 2001) and the shortest is kept.
-//! Paths are [`CurvePath`]s (module [`crate::curve`]) whose segment lengths are all
+//! Paths are [`CurvePath`]s (module [`crate::paths::curve`]) whose segment lengths are all
 //! non-negative. Hybrid A* uses these when reversing is not allowed.
 
 use std::f64::consts::TAU;
 
-use crate::curve::{CurvePath, Steer, check_turning_radius, scaled_segment};
+use crate::paths::curve::{CurvePath, Steer, check_turning_radius, scaled_segment};
 use crate::geometry::Pose;
 
 /// The shortest forward-only path from `from` to `to` for turning radius `turning_radius_m`.
@@ -213,7 +213,7 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
-    use crate::curve::{TOLERANCE, assert_pose_close};
+    use crate::paths::curve::{TOLERANCE, assert_pose_close};
 
     #[test]
     fn identical_poses_give_an_empty_path() {

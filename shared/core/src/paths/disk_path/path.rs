@@ -132,7 +132,7 @@ impl DiskPath {
     /// circle, so the prefix ends on the path itself, never on a chord inside a disk.
     ///
     /// ```
-    /// use shared::disk_path::{DiskPath, PathPiece};
+    /// use shared::paths::disk_path::{DiskPath, PathPiece};
     /// use shared::geometry::Point;
     /// let quarter = PathPiece::Arc {
     ///     centre: Point::new(0.0, 0.0),
@@ -198,7 +198,7 @@ impl DiskPath {
     /// `max_chord_m` below `1e-9` m (or NaN) is treated as `1e-9` m; infinite: no limit.
     ///
     /// ```
-    /// use shared::disk_path::{DiskPath, PathPiece};
+    /// use shared::paths::disk_path::{DiskPath, PathPiece};
     /// use shared::geometry::Point;
     /// let quarter = PathPiece::Arc {
     ///     centre: Point::origin(),

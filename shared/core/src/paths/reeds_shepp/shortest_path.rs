@@ -1,7 +1,7 @@
 //! The entry points: the shortest Reeds-Shepp path between two poses, and its length.
 
 use super::word::solve;
-use crate::curve::{CurvePath, check_turning_radius};
+use crate::paths::curve::{CurvePath, check_turning_radius};
 use crate::geometry::Pose;
 
 /// The shortest Reeds-Shepp path from `from` to `to` for turning radius `turning_radius_m`.
@@ -37,7 +37,7 @@ pub fn shortest_path(from: &Pose, to: &Pose, turning_radius_m: f64) -> CurvePath
 /// use std::f64::consts::FRAC_PI_2;
 ///
 /// use shared::geometry::Pose;
-/// use shared::{dubins, reeds_shepp};
+/// use shared::paths::{dubins, reeds_shepp};
 ///
 /// let rho = 2.0;
 /// let start = Pose::new(0.0, 0.0, 0.0);
@@ -61,8 +61,8 @@ mod tests {
     use std::f64::consts::PI;
 
     use super::*;
-    use crate::curve::Steer;
-    use crate::curve::{TOLERANCE, assert_pose_close};
+    use crate::paths::curve::Steer;
+    use crate::paths::curve::{TOLERANCE, assert_pose_close};
 
     #[test]
     fn identical_poses_give_an_empty_path() {

@@ -35,7 +35,7 @@ use crate::geometry::{Disk, Field, Point, Polygon, Pose};
 ///
 /// ```
 /// use shared::geometry::{Disk, Field, Pose};
-/// use shared::hybrid_astar::{HybridAStarSettings, Replanner, first_blocked_pose};
+/// use shared::paths::hybrid_astar::{HybridAStarSettings, Replanner, first_blocked_pose};
 ///
 /// let field = Field::new(60.0, 30.0);
 /// let settings = HybridAStarSettings::new(2.0, 0.5, false);
@@ -52,7 +52,7 @@ use crate::geometry::{Disk, Field, Point, Polygon, Pose};
 /// let new_path = replanner.plan_from(&here, &obstacles)?;
 /// assert_eq!((new_path[0], new_path[new_path.len() - 1]), (here, goal));
 /// assert_eq!(first_blocked_pose(&field, &new_path, &obstacles, 0.5), None);
-/// # Ok::<(), shared::hybrid_astar::PlanError>(())
+/// # Ok::<(), shared::paths::hybrid_astar::PlanError>(())
 /// ```
 ///
 /// Cloning copies the kept heuristic with it.

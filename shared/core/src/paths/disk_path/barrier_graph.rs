@@ -204,8 +204,8 @@ impl BarrierGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::disk_path::barrier::separated;
-    use crate::disk_path::tests::packed_block;
+    use crate::paths::disk_path::barrier::separated;
+    use crate::paths::disk_path::tests::packed_block;
     use crate::geometry::{Disk, DiskGrid};
 
     #[test]

@@ -87,8 +87,8 @@ const BARRIER_PAD_RADII: f64 = 4.0;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::disk_path::shortest_path::shortest_path;
-    use crate::disk_path::tests::packed_block;
+    use crate::paths::disk_path::shortest_path::shortest_path;
+    use crate::paths::disk_path::tests::packed_block;
     use crate::geometry::DiskGrid;
 
     #[test]

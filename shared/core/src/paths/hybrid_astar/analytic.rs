@@ -4,10 +4,10 @@
 use super::collision::Checker;
 use super::primitive::Piece;
 use super::settings::HybridAStarSettings;
-use crate::curve::{CurvePath, Steer};
-use crate::dubins;
+use crate::paths::curve::{CurvePath, Steer};
+use crate::paths::dubins;
 use crate::geometry::{Pose, wrap_angle_rad};
-use crate::reeds_shepp;
+use crate::paths::reeds_shepp;
 
 /// The curve path (Reeds-Shepp, or Dubins when forward only) from `from` to `goal` as
 /// pieces, if it is free and ends at the goal.

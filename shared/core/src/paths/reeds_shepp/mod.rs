@@ -35,8 +35,8 @@
 //! already known (the middle) reaches the family's bound (the best word so far less the
 //! family's fixed arcs).
 //!
-//! Paths are [`CurvePath`]s (module [`crate::curve`], shared with the Dubins solver); the
-//! types are re-exported here, so `shared::reeds_shepp::CurvePath` names the same type.
+//! Paths are [`CurvePath`]s (module [`crate::paths::curve`], shared with the Dubins solver); the
+//! types are re-exported here, so `shared::paths::reeds_shepp::CurvePath` names the same type.
 //!
 //! # Files
 //!
@@ -48,5 +48,5 @@ mod formulas;
 mod shortest_path;
 mod word;
 
-pub use crate::curve::{CurvePath, Segment, Steer};
+pub use crate::paths::curve::{CurvePath, Segment, Steer};
 pub use shortest_path::{shortest_length_m, shortest_path};

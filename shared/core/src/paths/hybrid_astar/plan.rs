@@ -22,7 +22,7 @@ use crate::geometry::{Disk, Field, Polygon, Pose};
 ///
 /// ```
 /// use shared::geometry::{Disk, Field, Pose};
-/// use shared::hybrid_astar::{HybridAStarSettings, path_length_m, plan, resample};
+/// use shared::paths::hybrid_astar::{HybridAStarSettings, path_length_m, plan, resample};
 ///
 /// // A disk of radius 2 m right on the straight line from start to goal.
 /// let field = Field::new(40.0, 30.0);
@@ -38,7 +38,7 @@ use crate::geometry::{Disk, Field, Polygon, Pose};
 /// assert!(length_m > 30.0 && length_m < 33.0, "{length_m}");
 /// let steps = resample(&path, 0.25);
 /// assert_eq!(steps[0], start);
-/// # Ok::<(), shared::hybrid_astar::PlanError>(())
+/// # Ok::<(), shared::paths::hybrid_astar::PlanError>(())
 /// ```
 pub fn plan(
     field: &Field,

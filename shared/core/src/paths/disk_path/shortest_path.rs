@@ -20,7 +20,7 @@ use crate::geometry::{Disk, FreeSpace, Point};
 /// ```
 /// use std::f64::consts::PI;
 ///
-/// use shared::disk_path::{PathError, PathPiece, shortest_path};
+/// use shared::paths::disk_path::{PathError, PathPiece, shortest_path};
 /// use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 ///
 /// // One disk of radius 1 m between start and goal.
