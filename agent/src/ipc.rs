@@ -131,7 +131,7 @@ impl Channel for IpcPorts {
             }
             // Only the coordinator publishes here, but a count beyond the capacity would
             // make the slice below panic: refuse it instead.
-            if w.bodies.len() > shared::vocabulary::MAX_AGENTS {
+            if w.bodies.len() > shared::control::vocabulary::MAX_AGENTS {
                 bail!(
                     "a world with {} bodies, beyond the capacity",
                     w.bodies.len()
@@ -141,7 +141,7 @@ impl Channel for IpcPorts {
             if heading_rad.is_some_and(|h| !h.is_finite()) {
                 bail!("a world whose heading is not a finite number");
             }
-            if w.ahead.len() > shared::tracking::MAX_HORIZON_STEPS {
+            if w.ahead.len() > shared::control::tracking::MAX_HORIZON_STEPS {
                 bail!(
                     "a world with {} poses ahead, beyond the capacity",
                     w.ahead.len()

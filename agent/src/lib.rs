@@ -1,5 +1,5 @@
 //! One formation agent: it waits for its turn, reads the world, computes its slot, best
-//! point and path with [`shared::turn::BestPointController`], and publishes its move.
+//! point and path with [`shared::control::turn::BestPointController`], and publishes its move.
 //!
 //! The turn loop, [`serve`] (in `serve.rs`), talks to the world only through the [`Transport`] trait, so
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.

@@ -8,7 +8,7 @@ use anyhow::{Context, bail};
 use net::{NetMove, NetTurn};
 use shared::geometry::{Point, Pose, Vector};
 use shared::scenario::{Checks, Scenario};
-use shared::vocabulary::{MAX_AGENTS, MAX_WAYPOINTS, Move, MoveStatus};
+use shared::control::vocabulary::{MAX_AGENTS, MAX_WAYPOINTS, Move, MoveStatus};
 
 use crate::transport::{MissionView, Reply, TurnInput};
 
@@ -74,7 +74,7 @@ pub fn turn_input(t: NetTurn) -> anyhow::Result<TurnInput> {
             t.bodies.len()
         );
     }
-    if t.ahead.len() > shared::tracking::MAX_HORIZON_STEPS {
+    if t.ahead.len() > shared::control::tracking::MAX_HORIZON_STEPS {
         bail!(
             "a turn with {} poses ahead, beyond the capacity",
             t.ahead.len()

@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use shared::geometry::Point;
-use shared::turn::{TurnController, TurnRequest, Velocities};
-use shared::vocabulary::{Body, TurnMode};
+use shared::control::turn::{TurnController, TurnRequest, Velocities};
+use shared::control::vocabulary::{Body, TurnMode};
 
 use crate::transport::{Command, Reply, Transport, TurnInput};
 
@@ -132,7 +132,7 @@ mod tests {
 
     use shared::scenario::Scenario;
     use shared::simulate::{agent_controllers, plan_centre_path};
-    use shared::vocabulary::Move;
+    use shared::control::vocabulary::Move;
 
     use super::*;
     use crate::transport::MissionView;

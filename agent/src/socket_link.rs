@@ -15,7 +15,7 @@ use serde::de::DeserializeOwned;
 /// Largest frame a relay reads from its agent: a move of [`MAX_WAYPOINTS`] waypoints with
 /// room to spare.
 ///
-/// [`MAX_WAYPOINTS`]: shared::vocabulary::MAX_WAYPOINTS
+/// [`MAX_WAYPOINTS`]: shared::control::vocabulary::MAX_WAYPOINTS
 pub const MAX_UP_FRAME_BYTES: usize = 64 << 10;
 
 /// How long a frame, once begun, may take to arrive whole.

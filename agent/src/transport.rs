@@ -4,8 +4,8 @@ use std::time::Duration;
 
 use shared::geometry::{Disk, Field, Point, Polygon, Pose, Vector};
 use shared::moving_obstacle::MovingObstacle;
-use shared::turn::{MateView, TurnController};
-use shared::vocabulary::{AgentSpec, ControllerSpec, Move, TurnMode};
+use shared::control::turn::{MateView, TurnController};
+use shared::control::vocabulary::{AgentSpec, ControllerSpec, Move, TurnMode};
 
 /// The static scenario as an agent sees it.
 #[derive(Clone, Debug, PartialEq)]

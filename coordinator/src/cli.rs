@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand};
-use shared::vocabulary::{ControllerKind, TurnMode, TurnOrder};
+use shared::control::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 use wire::cgroup::Limits;
 use wire::misbehave::Misbehave;
 

@@ -9,7 +9,7 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::record::{FaultKind, Run};
 use shared::scenario::{Scenario, ScenarioError};
-use shared::vocabulary::{ControllerKind, TurnMode, TurnOrder};
+use shared::control::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;

@@ -13,7 +13,7 @@ use std::time::Duration;
 use crate::turns::FaultInjection;
 use shared::geometry::DiskGrid;
 use shared::record::{Recorder, Step, replay_course};
-use shared::safety;
+use shared::control::safety;
 use shared::scenario::Scenario;
 
 use crate::error::CliError;

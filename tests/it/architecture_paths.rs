@@ -179,8 +179,8 @@ fn brace_lists_expand_to_one_path_per_choice() {
 #[test]
 fn items_in_parentheses_are_not_paths() {
     assert_eq!(
-        paths_in_cell("`shared/core/src/turn.rs` (`TurnController::plan_turn`)"),
-        ["shared/core/src/turn.rs"]
+        paths_in_cell("`shared/core/src/control/turn.rs` (`TurnController::plan_turn`)"),
+        ["shared/core/src/control/turn.rs"]
     );
     assert_eq!(
         paths_in_cell("`shared/wire/src/misbehave.rs`, `agent/src/{misbehave,rogue}.rs`"),
@@ -198,7 +198,7 @@ fn a_wrong_path_is_reported_with_its_line() {
     let table = format!(
         "{SECTION}\n\n| concept | file |\n|---|---|\n\
          | exists | `shared/core/src/{{lib,sensing}}.rs` |\n\
-         | a folder | `shared/core/src/vocabulary/` |\n\
+         | a folder | `shared/core/src/control/vocabulary/` |\n\
          | wrong | `shared/core/src/{{sensing,no_such_module}}.rs` |\n\
          | a file named as a folder | `shared/core/src/lib.rs/` |\n"
     );

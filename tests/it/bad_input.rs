@@ -22,7 +22,7 @@ use std::process::{Command, Output};
 
 use coordinator::validate::load_and_plan;
 use shared::scenario::{Scenario, ScenarioError};
-use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
+use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 
 /// The corpus must hold at least this many files.
 const MIN_CORPUS_FILES: usize = 30;

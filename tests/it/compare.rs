@@ -319,7 +319,7 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
     let original = shared::scenario::Scenario::load(&paper).expect("paper.toml");
     assert_eq!(
         resolved,
-        original.with_controller(shared::vocabulary::ControllerKind::ZcbfLogsumexp)
+        original.with_controller(shared::control::vocabulary::ControllerKind::ZcbfLogsumexp)
     );
     assert!(!text.contains("random"));
 }

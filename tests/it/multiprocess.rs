@@ -58,7 +58,7 @@ pub(crate) fn run_and_compare(scenario: &Scenario) -> Run {
     assert!(run.completed);
     let s = run.summary();
     assert_eq!(s.collisions, 0, "{}", scenario.name);
-    assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
+    assert!(s.min_clearance_m >= -shared::control::safety::SAFETY_TOLERANCE_M);
     assert!(outcome.timing.turn_latency_us.count > 0);
     run
 }
@@ -234,7 +234,7 @@ fn the_barrier_baseline_on_unicycle_processes_matches_the_reference() {
     let file = support::repo_root().join("scenarios/robotarium-unicycle.toml");
     let scenario = Scenario::load(&file)
         .expect("robotarium-unicycle.toml")
-        .with_controller(shared::vocabulary::ControllerKind::Cbf);
+        .with_controller(shared::control::vocabulary::ControllerKind::Cbf);
     let run = run_and_compare(&scenario);
     assert!(run.faults.is_empty(), "{:?}", run.faults);
     let arcs = run
@@ -270,7 +270,7 @@ fn a_changing_world_with_limited_sensing_matches_the_reference() {
 fn parallel_turns_on_a_map_match_the_reference() {
     let file = support::repo_root().join("tests/data/depot-parallel.toml");
     let scenario = Scenario::load(&file).expect("depot-parallel.toml");
-    assert!(scenario.map.is_some() && scenario.turns == shared::vocabulary::TurnMode::Parallel);
+    assert!(scenario.map.is_some() && scenario.turns == shared::control::vocabulary::TurnMode::Parallel);
     let run = run_and_compare(&scenario);
     let agents = scenario.agents.len() as f64;
     assert!(
@@ -286,7 +286,7 @@ fn parallel_turns_on_a_map_match_the_reference() {
 fn orca_in_its_own_model_matches_the_reference() {
     let file = support::repo_root().join("tests/data/dense-orca.toml");
     let scenario = Scenario::load(&file).expect("dense-orca.toml");
-    assert_eq!(scenario.turns, shared::vocabulary::TurnMode::Simultaneous);
+    assert_eq!(scenario.turns, shared::control::vocabulary::TurnMode::Simultaneous);
     let run = run_and_compare(&scenario);
     let agents = scenario.agents.len() as f64;
     assert_eq!(

@@ -10,7 +10,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::SystemTime;
 
 use shared::scenario::Scenario;
-use shared::vocabulary::ControllerKind;
+use shared::control::vocabulary::ControllerKind;
 
 fn coordinator(args: &[&str]) -> Command {
     let mut c = Command::new(support::coordinator_bin());
@@ -214,7 +214,7 @@ fn unrelated_folders_and_files_are_never_replaced_without_force() {
 /// place nor bends tighter than its turning radius, and a unicycle drives straight.
 #[test]
 fn moves_csv_gives_the_exact_arc_that_reaches_each_waypoint() {
-    use shared::vocabulary::Kinematics;
+    use shared::control::vocabulary::Kinematics;
     for name in [
         "paper-car.toml",
         "narrow-reversing-car.toml",

@@ -12,7 +12,7 @@ use shared::groups::turn_groups_ordered;
 use shared::record::{FaultKind, Run};
 use shared::scenario::Scenario;
 use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
-use shared::vocabulary::{Body, MoveStatus, TurnMode};
+use shared::control::vocabulary::{Body, MoveStatus, TurnMode};
 
 /// About determinism, not liveness: a generous turn deadline keeps a healthy agent that
 /// the loaded test machine schedules late from counting as missed (dead agents are still
@@ -79,7 +79,7 @@ fn run_and_compare(scenario: &Scenario, deaths: &[(usize, usize)]) -> Run {
     assert!(run.completed);
     let s = run.summary();
     assert_eq!(s.collisions, 0);
-    assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
+    assert!(s.min_clearance_m >= -shared::control::safety::SAFETY_TOLERANCE_M);
     run
 }
 

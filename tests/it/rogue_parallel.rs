@@ -20,7 +20,7 @@ use serde_json::Value;
 use shared::geometry::Point;
 use shared::groups::turn_groups_ordered;
 use shared::scenario::Scenario;
-use shared::vocabulary::{Body, TurnMode};
+use shared::control::vocabulary::{Body, TurnMode};
 use support::progress::{self, Watched};
 use support::{
     agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, run_to_end, summary,

@@ -152,7 +152,7 @@ fn what_a_rogue_agent_starts_dies_with_the_run_in_process() {
     assert!(outcome.run.completed);
     let s = outcome.run.summary();
     assert_eq!(s.collisions, 0);
-    assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
+    assert!(s.min_clearance_m >= -shared::control::safety::SAFETY_TOLERANCE_M);
     // Playing honestly otherwise: no fault at all.
     assert!(outcome.run.faults.is_empty(), "{:?}", outcome.run.faults);
     assert_nothing_left(&prefix, &started);

@@ -5,7 +5,7 @@
 
 use anyhow::Context;
 use shared::geometry::{Disk, Point, Vector};
-use shared::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
+use shared::control::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
 use wire::misbehave::Misbehave;
 
 use crate::transport::{Command, MissionView, Reply, Transport, TurnInput};

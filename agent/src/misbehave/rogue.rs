@@ -166,7 +166,7 @@ fn grab<P: 'static, E>(
 fn hoard(prefix: &str, me: usize, held: &mut Vec<Box<dyn Any>>) -> anyhow::Result<()> {
     let node = rogue_node(prefix, held)?;
     let mut ports = 0usize;
-    for victim in (0..shared::vocabulary::MAX_AGENTS).filter(|&v| v != me) {
+    for victim in (0..shared::control::vocabulary::MAX_AGENTS).filter(|&v| v != me) {
         let names = AgentServiceNames::new(victim, 0);
         let Ok(world) = node
             .service_builder(&service_name(&names.world)?)

@@ -17,13 +17,13 @@ use crate::transport::TurnInput;
 const RAW_COUNTS: [u64; 3] = [wire_capacity_plus_one(), 1 << 40, u64::MAX];
 
 const fn wire_capacity_plus_one() -> u64 {
-    shared::vocabulary::MAX_WAYPOINTS as u64 + 1
+    shared::control::vocabulary::MAX_WAYPOINTS as u64 + 1
 }
 
 /// Write `state`'s waypoint count field raw, as a hostile process can.
 fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
     let vec = std::ptr::addr_of_mut!(state.waypoints).cast::<u8>();
-    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::vocabulary::MAX_WAYPOINTS]>();
+    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::control::vocabulary::MAX_WAYPOINTS]>();
     // SAFETY: `StaticVec` is `repr(C)` { data: [_; CAPACITY], len: u64 }: the count lies
     // right after the array, inside the sample.
     unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };
@@ -146,7 +146,7 @@ mod tests {
     fn raw_waypoint_count(state: &AgentState) -> u64 {
         let vec = std::ptr::addr_of!(state.waypoints).cast::<u8>();
         let len_offset =
-            std::mem::size_of::<[wire::WirePoint; shared::vocabulary::MAX_WAYPOINTS]>();
+            std::mem::size_of::<[wire::WirePoint; shared::control::vocabulary::MAX_WAYPOINTS]>();
         // SAFETY: the count lies right after the array, inside the state (see
         // `write_raw_waypoint_count`).
         unsafe { std::ptr::read_unaligned(vec.add(len_offset).cast::<u64>()) }
@@ -196,7 +196,7 @@ mod tests {
         assert_eq!(counts(&honest), [0, 1]);
     }
 
-    const MAX_WAYPOINTS_PLUS_ONE: u64 = shared::vocabulary::MAX_WAYPOINTS as u64 + 1;
+    const MAX_WAYPOINTS_PLUS_ONE: u64 = shared::control::vocabulary::MAX_WAYPOINTS as u64 + 1;
 
     #[test]
     fn a_spoofed_handshake_names_the_victim_and_its_moves_name_the_agent() {

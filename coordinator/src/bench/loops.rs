@@ -169,7 +169,7 @@ pub fn measure(
     }
     session.finish().map_err(CliError::Other)?;
     let simulate_median_s = median(&simulate_s);
-    let sequential = scenario.turns == shared::vocabulary::TurnMode::Sequential;
+    let sequential = scenario.turns == shared::control::vocabulary::TurnMode::Sequential;
     Ok(LoopsReport {
         floor_spin_us: Distribution::of(&floor_spin),
         floor_block_us: Distribution::of(&floor_block),

@@ -44,7 +44,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::Context;
-use shared::vocabulary::MAX_AGENTS;
+use shared::control::vocabulary::MAX_AGENTS;
 
 use crate::agents::locate_agent_binary;
 use crate::bench::run_options::{ECHO_DEADLINE, MAX_BENCH_STEPS, bench_run_options};

@@ -147,11 +147,11 @@ pub struct EventRings {
 pub fn check_sizes(sizes: &[usize], steps: usize) -> Result<(), CliError> {
     if let Some(&n) = sizes
         .iter()
-        .find(|&&n| n == 0 || n > shared::vocabulary::MAX_AGENTS)
+        .find(|&&n| n == 0 || n > shared::control::vocabulary::MAX_AGENTS)
     {
         return Err(CliError::Usage(format!(
             "--scale {n}: a formation has 1 to {} agents",
-            shared::vocabulary::MAX_AGENTS
+            shared::control::vocabulary::MAX_AGENTS
         )));
     }
     if !(2..=super::run_options::MAX_BENCH_STEPS).contains(&steps) {
@@ -489,7 +489,7 @@ mod tests {
     fn sizes_out_of_range_are_refused_before_anything_runs() {
         assert!(check_sizes(&[1, 300, 1000], DEFAULT_SCALE_STEPS).is_ok());
         assert!(check_sizes(&[0], DEFAULT_SCALE_STEPS).is_err());
-        assert!(check_sizes(&[shared::vocabulary::MAX_AGENTS + 1], DEFAULT_SCALE_STEPS).is_err());
+        assert!(check_sizes(&[shared::control::vocabulary::MAX_AGENTS + 1], DEFAULT_SCALE_STEPS).is_err());
         assert!(check_sizes(&[10], 1).is_err());
     }
 }

@@ -147,9 +147,9 @@ mod tests {
             assert_eq!(s.agents.len(), n);
             assert_eq!(s.obstacles.len(), 4);
             assert_eq!(path.len(), 21);
-            assert_eq!(s.turns, shared::vocabulary::TurnMode::Sequential);
+            assert_eq!(s.turns, shared::control::vocabulary::TurnMode::Sequential);
             let (_, swarm, _) = generate_kind(n, 20, Kind::Swarm).unwrap();
-            assert_eq!(swarm.turns, shared::vocabulary::TurnMode::Parallel);
+            assert_eq!(swarm.turns, shared::control::vocabulary::TurnMode::Parallel);
             assert!(
                 swarm
                     .agents

@@ -10,7 +10,7 @@ use std::time::Duration;
 use serde::Serialize;
 use shared::geometry::Pose;
 use shared::scenario::Scenario;
-use shared::vocabulary::TurnMode;
+use shared::control::vocabulary::TurnMode;
 
 use crate::bench::run_options::bench_run_options;
 use crate::compare::with_turn_mode;

@@ -475,7 +475,7 @@ mod tests {
     #[test]
     fn the_bound_is_below_every_track_found() {
         use rand::{Rng, SeedableRng};
-        use shared::tracking::{Lattice, best_track_on_lattice};
+        use shared::control::tracking::{Lattice, best_track_on_lattice};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(29);
         let max_step_m = 0.5;
         let (mut counted, mut round_m) = (0, 0.0);

@@ -30,7 +30,7 @@
 //! deviation is measured from.
 //!
 //! With `--alone` each agent is also run alone (`alone.rs`: the method with no mate) and
-//! its best track searched on a lattice (`shared::tracking::best_track_on_lattice`): an achievable track, so the least
+//! its best track searched on a lattice (`shared::control::tracking::best_track_on_lattice`): an achievable track, so the least
 //! deviation an agent alone can have lies between its bound and that track, and the
 //! formation's excess over the agents alone is what the mates cost.
 //!
@@ -41,7 +41,7 @@
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::best_point::nearest_free_point;
+use shared::control::best_point::nearest_free_point;
 use shared::geometry::{FreeSpace, Point, Pose, Vector};
 use shared::scenario::Scenario;
 use shared::simulate::simulate_along;
@@ -499,7 +499,7 @@ mod tests {
         assert!((max - 0.5 * t as f64).abs() < 1e-5, "{max}");
     }
 
-    /// The agents' own look-ahead solver (`shared::tracking`) finds a track no better
+    /// The agents' own look-ahead solver (`shared::control::tracking`) finds a track no better
     /// than the optimum (it is feasible) and close to it.
     #[test]
     fn the_agents_track_solver_comes_close_to_the_optimum() {
@@ -511,8 +511,8 @@ mod tests {
             })
             .collect();
         let (best, _) = optimal_track(&start, &slots, &[], 0.8, Objective::Sum).unwrap();
-        let track = shared::tracking::least_deviation_track(&start, &slots, 0.8, 150);
-        let ours = shared::tracking::track_deviation_m(&track, &slots);
+        let track = shared::control::tracking::least_deviation_track(&start, &slots, 0.8, 150);
+        let ours = shared::control::tracking::track_deviation_m(&track, &slots);
         assert!(ours >= best - 1e-6, "{ours} below the optimum {best}");
         assert!(ours <= best * 1.02, "{ours} against the optimum {best}");
     }

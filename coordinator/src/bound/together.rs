@@ -205,8 +205,8 @@ mod tests {
     use crate::bound::agent_bounds;
     use crate::bound::alone::{DEFAULT_POINTS_PER_MOVE, searched_track};
     use shared::geometry::DiskGrid;
-    use shared::safety::check_move;
-    use shared::vocabulary::Body;
+    use shared::control::safety::check_move;
+    use shared::control::vocabulary::Body;
 
     /// The paper example with every agent capped at twice the centre's step, its centre
     /// path and the agents' bounds.

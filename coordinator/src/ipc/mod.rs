@@ -20,7 +20,7 @@ use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
 use shared::geometry::{Pose, Vector};
 use shared::scenario::Scenario;
-use shared::vocabulary::Body;
+use shared::control::vocabulary::Body;
 use wire::{AgentServiceNames, AgentState, EVENT_TURN, MalformedState, Role, StateMsg, World};
 
 use crate::turns::WakeMode;

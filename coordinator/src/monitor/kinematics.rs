@@ -3,8 +3,8 @@
 
 use nalgebra::Vector2;
 use shared::geometry::Point;
-use shared::safety::SAFETY_TOLERANCE_M;
-use shared::vocabulary::Kinematics;
+use shared::control::safety::SAFETY_TOLERANCE_M;
+use shared::control::vocabulary::Kinematics;
 
 use super::Refusal;
 
@@ -235,14 +235,14 @@ mod tests {
             reverse in proptest::bool::ANY,
             xs in proptest::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 0..5),
         ) {
-            let limits = shared::kinematics::UnicycleLimits {
+            let limits = shared::control::kinematics::UnicycleLimits {
                 max_step_m: 2.0,
                 max_turn_rad: 3.0,
                 reverse,
             };
             let mut path = vec![Point::origin()];
             path.extend(xs.iter().map(|&(x, y)| Point::new(x, y)));
-            let share = shared::kinematics::unicycle_step_share(start, &path, end, &limits);
+            let share = shared::control::kinematics::unicycle_step_share(start, &path, end, &limits);
             let kinematics = Kinematics::Unicycle { max_turn_rad: 3.0, reverse };
             let verdict = check_kinematics(kinematics, Some(start), &path, Some(end), Some(2.0));
             if (share - 1.0).abs() > 1e-6 {
@@ -269,15 +269,15 @@ mod tests {
             // The end heading the chords give, give or take `end_off`.
             let mut heading = start;
             for w in path.windows(2) {
-                heading += shared::kinematics::car_piece(heading, &w[0], &w[1]).turn_rad;
+                heading += shared::control::kinematics::car_piece(heading, &w[0], &w[1]).turn_rad;
             }
             let end = heading + end_off;
-            let limits = shared::kinematics::CarLimits {
+            let limits = shared::control::kinematics::CarLimits {
                 max_step_m: 1.5,
                 turning_radius_m: rho_m,
                 reverse,
             };
-            let library = shared::kinematics::check_car_move(start, &path, Some(end), &limits);
+            let library = shared::control::kinematics::check_car_move(start, &path, Some(end), &limits);
             let kinematics = Kinematics::Car { turning_radius_m: rho_m, reverse };
             let monitor = check_kinematics(kinematics, Some(start), &path, Some(end), Some(1.5));
             proptest::prop_assert_eq!(library.is_ok(), monitor.is_ok(), "{:?} {:?}", library, monitor);

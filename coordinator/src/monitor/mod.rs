@@ -12,8 +12,8 @@ use parry2d_f64::query;
 use parry2d_f64::shape::{Ball, Polyline, Segment};
 use parry2d_f64::utils::point_in_poly2d;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Polygon};
-use shared::safety::SAFETY_TOLERANCE_M;
-use shared::vocabulary::Body;
+use shared::control::safety::SAFETY_TOLERANCE_M;
+use shared::control::vocabulary::Body;
 
 mod kinematics;
 

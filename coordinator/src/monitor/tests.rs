@@ -245,7 +245,7 @@ proptest::proptest! {
             .chain(path.iter().map(|&(x, y)| Point::new(x, y)))
             .collect();
         let best = *waypoints.last().expect("one at least");
-        let grid = shared::safety::bodies_grid(&bodies);
+        let grid = shared::control::safety::bodies_grid(&bodies);
         let passing = &passing_bits[..bodies.len()];
         let m = SafetyMonitor::new(Field::new(20.0, 20.0), &[]);
         let mv = MoveUnderCheck {

@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use shared::course::ReplanReason;
-use shared::vocabulary::{MoveStatus, Named, named};
+use shared::control::vocabulary::{MoveStatus, Named, named};
 
 use super::csv_format::{cell_f64, display_f64, zero_one};
 

@@ -2,10 +2,10 @@
 //! each file with its header.
 
 use shared::geometry::{Point, Pose, wrap_angle_rad};
-use shared::kinematics::{car_piece, driving_headings};
+use shared::control::kinematics::{car_piece, driving_headings};
 use shared::record::Run;
 use shared::scenario::Scenario;
-use shared::vocabulary::Kinematics;
+use shared::control::vocabulary::Kinematics;
 
 use super::csv_format::{csv_bytes, csv_bytes_with_columns, header};
 use super::rows::{
@@ -69,7 +69,7 @@ pub fn trajectory_csv(run: &Run) -> anyhow::Result<Vec<u8>> {
 /// reaches each waypoint: the heading there, the signed length and the curvature of the
 /// arc from the waypoint before (a unicycle drives straight segments, turning in place
 /// between them; each chord of a car stands for exactly one arc,
-/// [`shared::kinematics::car_piece`]).
+/// [`shared::control::kinematics::car_piece`]).
 pub fn moves_csv(scenario: &Scenario, run: &Run) -> anyhow::Result<Vec<u8>> {
     let headings = scenario.agents.iter().any(|a| a.kinematics.has_heading());
     let columns = header::<MoveRow>().len() - if headings { 0 } else { 3 };

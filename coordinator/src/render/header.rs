@@ -6,7 +6,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::{RGBAColor, TextStyle};
 use shared::scenario::Scenario;
-use shared::vocabulary::TurnMode;
+use shared::control::vocabulary::TurnMode;
 
 use super::canvas::Backend;
 use super::font;

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use shared::course::{Replan, ReplanReason, Wait, WaitReason};
 use shared::geometry::{Point, Pose};
 use shared::record::{AgentStep, Fault, FaultKind, Step};
-use shared::vocabulary::MoveStatus;
+use shared::control::vocabulary::MoveStatus;
 
 /// A position, `[x_m, y_m]`.
 pub type XyM = [f64; 2];

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use shared::geometry::Point;
 use shared::record::{FaultKind, Recorder};
-use shared::vocabulary::Kinematics;
+use shared::control::vocabulary::Kinematics;
 
 use super::driver::Driver;
 use super::lateness::{Lateness, Verdict};

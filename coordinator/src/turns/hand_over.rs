@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use shared::vocabulary::TurnMode;
+use shared::control::vocabulary::TurnMode;
 use wire::PREPARED_GRANT_WINDOW;
 
 use super::options::SPIN_BUDGET;

@@ -6,7 +6,7 @@ use shared::geometry::Point;
 use shared::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
 use shared::record::{FaultKind, Recorder};
 use shared::step_loop::Judge;
-use shared::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
+use shared::control::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
 
 use crate::monitor::{self, MoveUnderCheck, Refusal, SafetyMonitor, Standing};
 
@@ -76,7 +76,7 @@ impl Judge for MonitorJudge {
         // A move is checked against the bodies near it, found with a grid over them, when
         // there are enough moves to pay for building it (the verdicts are the same).
         let grid =
-            (moves.len() > 1).then(|| shared::safety::bodies_grid(recorder.world().bodies()));
+            (moves.len() > 1).then(|| shared::control::safety::bodies_grid(recorder.world().bodies()));
         let mut alone = Vec::with_capacity(moves.len());
         for (agent, mv) in moves {
             let standing = Standing {

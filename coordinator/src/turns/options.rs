@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use super::fault_injection::FaultInjection;
-use shared::vocabulary::Kinematics;
+use shared::control::vocabulary::Kinematics;
 
 use crate::network::NetworkOptions;
 
@@ -148,7 +148,7 @@ impl RunOptions {
     /// The slow bound in force for an agent that moves as `kinematics`:
     /// [`Self::slow_turn`], or by default a fifth of the turn deadline, and half of it for
     /// a car. A boxed-in car's turn runs a Hybrid A* search to its end
-    /// ([`shared::turn::SEARCH_EXPANSIONS`]), about 65 ms in one process on the project's
+    /// ([`shared::control::turn::SEARCH_EXPANSIONS`]), about 65 ms in one process on the project's
     /// 2-core machine and up to 83 ms among agent processes on `paper-car`: honest, and
     /// over a fifth of the default deadline.
     ///
@@ -156,7 +156,7 @@ impl RunOptions {
     /// use std::time::Duration;
     ///
     /// use coordinator::turns::RunOptions;
-    /// use shared::vocabulary::Kinematics;
+    /// use shared::control::vocabulary::Kinematics;
     ///
     /// let options = RunOptions::default();
     /// let car = Kinematics::Car { turning_radius_m: 0.5, reverse: true };

@@ -9,7 +9,7 @@ use shared::geometry::{Point, Pose};
 use shared::record::{FaultKind, Recorder};
 use shared::sensing::SensedAgents;
 use shared::step_loop::{GroupMoves, GroupTurn};
-use shared::vocabulary::Move;
+use shared::control::vocabulary::Move;
 use wire::{StateMsg, monotonic_ns};
 
 use super::answer::{Answer, Turn};

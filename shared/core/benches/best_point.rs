@@ -18,14 +18,14 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::best_point::{nearest_free_point, nearest_reachable_free_point};
+use shared::control::best_point::{nearest_free_point, nearest_reachable_free_point};
 use shared::paths::disk_path::{PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
 use shared::record::Recorder;
 use shared::scenario::Scenario;
 use shared::simulate::plan_centre_path;
-use shared::turn::{BestPointController, PLANNING_MARGIN_M};
-use shared::vocabulary::Body;
+use shared::control::turn::{BestPointController, PLANNING_MARGIN_M};
+use shared::control::vocabulary::Body;
 
 /// Radius of every (inflated) disk, in metres.
 const DISK_RADIUS_M: f64 = 1.3;

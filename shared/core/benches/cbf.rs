@@ -10,10 +10,10 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{CbfController, solve_qp_2d};
-use shared::formation::Slot;
+use shared::control::cbf::{CbfController, solve_qp_2d};
+use shared::control::formation::Slot;
 use shared::geometry::{Disk, Field, Point, Pose, Vector};
-use shared::vocabulary::{AgentSpec, Body, CbfSettings};
+use shared::control::vocabulary::{AgentSpec, Body, CbfSettings};
 
 /// Queries per case, cycled through by the benchmark loop.
 const QUERY_COUNT: usize = 256;

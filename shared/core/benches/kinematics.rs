@@ -12,8 +12,8 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use shared::geometry::{Point, Pose};
 use shared::scenario::Scenario;
 use shared::simulate::{agent_controllers, simulate};
-use shared::turn::{TurnController, TurnRequest};
-use shared::vocabulary::{Body, Kinematics};
+use shared::control::turn::{TurnController, TurnRequest};
+use shared::control::vocabulary::{Body, Kinematics};
 
 /// One recorded turn: the centre, the agent, where it stood and faced, the others.
 struct Turn {

@@ -32,7 +32,7 @@ use std::time::Instant;
 use crate::geometry::{Disk, Pose};
 use crate::paths::hybrid_astar::{self, HybridAStarSettings, PlanError, Replanner, first_blocked_pose};
 use crate::scenario::Scenario;
-use crate::vocabulary::Body;
+use crate::control::vocabulary::Body;
 
 /// How many steps ahead the centre looks for moving obstacles crossing its path.
 pub const LOOKAHEAD_STEPS: usize = 20;
@@ -189,7 +189,7 @@ impl<'a> Course<'a> {
 
     /// The next poses along the current plan, at most `n`: where the centre goes next if
     /// it does not hold or replan (fewer near the goal). An agent looks ahead along them
-    /// ([`crate::turn::TurnController::plan`]).
+    /// ([`crate::control::turn::TurnController::plan`]).
     pub fn ahead(&self, n: usize) -> &[Pose] {
         let from = (self.at + 1).min(self.plan.len());
         &self.plan[from..(from + n).min(self.plan.len())]

@@ -18,8 +18,8 @@
 use std::collections::BTreeMap;
 
 use crate::geometry::{Point, polyline_length_m};
-use crate::safety::SAFETY_TOLERANCE_M;
-use crate::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
+use crate::control::safety::SAFETY_TOLERANCE_M;
+use crate::control::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
 
 /// The groups of one step, in turn order, each listing its agents in agent order. Dead
 /// agents take no turn and are in no group.
@@ -29,10 +29,10 @@ use crate::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
 /// one for every live agent it falls back to one group per agent.
 ///
 /// ```
-/// use shared::formation::Slot;
+/// use shared::control::formation::Slot;
 /// use shared::geometry::Point;
 /// use shared::groups::turn_groups;
-/// use shared::vocabulary::{AgentSpec, Body, TurnMode};
+/// use shared::control::vocabulary::{AgentSpec, Body, TurnMode};
 /// let mut spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.5);
 /// spec.max_step_m = Some(1.0);
 /// let specs = [spec; 3];
@@ -60,10 +60,10 @@ pub fn turn_groups(
 /// agent order.
 ///
 /// ```
-/// use shared::formation::Slot;
+/// use shared::control::formation::Slot;
 /// use shared::geometry::Point;
 /// use shared::groups::turn_groups_ordered;
-/// use shared::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
+/// use shared::control::vocabulary::{AgentSpec, Body, TurnMode, TurnOrder};
 /// let specs = [AgentSpec::new(Slot::new(0.0, 0.0), 0.5); 3];
 /// let at = |x: f64| Body { position: Point::new(x, 0.0), radius_m: 0.5 };
 /// // A column heading east, numbered from the back: the front one moves first.
@@ -408,7 +408,7 @@ pub fn simultaneous_meetings(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::formation::Slot;
+    use crate::control::formation::Slot;
 
     #[test]
     fn no_two_agents_of_a_group_could_meet_and_every_live_agent_has_one_group() {

@@ -36,28 +36,19 @@
 //! - [`output_file`]: writing into a folder that may hold someone else's links.
 #![warn(missing_docs)]
 
-pub mod best_point;
-pub mod cbf;
+pub mod control;
 pub mod course;
-pub mod formation;
 pub mod geometry;
 pub mod groups;
 pub mod input_file;
-pub mod kinematics;
 pub mod maps;
 pub mod moving_obstacle;
-pub mod orca;
 mod ordered;
 pub mod output_file;
 pub mod paths;
 pub mod record;
-pub mod safety;
 pub mod scenario;
 pub mod sensing;
 pub mod simulate;
 pub mod step_loop;
-pub mod survival_grid;
-pub mod tracking;
-pub mod turn;
-pub mod vocabulary;
 pub mod world;

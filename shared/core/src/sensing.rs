@@ -4,7 +4,7 @@
 use std::ops::ControlFlow;
 
 use crate::geometry::DiskGrid;
-use crate::vocabulary::{AgentSpec, Body};
+use crate::control::vocabulary::{AgentSpec, Body};
 
 /// The agents' bodies at one moment, indexed for sensing queries.
 #[derive(Clone, Debug)]
@@ -16,7 +16,7 @@ impl SensedAgents {
     /// Index `bodies` (every agent, in agent order).
     pub fn new(bodies: &[Body]) -> Self {
         Self {
-            grid: crate::safety::bodies_grid(bodies),
+            grid: crate::control::safety::bodies_grid(bodies),
         }
     }
 
@@ -31,10 +31,10 @@ impl SensedAgents {
     /// list exactly the bodies it would pick from all of them.
     ///
     /// ```
-    /// use shared::formation::Slot;
+    /// use shared::control::formation::Slot;
     /// use shared::geometry::Point;
     /// use shared::sensing::SensedAgents;
-    /// use shared::vocabulary::{AgentSpec, Body};
+    /// use shared::control::vocabulary::{AgentSpec, Body};
     /// let mut spec = AgentSpec::new(Slot::new(0.0, 0.0), 0.5);
     /// spec.sensing_radius_m = Some(3.0);
     /// let at = |x: f64| Body { position: Point::new(x, 0.0), radius_m: 0.5 };

@@ -17,8 +17,8 @@ use crate::paths::hybrid_astar::{self, HybridAStarSettings, PlanError};
 use crate::record::{Fault, FaultKind, Recorder, Run};
 use crate::scenario::Scenario;
 use crate::step_loop::{GroupMoves, GroupTurn, MoveSource, WorldChecksOnly, run_steps};
-use crate::turn::{TurnController, TurnRequest, Velocities};
-use crate::vocabulary::CbfSettingsError;
+use crate::control::turn::{TurnController, TurnRequest, Velocities};
+use crate::control::vocabulary::CbfSettingsError;
 
 /// Plan the formation centre's path with Hybrid A* and resample it every `step_m`.
 pub fn plan_centre_path(scenario: &Scenario) -> Result<Vec<Pose>, PlanError> {

@@ -24,8 +24,8 @@ use crate::course::Course;
 use crate::geometry::{Pose, Vector};
 use crate::groups::turn_groups_ordered;
 use crate::record::Recorder;
-use crate::tracking::MAX_HORIZON_STEPS;
-use crate::vocabulary::{Move, TurnMode};
+use crate::control::tracking::MAX_HORIZON_STEPS;
+use crate::control::vocabulary::{Move, TurnMode};
 
 /// One group's turns, as the step loop hands them to a [`MoveSource`].
 #[derive(Clone, Copy, Debug)]
@@ -145,8 +145,8 @@ impl Judge for WorldChecksOnly {
 /// use shared::scenario::Scenario;
 /// use shared::simulate::{agent_controllers, plan_centre_path};
 /// use shared::step_loop::{GroupMoves, GroupTurn, MoveSource, WorldChecksOnly, run_steps};
-/// use shared::turn::{TurnController, TurnRequest};
-/// use shared::vocabulary::Move;
+/// use shared::control::turn::{TurnController, TurnRequest};
+/// use shared::control::vocabulary::Move;
 ///
 /// /// Every agent plans in this process, the sequential way (no look-ahead, no mates).
 /// struct Planners(Vec<TurnController>);

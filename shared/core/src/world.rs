@@ -5,8 +5,8 @@
 
 use crate::geometry::{Point, Pose, Vector, wrap_angle_rad};
 use crate::scenario::Scenario;
-use crate::turn::MateView;
-use crate::vocabulary::{Body, Move};
+use crate::control::turn::MateView;
+use crate::control::vocabulary::{Body, Move};
 
 /// The world during a run, as every turn reads it.
 #[derive(Clone, Debug)]
@@ -116,7 +116,7 @@ impl<'a> World<'a> {
     }
 
     /// Every agent as the world shows it to its mates ([`MateView`]), in index order
-    /// (for [`crate::turn::TurnController::mate_views`]).
+    /// (for [`crate::control::turn::TurnController::mate_views`]).
     pub fn views(&self) -> impl Iterator<Item = MateView> + '_ {
         self.bodies
             .iter()
@@ -132,7 +132,7 @@ impl<'a> World<'a> {
     /// How far each agent moved over the last recorded step (metres per step: its
     /// velocity), from the positions recorded at the end of the last two steps; zero
     /// before two steps are recorded. What agents moving simultaneously know of each
-    /// other ([`crate::vocabulary::TurnMode::Simultaneous`]).
+    /// other ([`crate::control::vocabulary::TurnMode::Simultaneous`]).
     pub fn velocities(&self) -> Vec<Vector> {
         match &self.last_two[..] {
             [before, now] => now

@@ -11,7 +11,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use shared::vocabulary::Named;
+use shared::control::vocabulary::Named;
 
 /// How an agent misbehaves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -55,8 +55,8 @@ pub fn orca_crowd() -> shared::scenario::Scenario {
     let file = repo_root().join("scenarios/large-top-speed.toml");
     let mut scenario = shared::scenario::Scenario::load(&file)
         .expect("large-top-speed.toml")
-        .with_controller(shared::vocabulary::ControllerKind::Orca);
-    scenario.turns = shared::vocabulary::TurnMode::Simultaneous;
+        .with_controller(shared::control::vocabulary::ControllerKind::Orca);
+    scenario.turns = shared::control::vocabulary::TurnMode::Simultaneous;
     scenario
 }
 

@@ -185,7 +185,7 @@ fn survive(trouble: Trouble) {
     assert!(run.completed, "{trouble:?}");
     let s = run.summary();
     assert_eq!(s.collisions, 0, "{trouble:?}");
-    assert!(s.min_clearance_m >= -shared::safety::SAFETY_TOLERANCE_M);
+    assert!(s.min_clearance_m >= -shared::control::safety::SAFETY_TOLERANCE_M);
     let last = run.steps.last().expect("steps");
     if trouble == Trouble::KillAndRestart {
         assert!(

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::vocabulary::Named;
+use crate::control::vocabulary::Named;
 
 /// What went wrong with an agent, and when.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -5,9 +5,9 @@ use serde::Serialize;
 
 use super::Run;
 use crate::geometry::wrap_angle_rad;
-use crate::kinematics::{car_piece, driving_headings};
+use crate::control::kinematics::{car_piece, driving_headings};
 use crate::scenario::Scenario;
-use crate::vocabulary::Kinematics;
+use crate::control::vocabulary::Kinematics;
 
 /// The heading figures of a run, for runs in which some agent has a heading.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -12,7 +12,7 @@
 use crate::course::{Course, Replan, Wait};
 use crate::geometry::{Point, Pose, polyline_length_m};
 use crate::scenario::Scenario;
-use crate::vocabulary::{Body, MoveStatus};
+use crate::control::vocabulary::{Body, MoveStatus};
 
 mod fault;
 mod headings;
@@ -47,7 +47,7 @@ pub struct AgentStep {
     /// The polyline it followed this step (its position alone when it did not move).
     pub waypoints: Vec<Point>,
     /// Where it faces, radians in `(-pi, pi]`, for an agent with a heading
-    /// (a unicycle or a car, [`Kinematics`](crate::vocabulary::Kinematics)); `None` for a holonomic
+    /// (a unicycle or a car, [`Kinematics`](crate::control::vocabulary::Kinematics)); `None` for a holonomic
     /// one.
     pub heading_rad: Option<f64>,
 }

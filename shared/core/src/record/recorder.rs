@@ -7,9 +7,9 @@ use crate::geometry::{
     DiskGrid, Point, Pose, distance_at_the_same_time_m, distance_polyline_polyline,
 };
 use crate::groups::{GroupMove, group_meetings, simultaneous_meetings};
-use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
+use crate::control::safety::{self, SAFETY_TOLERANCE_M, Violation};
 use crate::scenario::Scenario;
-use crate::vocabulary::{Move, MoveStatus, TurnMode};
+use crate::control::vocabulary::{Move, MoveStatus, TurnMode};
 use crate::world::World;
 
 mod check;

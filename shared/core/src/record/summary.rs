@@ -3,7 +3,7 @@
 use serde::Serialize;
 
 use super::{Fault, Run, Step};
-use crate::safety::SAFETY_TOLERANCE_M;
+use crate::control::safety::SAFETY_TOLERANCE_M;
 
 /// The figures of a run (the `summary.json` keys that do not depend on timing).
 #[derive(Clone, Debug, PartialEq, Serialize)]

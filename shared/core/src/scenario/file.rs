@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::ScenarioError;
 use crate::geometry::Pose;
 use crate::moving_obstacle::Route;
-use crate::vocabulary::{ControllerKind, TurnMode, TurnOrder};
+use crate::control::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 
 // ---------------------------------------------------------------------------------------
 // The file format (serde side). Units are in the names; unknown fields are errors. A key

@@ -19,7 +19,7 @@
 //!   self-contained file.
 //!
 //! The agents, the controller and the capacities a scenario is made of are in
-//! [`crate::vocabulary`].
+//! [`crate::control::vocabulary`].
 
 mod check;
 mod error;

@@ -4,7 +4,7 @@ use crate::geometry::{Disk, Field, Polygon, Pose};
 use crate::moving_obstacle::MovingObstacle;
 
 use super::ScenarioMap;
-use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode, TurnOrder};
+use crate::control::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, TurnMode, TurnOrder};
 
 /// A validated scenario: every number finite and in range, every body placed legally.
 #[derive(Clone, Debug, PartialEq)]

@@ -13,7 +13,7 @@ use super::file::{
 use super::{Scenario, ScenarioMap};
 use crate::geometry::{Disk, Point, Pose};
 use crate::moving_obstacle::MovingObstacle;
-use crate::vocabulary::Kinematics;
+use crate::control::vocabulary::Kinematics;
 
 /// Why a scenario has no resolved TOML form (only a scenario built by hand, not one this
 /// module parsed, can meet these).

@@ -4,11 +4,11 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::cbf::{CbfController, ZcbfLogSumExpController, is_deadlocked, solve_qp_2d};
-use shared::formation::Slot;
+use shared::control::cbf::{CbfController, ZcbfLogSumExpController, is_deadlocked, solve_qp_2d};
+use shared::control::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
-use shared::safety::check_move;
-use shared::vocabulary::{
+use shared::control::safety::check_move;
+use shared::control::vocabulary::{
     AgentSpec, Body, CbfSettings, DEFAULT_LSE_SHARPNESS_PER_M, MAX_WAYPOINTS, Move, MoveStatus,
 };
 
@@ -388,7 +388,7 @@ fn the_cbf_table_sets_the_pieces_of_a_turn() {
     let default = load(&text).expect("loads");
     assert_eq!(
         default.controller.cbf.substeps,
-        shared::vocabulary::DEFAULT_CBF_SUBSTEPS
+        shared::control::vocabulary::DEFAULT_CBF_SUBSTEPS
     );
     let one = load(&with(1)).expect("loads");
     let three = load(&with(3)).expect("loads");
@@ -400,7 +400,7 @@ fn the_cbf_table_sets_the_pieces_of_a_turn() {
     assert_eq!(a.summary().collisions, 0);
     assert_eq!(b.summary().collisions, 0);
     assert_ne!(a.steps, b.steps, "the pieces changed nothing");
-    for bad in [0, shared::vocabulary::MAX_CBF_SUBSTEPS + 1] {
+    for bad in [0, shared::control::vocabulary::MAX_CBF_SUBSTEPS + 1] {
         let e = load(&with(bad)).expect_err("out of range").to_string();
         assert!(e.contains("cbf.substeps"), "{e}");
     }

@@ -10,7 +10,7 @@
 
 use shared::geometry::distance_polyline_polyline;
 use shared::record::{FaultKind, Run};
-use shared::safety::SAFETY_TOLERANCE_M;
+use shared::control::safety::SAFETY_TOLERANCE_M;
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
 

@@ -15,10 +15,10 @@ use proptest::prelude::*;
 use shared::geometry::{Point, distance_polyline_polyline, polyline_length_m};
 use shared::moving_obstacle::{MovingObstacle, Route};
 use shared::record::{FaultKind, Run};
-use shared::safety::SAFETY_TOLERANCE_M;
+use shared::control::safety::SAFETY_TOLERANCE_M;
 use shared::scenario::{Scenario, moving_obstacle_table};
 use shared::simulate::simulate;
-use shared::turn::TurnRequest;
+use shared::control::turn::TurnRequest;
 
 /// A random moving obstacle: radius, waypoints, speed, and whether its route loops.
 type MoverSpec = (f64, Vec<(f64, f64)>, f64, bool);
@@ -151,7 +151,7 @@ proptest! {
     /// docs/measurements.md says how often, about 1 field in 5 000): these 48 have none, and
     /// [`every_random_field_keeps_the_invariants_and_books_every_strike`] states what
     /// holds in every field. Without the sweep of where an agent can go on to
-    /// ([`shared::survival_grid`]) this fails (one of them: three obstacles closing on
+    /// ([`shared::control::survival_grid`]) this fails (one of them: three obstacles closing on
     /// the rear agent); without looking ahead at all, two of the regression file's fields
     /// are struck.
     #[test]
@@ -439,23 +439,23 @@ centre_clearance_m = 0.5
             (obstacle.y + near.1).clamp(0.5, 19.5),
         );
         let spec = scenario.agents[0];
-        let others: Vec<shared::vocabulary::Body> = crowd
+        let others: Vec<shared::control::vocabulary::Body> = crowd
             .iter()
-            .map(|(angle, d)| shared::vocabulary::Body {
+            .map(|(angle, d)| shared::control::vocabulary::Body {
                 position: Point::new(me.x + d * angle.cos(), me.y + d * angle.sin()),
                 radius_m: 0.25,
             })
             .filter(|b| (b.position - me).norm() >= 0.5 + 1e-3 && (b.position - obstacle).norm() >= 0.85)
             .collect();
         // Bodies that overlap one another are left out, not the case.
-        let others: Vec<shared::vocabulary::Body> = others
+        let others: Vec<shared::control::vocabulary::Body> = others
             .iter()
             .enumerate()
             .filter(|(i, a)| others[..*i].iter().all(|b| (a.position - b.position).norm() >= 0.5))
             .map(|(_, b)| *b)
             .collect();
         prop_assume!((me - obstacle).norm() >= 0.85 + 1e-3);
-        let sensed: Vec<shared::vocabulary::Body> = others
+        let sensed: Vec<shared::control::vocabulary::Body> = others
             .iter()
             .filter(|b| spec.senses(&me, &b.position, b.radius_m))
             .copied()

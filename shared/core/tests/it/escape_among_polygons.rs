@@ -3,10 +3,10 @@
 //! wall, and the escape goes round instead.
 
 use shared::geometry::{Point, Pose};
-use shared::safety::check_move_against_polygons;
+use shared::control::safety::check_move_against_polygons;
 use shared::scenario::Scenario;
 use shared::simulate::agent_controllers;
-use shared::turn::TurnRequest;
+use shared::control::turn::TurnRequest;
 
 /// One agent (radius 0.3 m, at most 0.8 m a step) with a wall 0.15 m to its right and a
 /// moving obstacle coming at it from the left.

@@ -8,7 +8,7 @@ use shared::geometry::polyline_length_m;
 use shared::record::Run;
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
-use shared::vocabulary::TurnOrder;
+use shared::control::vocabulary::TurnOrder;
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data")).join(name)

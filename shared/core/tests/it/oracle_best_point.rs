@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
-use shared::best_point::{BestPointError, nearest_free_point, nearest_reachable_free_point};
+use shared::control::best_point::{BestPointError, nearest_free_point, nearest_reachable_free_point};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 
 /// The oracle's tolerance on distances and feasibility, in metres.

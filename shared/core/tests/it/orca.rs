@@ -7,11 +7,11 @@ use crate::support;
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::formation::Slot;
+use shared::control::formation::Slot;
 use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
-use shared::orca::OrcaController;
-use shared::safety::check_move;
-use shared::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
+use shared::control::orca::OrcaController;
+use shared::control::safety::check_move;
+use shared::control::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 
 /// The agent's slot is the formation centre itself.
 fn spec(radius_m: f64) -> AgentSpec {
@@ -336,7 +336,7 @@ fn in_its_own_model_no_two_agents_meet_at_any_instant() {
         "/../../tests/data/dense-orca.toml"
     ));
     let scenario = shared::scenario::Scenario::load(&file).expect("dense-orca.toml");
-    assert_eq!(scenario.turns, shared::vocabulary::TurnMode::Simultaneous);
+    assert_eq!(scenario.turns, shared::control::vocabulary::TurnMode::Simultaneous);
     let run = shared::simulate::simulate(&scenario).expect("runs");
     let mut crossings = 0;
     for step in &run.steps[1..] {
@@ -345,7 +345,7 @@ fn in_its_own_model_no_two_agents_meet_at_any_instant() {
                 let reach_m = scenario.agents[i].radius_m + scenario.agents[j].radius_m;
                 let d = shared::geometry::distance_at_the_same_time_m(&a.waypoints, &b.waypoints);
                 assert!(
-                    d >= reach_m - shared::safety::SAFETY_TOLERANCE_M,
+                    d >= reach_m - shared::control::safety::SAFETY_TOLERANCE_M,
                     "step {}: agents {i} and {j} come within {d} m at once",
                     step.step
                 );

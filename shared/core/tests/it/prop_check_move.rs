@@ -7,11 +7,11 @@
 
 use proptest::prelude::*;
 use shared::geometry::{DiskGrid, Field, Point, distance_point_segment};
-use shared::safety::{
+use shared::control::safety::{
     Others, SAFETY_TOLERANCE_M, Violation, bodies_grid, check_move, check_move_among,
     clearance_to_others_m, clearances_of_m,
 };
-use shared::vocabulary::{Body, MAX_WAYPOINTS};
+use shared::control::vocabulary::{Body, MAX_WAYPOINTS};
 
 /// The first (segment, body, overlap) by the plain definition, segment by segment.
 fn first_overlap(

@@ -21,7 +21,7 @@ use std::f64::consts::TAU;
 
 use proptest::prelude::*;
 use proptest::test_runner::Config;
-use shared::best_point::nearest_reachable_free_point;
+use shared::control::best_point::nearest_reachable_free_point;
 use shared::paths::disk_path::{DiskPath, PathError, PathPiece, PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 

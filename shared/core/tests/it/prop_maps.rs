@@ -7,7 +7,7 @@
 
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
-use shared::best_point::nearest_free_point;
+use shared::control::best_point::nearest_free_point;
 use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Vector};
 use shared::maps::{Cell, OccupancyGrid};

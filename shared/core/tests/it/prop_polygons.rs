@@ -14,7 +14,7 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::Config;
-use shared::best_point::nearest_free_point;
+use shared::control::best_point::nearest_free_point;
 use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer,

@@ -4,7 +4,7 @@
 
 use proptest::prelude::*;
 use shared::geometry::{Disk, Point, Vector};
-use shared::survival_grid::SurvivalGrid;
+use shared::control::survival_grid::SurvivalGrid;
 
 /// A disk moving in a straight line: centre at turn 0, velocity per turn, radius.
 type Mover = ((f64, f64), (f64, f64), f64);

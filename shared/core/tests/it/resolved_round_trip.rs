@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 use shared::scenario::{Checks, Scenario};
-use shared::vocabulary::{ControllerKind, TurnMode};
+use shared::control::vocabulary::{ControllerKind, TurnMode};
 
 /// `a` and `b` equal with `==`, and bit for bit: Debug prints every float in its
 /// shortest round-trip form, which tells `-0.0` from `0.0` and any two different finite

@@ -13,7 +13,7 @@
 //! - every `float` key refuses NaN naming itself, a `> 0` key refuses 0, a `≥ 0` key
 //!   refuses -1;
 //! - the limits table gives the values of the constants in `shared::scenario` and
-//!   `shared::vocabulary`.
+//!   `shared::control::vocabulary`.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -22,7 +22,7 @@ use shared::scenario::{
     MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, MAX_STEPS, Scenario,
 };
 use shared::simulate::plan_centre_path;
-use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
+use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 use toml::{Table, Value};
 
 fn repo_root() -> PathBuf {

@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use shared::geometry::{DiskGrid, distance_polyline_polyline, polyline_length_m};
 use shared::groups::turn_groups_ordered;
 use shared::record::Run;
-use shared::safety::{self, SAFETY_TOLERANCE_M};
+use shared::control::safety::{self, SAFETY_TOLERANCE_M};
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
-use shared::vocabulary::{Body, ControllerKind, MAX_WAYPOINTS, MoveStatus};
+use shared::control::vocabulary::{Body, ControllerKind, MAX_WAYPOINTS, MoveStatus};
 
 fn scenario_files() -> Vec<PathBuf> {
     let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios"));

@@ -9,8 +9,8 @@ use shared::record::{FaultKind, Recorder};
 use shared::scenario::Scenario;
 use shared::simulate::{agent_controllers, plan_centre_path, simulate_along};
 use shared::step_loop::{GroupMoves, GroupTurn, Judge, MoveSource, WorldChecksOnly, run_steps};
-use shared::turn::{TurnController, TurnRequest};
-use shared::vocabulary::{Move, MoveStatus};
+use shared::control::turn::{TurnController, TurnRequest};
+use shared::control::vocabulary::{Move, MoveStatus};
 
 /// Every agent plans in this process (the paper's holonomic agents need no more than
 /// the centre, where they stand and the others); the run is interrupted at

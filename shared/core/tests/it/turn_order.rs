@@ -3,7 +3,7 @@
 
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
-use shared::vocabulary::TurnOrder;
+use shared::control::vocabulary::TurnOrder;
 
 /// Three agents in a column driving east, 0.7 m apart with radii of 0.3 m, numbered from
 /// the back; each step the centre moves 0.25 m, within the top speed.

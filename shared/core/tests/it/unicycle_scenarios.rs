@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 use shared::geometry::{Point, polyline_length_m};
 use shared::scenario::Scenario;
 use shared::simulate::simulate;
-use shared::vocabulary::Kinematics;
+use shared::control::vocabulary::Kinematics;
 
 fn repository(path: &str) -> std::path::PathBuf {
     std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(path)

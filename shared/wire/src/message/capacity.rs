@@ -1,6 +1,6 @@
 //! Why a scenario or a move does not fit the fixed capacity of a message.
 
-use shared::vocabulary::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
+use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES, MAX_WAYPOINTS};
 
 /// Why a scenario does not fit the wire.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]

@@ -8,7 +8,7 @@
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
 use shared::geometry::Point;
-use shared::vocabulary::{MAX_WAYPOINTS, MoveStatus};
+use shared::control::vocabulary::{MAX_WAYPOINTS, MoveStatus};
 
 use crate::{CapacityError, WirePoint};
 

@@ -3,8 +3,8 @@
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
 use shared::geometry::{self, Pose};
-use shared::tracking::MAX_HORIZON_STEPS;
-use shared::vocabulary::{Body, MAX_AGENTS};
+use shared::control::tracking::MAX_HORIZON_STEPS;
+use shared::control::vocabulary::{Body, MAX_AGENTS};
 
 use crate::{CapacityError, WirePoint, WirePose};
 

@@ -4,9 +4,9 @@
 
 use super::Recorder;
 use crate::geometry::polyline_length_m;
-use crate::kinematics::{CarLimits, UnicycleLimits, check_car_move, unicycle_step_share};
-use crate::safety::{self, SAFETY_TOLERANCE_M, Violation};
-use crate::vocabulary::{Kinematics, MAX_WAYPOINTS, Move, MoveStatus};
+use crate::control::kinematics::{CarLimits, UnicycleLimits, check_car_move, unicycle_step_share};
+use crate::control::safety::{self, SAFETY_TOLERANCE_M, Violation};
+use crate::control::vocabulary::{Kinematics, MAX_WAYPOINTS, Move, MoveStatus};
 
 /// How far beyond one step a unicycle's move may go, as a share of the step (rounding).
 const UNICYCLE_SHARE_TOLERANCE: f64 = 1e-9;

@@ -5,7 +5,7 @@
 use super::Checker;
 use crate::geometry::{Disk, Field};
 use crate::scenario::{PathSpec, ScenarioError};
-use crate::vocabulary::AgentSpec;
+use crate::control::vocabulary::AgentSpec;
 
 impl Checker<'_> {
     pub(super) fn start_and_goal_clear(

@@ -2,12 +2,12 @@
 //! speed and sensing, and the controller with its `[cbf]` settings.
 
 use super::{Checker, Checks, num};
-use crate::formation::Slot;
+use crate::control::formation::Slot;
 use crate::geometry::{Field, Pose};
 use crate::scenario::ScenarioError;
 use crate::scenario::file::{CbfFile, FormationFile, OrcaFile};
-use crate::tracking::{DEFAULT_HORIZON_STEPS, MAX_HORIZON_STEPS};
-use crate::vocabulary::{
+use crate::control::tracking::{DEFAULT_HORIZON_STEPS, MAX_HORIZON_STEPS};
+use crate::control::vocabulary::{
     AgentSpec, ControllerKind, ControllerSpec, Kinematics, MAX_AGENTS, MAX_CBF_SUBSTEPS,
 };
 

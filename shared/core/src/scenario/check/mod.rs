@@ -9,7 +9,7 @@
 use super::file::{DiskFile, PoseFile, ScenarioFile};
 use super::{PathSpec, Scenario, ScenarioError};
 use crate::geometry::{Disk, Field, Point, Pose};
-use crate::vocabulary::{ControllerKind, TurnMode, TurnOrder};
+use crate::control::vocabulary::{ControllerKind, TurnMode, TurnOrder};
 
 mod feasibility;
 mod formation;

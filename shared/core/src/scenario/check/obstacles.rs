@@ -7,7 +7,7 @@ use crate::moving_obstacle::MovingObstacle;
 use crate::scenario::file::{MovingFile, ObstaclesFile};
 use crate::scenario::random::{Crowded, random_obstacles};
 use crate::scenario::{PathSpec, ScenarioError};
-use crate::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_OBSTACLES};
+use crate::control::vocabulary::{AgentSpec, ControllerKind, ControllerSpec, MAX_OBSTACLES};
 
 /// The most polygon corners a scenario may list, all polygons together (the validity
 /// check of a polygon is quadratic in its corners).

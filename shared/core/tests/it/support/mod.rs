@@ -2,7 +2,7 @@
 
 use rand::Rng;
 use shared::geometry::{Disk, Field, Point, Vector};
-use shared::vocabulary::Body;
+use shared::control::vocabulary::Body;
 
 /// Draw a start for an agent of radius `radius_m` where controllers are put to the test:
 /// touching an obstacle or another agent, on the field's left edge, or anywhere, until
