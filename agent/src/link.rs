@@ -6,9 +6,9 @@ use std::time::Duration;
 
 use anyhow::{Context, bail};
 use net::{NetMove, NetTurn};
-use shared::geometry::{Point, Pose, Vector};
-use shared::scenario::{Checks, Scenario};
 use shared::control::vocabulary::{MAX_AGENTS, MAX_WAYPOINTS, Move, MoveStatus};
+use shared::geometry::{Point, Pose, Vector};
+use shared::world::scenario::{Checks, Scenario};
 
 use crate::transport::{MissionView, Reply, TurnInput};
 

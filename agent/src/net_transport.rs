@@ -12,7 +12,7 @@ use net::zenoh::liveliness::LivelinessToken;
 use net::zenoh::pubsub::{Publisher, Subscriber};
 use net::zenoh::sample::Sample;
 use net::{Down, Endpoint, Security, Up};
-use shared::scenario::Checks;
+use shared::world::scenario::Checks;
 
 use crate::link::{mission_view, net_move, turn_input};
 use crate::relay::Token;

@@ -5,9 +5,9 @@
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use shared::geometry::Point;
 use shared::control::turn::{TurnController, TurnRequest, Velocities};
 use shared::control::vocabulary::{Body, TurnMode};
+use shared::geometry::Point;
 
 use crate::transport::{Command, Reply, Transport, TurnInput};
 
@@ -130,9 +130,9 @@ pub fn serve<T: Transport>(transport: &mut T, agent: usize) -> anyhow::Result<()
 mod tests {
     use std::collections::VecDeque;
 
-    use shared::scenario::Scenario;
-    use shared::simulate::{agent_controllers, plan_centre_path};
     use shared::control::vocabulary::Move;
+    use shared::run::simulate::{agent_controllers, plan_centre_path};
+    use shared::world::scenario::Scenario;
 
     use super::*;
     use crate::transport::MissionView;

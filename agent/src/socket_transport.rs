@@ -8,7 +8,7 @@ use std::os::unix::net::UnixStream;
 
 use anyhow::{Context, bail};
 use net::{Down, MAX_MESSAGE_BYTES, Up};
-use shared::scenario::Checks;
+use shared::world::scenario::Checks;
 
 use wire::misbehave::Misbehave;
 

@@ -2,10 +2,10 @@
 
 use std::time::Duration;
 
-use shared::geometry::{Disk, Field, Point, Polygon, Pose, Vector};
-use shared::moving_obstacle::MovingObstacle;
 use shared::control::turn::{MateView, TurnController};
 use shared::control::vocabulary::{AgentSpec, ControllerSpec, Move, TurnMode};
+use shared::geometry::{Disk, Field, Point, Polygon, Pose, Vector};
+use shared::world::moving_obstacle::MovingObstacle;
 
 /// The static scenario as an agent sees it.
 #[derive(Clone, Debug, PartialEq)]
@@ -18,7 +18,7 @@ pub struct MissionView {
     /// The static polygon obstacles.
     pub polygons: Vec<Polygon>,
     /// The map the polygons from its `first_piece` on come from, if any.
-    pub map: Option<shared::scenario::ScenarioMap>,
+    pub map: Option<shared::world::scenario::ScenarioMap>,
     /// The moving obstacles; where they stand follows from the turn's step.
     pub moving: Vec<MovingObstacle>,
     /// Every agent, in agent order.
@@ -32,7 +32,7 @@ pub struct MissionView {
 impl MissionView {
     /// What an agent sees of `scenario`: every obstacle with its true radius, known or
     /// not.
-    pub fn of(scenario: shared::scenario::Scenario) -> Self {
+    pub fn of(scenario: shared::world::scenario::Scenario) -> Self {
         Self {
             field: scenario.field,
             obstacles: scenario.static_obstacles(),

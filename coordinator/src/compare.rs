@@ -7,9 +7,9 @@ use std::path::Path;
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::record::{FaultKind, Run};
-use shared::scenario::{Scenario, ScenarioError};
 use shared::control::vocabulary::{ControllerKind, TurnMode, TurnOrder};
+use shared::run::record::{FaultKind, Run};
+use shared::world::scenario::{Scenario, ScenarioError};
 
 use crate::cli::CompareArgs;
 use crate::error::CliError;

@@ -1,8 +1,8 @@
 //! The coordinator's errors and their exit codes (`docs/outputs.md`): 2 for bad input,
 //! 1 for anything else.
 
-use shared::maps::MapError;
-use shared::scenario::ScenarioError;
+use shared::world::maps::MapError;
+use shared::world::scenario::ScenarioError;
 
 /// Why a command failed.
 #[derive(Debug, thiserror::Error)]

@@ -11,10 +11,10 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::turns::FaultInjection;
-use shared::geometry::DiskGrid;
-use shared::record::{Recorder, Step, replay_course};
 use shared::control::safety;
-use shared::scenario::Scenario;
+use shared::geometry::DiskGrid;
+use shared::run::record::{Recorder, Step, replay_course};
+use shared::world::scenario::Scenario;
 
 use crate::error::CliError;
 use crate::run_log::{LOG_FORMAT_VERSION, LoggedRun, RUN_LOG_FILE, read_run_log};

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use shared::geometry::Pose;
-use shared::scenario::Scenario;
+use shared::world::scenario::Scenario;
 
 use crate::cli::RunArgs;
 use crate::error::CliError;

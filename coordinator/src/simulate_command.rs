@@ -1,5 +1,5 @@
 //! `coordinator simulate [SCENARIO] [--controller P] [--repeat N]`: the reference simulation
-//! (`shared::simulate`, every agent in this process, no IPC) timed, the yardstick a
+//! (`shared::run::simulate`, every agent in this process, no IPC) timed, the yardstick a
 //! multi-process run's step loop (`steps_per_s` in its `summary.json`) is measured
 //! against. One JSON object on stdout, one line on stderr.
 
@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::simulate::simulate_along;
+use shared::run::simulate::simulate_along;
 
 use crate::cli::SimulateArgs;
 use crate::error::CliError;

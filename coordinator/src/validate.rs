@@ -4,9 +4,9 @@
 use std::path::Path;
 
 use shared::geometry::Pose;
-use shared::maps::{Cell, OccupancyGrid};
-use shared::scenario::{Scenario, ScenarioError};
-use shared::simulate::plan_centre_path;
+use shared::run::simulate::plan_centre_path;
+use shared::world::maps::{Cell, OccupancyGrid};
+use shared::world::scenario::{Scenario, ScenarioError};
 
 use crate::cli::ValidateArgs;
 use crate::error::CliError;
@@ -35,8 +35,8 @@ pub fn load_and_plan(file: Option<&std::path::Path>) -> Result<Loaded, ScenarioE
         }
         None => (
             Scenario::paper(),
-            shared::scenario::PAPER_SCENARIO_TOML.to_string(),
-            shared::scenario::PAPER_SCENARIO_NAME.to_string(),
+            shared::world::scenario::PAPER_SCENARIO_TOML.to_string(),
+            shared::world::scenario::PAPER_SCENARIO_NAME.to_string(),
         ),
     };
     let centre_path = plan_centre_path(&scenario).map_err(|e| ScenarioError::Invalid {

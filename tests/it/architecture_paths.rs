@@ -197,9 +197,9 @@ fn a_wrong_path_is_reported_with_its_line() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let table = format!(
         "{SECTION}\n\n| concept | file |\n|---|---|\n\
-         | exists | `shared/core/src/{{lib,sensing}}.rs` |\n\
+         | exists | `shared/core/src/{{lib,ordered}}.rs` |\n\
          | a folder | `shared/core/src/control/vocabulary/` |\n\
-         | wrong | `shared/core/src/{{sensing,no_such_module}}.rs` |\n\
+         | wrong | `shared/core/src/{{ordered,no_such_module}}.rs` |\n\
          | a file named as a folder | `shared/core/src/lib.rs/` |\n"
     );
     let paths: Vec<(usize, String)> = file_cells(&table)

@@ -21,8 +21,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use coordinator::validate::load_and_plan;
-use shared::scenario::{Scenario, ScenarioError};
 use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
+use shared::world::scenario::{Scenario, ScenarioError};
 
 /// The corpus must hold at least this many files.
 const MIN_CORPUS_FILES: usize = 30;
@@ -395,7 +395,7 @@ fn what_is_not_a_small_regular_file_is_refused_as_unreadable_before_it_is_read()
     nix::unistd::mkfifo(&fifo, nix::sys::stat::Mode::from_bits_truncate(0o600)).expect("mkfifo");
     let sparse = dir.path().join("sparse.toml");
     std::fs::File::create(&sparse)
-        .and_then(|f| f.set_len(shared::scenario::MAX_SCENARIO_BYTES + 1))
+        .and_then(|f| f.set_len(shared::world::scenario::MAX_SCENARIO_BYTES + 1))
         .expect("a sparse file");
     let zero = dir.path().join("zero.toml");
     std::os::unix::fs::symlink("/dev/zero", &zero).expect("a link to /dev/zero");

@@ -315,8 +315,8 @@ fn compare_prints_one_line_per_run_and_keeps_the_refusals_in_the_run_summaries()
     // The run's folder holds the resolved scenario, with the controller as run.
     let text = std::fs::read_to_string(run_dir.join("scenario.toml")).expect("scenario.toml");
     let resolved =
-        shared::scenario::Scenario::parse(&text, "scenario.toml").expect("resolved loads");
-    let original = shared::scenario::Scenario::load(&paper).expect("paper.toml");
+        shared::world::scenario::Scenario::parse(&text, "scenario.toml").expect("resolved loads");
+    let original = shared::world::scenario::Scenario::load(&paper).expect("paper.toml");
     assert_eq!(
         resolved,
         original.with_controller(shared::control::vocabulary::ControllerKind::ZcbfLogsumexp)

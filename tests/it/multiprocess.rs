@@ -5,9 +5,9 @@
 use crate::support;
 
 use coordinator::turns::{FaultInjection, RunOptions, WaitMode, WakeMode, run_scenario};
-use shared::record::{FaultKind, Run};
-use shared::scenario::Scenario;
-use shared::simulate::{plan_centre_path, simulate_along};
+use shared::run::record::{FaultKind, Run};
+use shared::run::simulate::{plan_centre_path, simulate_along};
+use shared::world::scenario::Scenario;
 use wire::misbehave::Misbehave;
 
 /// These tests are about determinism, not liveness: a generous turn deadline keeps a
@@ -270,7 +270,9 @@ fn a_changing_world_with_limited_sensing_matches_the_reference() {
 fn parallel_turns_on_a_map_match_the_reference() {
     let file = support::repo_root().join("tests/data/depot-parallel.toml");
     let scenario = Scenario::load(&file).expect("depot-parallel.toml");
-    assert!(scenario.map.is_some() && scenario.turns == shared::control::vocabulary::TurnMode::Parallel);
+    assert!(
+        scenario.map.is_some() && scenario.turns == shared::control::vocabulary::TurnMode::Parallel
+    );
     let run = run_and_compare(&scenario);
     let agents = scenario.agents.len() as f64;
     assert!(
@@ -286,7 +288,10 @@ fn parallel_turns_on_a_map_match_the_reference() {
 fn orca_in_its_own_model_matches_the_reference() {
     let file = support::repo_root().join("tests/data/dense-orca.toml");
     let scenario = Scenario::load(&file).expect("dense-orca.toml");
-    assert_eq!(scenario.turns, shared::control::vocabulary::TurnMode::Simultaneous);
+    assert_eq!(
+        scenario.turns,
+        shared::control::vocabulary::TurnMode::Simultaneous
+    );
     let run = run_and_compare(&scenario);
     let agents = scenario.agents.len() as f64;
     assert_eq!(

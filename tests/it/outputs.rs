@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::SystemTime;
 
-use shared::scenario::Scenario;
 use shared::control::vocabulary::ControllerKind;
+use shared::world::scenario::Scenario;
 
 fn coordinator(args: &[&str]) -> Command {
     let mut c = Command::new(support::coordinator_bin());
@@ -222,7 +222,7 @@ fn moves_csv_gives_the_exact_arc_that_reaches_each_waypoint() {
     ] {
         let file = support::repo_root().join("scenarios").join(name);
         let scenario = Scenario::load(&file).expect("shipped scenario");
-        let run = shared::simulate::simulate(&scenario).expect("simulate");
+        let run = shared::run::simulate::simulate(&scenario).expect("simulate");
         let bytes = coordinator::output::moves_csv(&scenario, &run).expect("moves.csv");
         let mut reader = csv::Reader::from_reader(bytes.as_slice());
         let headers = reader.headers().expect("headers").clone();

@@ -8,11 +8,11 @@
 use crate::support;
 
 use coordinator::turns::{FaultInjection, RunOptions, run_scenario};
-use shared::groups::turn_groups_ordered;
-use shared::record::{FaultKind, Run};
-use shared::scenario::Scenario;
-use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
 use shared::control::vocabulary::{Body, MoveStatus, TurnMode};
+use shared::run::record::{FaultKind, Run};
+use shared::run::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
+use shared::world::groups::turn_groups_ordered;
+use shared::world::scenario::Scenario;
 
 /// About determinism, not liveness: a generous turn deadline keeps a healthy agent that
 /// the loaded test machine schedules late from counting as missed (dead agents are still

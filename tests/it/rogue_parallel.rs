@@ -17,10 +17,10 @@ use nix::unistd::Pid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
-use shared::geometry::Point;
-use shared::groups::turn_groups_ordered;
-use shared::scenario::Scenario;
 use shared::control::vocabulary::{Body, TurnMode};
+use shared::geometry::Point;
+use shared::world::groups::turn_groups_ordered;
+use shared::world::scenario::Scenario;
 use support::progress::{self, Watched};
 use support::{
     agent_rows, assert_nothing_left, assert_safe, coordinator, faults_of, run_to_end, summary,
@@ -136,7 +136,7 @@ fn positions(out: &Path) -> Vec<Vec<Point>> {
 /// in the scenario's turn order along the centre's heading at step 1), when every agent
 /// is alive.
 fn group_mates(scenario: &Scenario, before: &[Point], agent: usize) -> Vec<usize> {
-    let path = shared::simulate::plan_centre_path(scenario).expect("centre path");
+    let path = shared::run::simulate::plan_centre_path(scenario).expect("centre path");
     let bodies: Vec<Body> = before
         .iter()
         .zip(&scenario.agents)

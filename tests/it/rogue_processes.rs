@@ -16,8 +16,8 @@ use coordinator::turns::{
     BetweenSteps, FaultInjection, RunOptions, run_scenario, run_scenario_with,
 };
 use shared::geometry::Pose;
-use shared::scenario::Scenario;
-use shared::simulate::plan_centre_path;
+use shared::run::simulate::plan_centre_path;
+use shared::world::scenario::Scenario;
 use wire::{RUN_ENV, effective_uid, run_root};
 
 /// `argv[0]` of the processes a `fork` agent starts (`agent::misbehave::stray_marker`).
@@ -287,7 +287,7 @@ fn an_agent_whose_process_cannot_be_started_fails_alone_and_the_run_goes_on() {
         .run
         .faults
         .iter()
-        .filter(|f| f.kind == shared::record::FaultKind::FailedToStart)
+        .filter(|f| f.kind == shared::run::record::FaultKind::FailedToStart)
         .collect();
     assert_eq!(
         failed.len(),

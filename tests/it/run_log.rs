@@ -18,9 +18,9 @@ use nix::unistd::Pid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::Value;
-use shared::record::Run;
-use shared::scenario::Scenario;
-use shared::simulate::{plan_centre_path, simulate_along};
+use shared::run::record::Run;
+use shared::run::simulate::{plan_centre_path, simulate_along};
+use shared::world::scenario::Scenario;
 use support::progress::{self, Watched};
 use support::{assert_nothing_left, coordinator, json_schema, run_to_end, summary};
 

@@ -4,8 +4,8 @@
 //! publishes them in place of the honest move the turn loop hands it.
 
 use anyhow::Context;
-use shared::geometry::{Disk, Point, Vector};
 use shared::control::vocabulary::{MAX_WAYPOINTS, Move, MoveStatus};
+use shared::geometry::{Disk, Point, Vector};
 use wire::misbehave::Misbehave;
 
 use crate::transport::{Command, MissionView, Reply, Transport, TurnInput};

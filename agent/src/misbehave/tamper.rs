@@ -23,7 +23,8 @@ const fn wire_capacity_plus_one() -> u64 {
 /// Write `state`'s waypoint count field raw, as a hostile process can.
 fn write_raw_waypoint_count(state: &mut AgentState, count: u64) {
     let vec = std::ptr::addr_of_mut!(state.waypoints).cast::<u8>();
-    let len_offset = std::mem::size_of::<[wire::WirePoint; shared::control::vocabulary::MAX_WAYPOINTS]>();
+    let len_offset =
+        std::mem::size_of::<[wire::WirePoint; shared::control::vocabulary::MAX_WAYPOINTS]>();
     // SAFETY: `StaticVec` is `repr(C)` { data: [_; CAPACITY], len: u64 }: the count lies
     // right after the array, inside the sample.
     unsafe { std::ptr::write_unaligned(vec.add(len_offset).cast::<u64>(), count) };

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
-use shared::simulate::simulate_along;
+use shared::run::simulate::simulate_along;
 
 use crate::bench::run_options::bench_run_options;
 use crate::error::CliError;

@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use serde::Serialize;
-use shared::simulate::simulate_along;
+use shared::run::simulate::simulate_along;
 
 use super::plot::{BLUE, Curve, GREEN, GREY, ORANGE, PURPLE, SKY, ScaleChart, VERMILLION};
 use super::run_options::bench_run_options;
@@ -40,7 +40,7 @@ use crate::output::{GroupTiming, StartupPhases};
 use crate::stats::Distribution;
 use crate::turns::{RunOutcome, WakeMode, run_scenario_with};
 use shared::geometry::Pose;
-use shared::scenario::Scenario;
+use shared::world::scenario::Scenario;
 
 /// Steps of the swarm's straight path when `--scale-steps` is not given (the length of
 /// `scenarios/swarm1000.toml`'s path).
@@ -489,7 +489,13 @@ mod tests {
     fn sizes_out_of_range_are_refused_before_anything_runs() {
         assert!(check_sizes(&[1, 300, 1000], DEFAULT_SCALE_STEPS).is_ok());
         assert!(check_sizes(&[0], DEFAULT_SCALE_STEPS).is_err());
-        assert!(check_sizes(&[shared::control::vocabulary::MAX_AGENTS + 1], DEFAULT_SCALE_STEPS).is_err());
+        assert!(
+            check_sizes(
+                &[shared::control::vocabulary::MAX_AGENTS + 1],
+                DEFAULT_SCALE_STEPS
+            )
+            .is_err()
+        );
         assert!(check_sizes(&[10], 1).is_err());
     }
 }

@@ -6,7 +6,7 @@
 
 use anyhow::Context;
 use shared::geometry::Pose;
-use shared::scenario::Scenario;
+use shared::world::scenario::Scenario;
 
 /// Distance between neighbouring slots of the block, in metres.
 const SPACING_M: f64 = 1.5;

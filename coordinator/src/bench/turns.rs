@@ -8,9 +8,9 @@ use std::path::Path;
 use std::time::Duration;
 
 use serde::Serialize;
-use shared::geometry::Pose;
-use shared::scenario::Scenario;
 use shared::control::vocabulary::TurnMode;
+use shared::geometry::Pose;
+use shared::world::scenario::Scenario;
 
 use crate::bench::run_options::bench_run_options;
 use crate::compare::with_turn_mode;

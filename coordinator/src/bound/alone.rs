@@ -7,15 +7,15 @@
 
 use serde::Serialize;
 use shared::control::best_point::nearest_free_point;
+use shared::control::tracking::{Lattice, best_track_on_lattice};
+use shared::control::turn::PLANNING_MARGIN_M;
+use shared::control::vocabulary::AgentSpec;
 use shared::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
     distance_point_segment,
 };
-use shared::scenario::Scenario;
-use shared::simulate::{SimulateError, simulate_along};
-use shared::control::tracking::{Lattice, best_track_on_lattice};
-use shared::control::turn::PLANNING_MARGIN_M;
-use shared::control::vocabulary::AgentSpec;
+use shared::run::simulate::{SimulateError, simulate_along};
+use shared::world::scenario::Scenario;
 
 /// Lattice points per top-speed move of the searches (`bound --alone`, `--together`)
 /// unless `--lattice-per-move` says otherwise: on large (a top speed of 1 m) 10 found a

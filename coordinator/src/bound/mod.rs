@@ -43,8 +43,8 @@ use anyhow::Context;
 use serde::Serialize;
 use shared::control::best_point::nearest_free_point;
 use shared::geometry::{FreeSpace, Point, Pose, Vector};
-use shared::scenario::Scenario;
-use shared::simulate::simulate_along;
+use shared::run::simulate::simulate_along;
+use shared::world::scenario::Scenario;
 
 mod alone;
 mod cone;

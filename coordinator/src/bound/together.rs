@@ -12,7 +12,7 @@
 
 use serde::Serialize;
 use shared::geometry::{Point, Pose, Vector};
-use shared::scenario::Scenario;
+use shared::world::scenario::Scenario;
 
 use super::AgentBound;
 use super::alone::{MateTrack, lattice_for, searched_track};
@@ -204,9 +204,9 @@ mod tests {
     use super::*;
     use crate::bound::agent_bounds;
     use crate::bound::alone::{DEFAULT_POINTS_PER_MOVE, searched_track};
-    use shared::geometry::DiskGrid;
     use shared::control::safety::check_move;
     use shared::control::vocabulary::Body;
+    use shared::geometry::DiskGrid;
 
     /// The paper example with every agent capped at twice the centre's step, its centre
     /// path and the agents' bounds.

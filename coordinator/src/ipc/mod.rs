@@ -18,9 +18,9 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFac
 use iceoryx2_bb_posix::unique_system_id::UniqueSystemId;
 use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
-use shared::geometry::{Pose, Vector};
-use shared::scenario::Scenario;
 use shared::control::vocabulary::Body;
+use shared::geometry::{Pose, Vector};
+use shared::world::scenario::Scenario;
 use wire::{AgentServiceNames, AgentState, EVENT_TURN, MalformedState, Role, StateMsg, World};
 
 use crate::turns::WakeMode;

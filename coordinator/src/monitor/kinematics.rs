@@ -2,9 +2,9 @@
 //! arithmetic (angles from dot and cross products, not the controllers' code).
 
 use nalgebra::Vector2;
-use shared::geometry::Point;
 use shared::control::safety::SAFETY_TOLERANCE_M;
 use shared::control::vocabulary::Kinematics;
+use shared::geometry::Point;
 
 use super::Refusal;
 

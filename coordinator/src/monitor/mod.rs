@@ -11,9 +11,9 @@ use parry2d_f64::partitioning::{Bvh, BvhBuildStrategy};
 use parry2d_f64::query;
 use parry2d_f64::shape::{Ball, Polyline, Segment};
 use parry2d_f64::utils::point_in_poly2d;
-use shared::geometry::{Disk, DiskGrid, Field, Point, Polygon};
 use shared::control::safety::SAFETY_TOLERANCE_M;
 use shared::control::vocabulary::Body;
+use shared::geometry::{Disk, DiskGrid, Field, Point, Polygon};
 
 mod kinematics;
 

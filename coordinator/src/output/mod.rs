@@ -19,8 +19,8 @@ use anyhow::Context;
 
 use crate::stats::Distribution;
 use shared::geometry::Pose;
-use shared::record::Run;
-use shared::scenario::Scenario;
+use shared::run::record::Run;
+use shared::world::scenario::Scenario;
 
 mod csv_format;
 mod out_dir;

@@ -4,8 +4,8 @@
 //! The cells are written as `output::csv_format` says; the move status by its name.
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
-use shared::course::ReplanReason;
 use shared::control::vocabulary::{MoveStatus, Named, named};
+use shared::world::course::ReplanReason;
 
 use super::csv_format::{cell_f64, display_f64, zero_one};
 

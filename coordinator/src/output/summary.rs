@@ -2,7 +2,7 @@
 //! step, written as [`SummaryFile`]; the part `coordinator render` reads back is
 //! [`SummaryRead`].
 //!
-//! Two types, not one: [`Summary`] (in `shared::record`) is written from a run and cannot
+//! Two types, not one: [`Summary`] (in `shared::run::record`) is written from a run and cannot
 //! be read back whole (its replans and waits hold `&'static str` names, and a figure
 //! that is infinite, such as `min_clearance_m` with nothing ever near, is written as
 //! `null`). [`SummaryRead`] holds the keys render needs under the names [`Summary`]
@@ -10,7 +10,7 @@
 //! a [`SummaryFile`] and read it back as a [`SummaryRead`].
 
 use serde::{Deserialize, Serialize};
-use shared::record::{FaultKind, HeadingSummary, Summary};
+use shared::run::record::{FaultKind, HeadingSummary, Summary};
 
 use crate::stats::Distribution;
 
@@ -109,7 +109,7 @@ pub struct SummaryRead {
     pub unknown_found_at_step: Vec<Option<usize>>,
 }
 
-/// A fault as `summary.json` lists it (the keys of [`shared::record::Fault`] render
+/// A fault as `summary.json` lists it (the keys of [`shared::run::record::Fault`] render
 /// reads).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 pub struct FaultRecord {
@@ -126,15 +126,15 @@ pub struct FaultRecord {
 
 #[cfg(test)]
 mod tests {
-    use shared::record::Fault;
-    use shared::scenario::Scenario;
+    use shared::run::record::Fault;
+    use shared::world::scenario::Scenario;
 
     use super::*;
 
     #[test]
     fn what_is_written_reads_back_as_the_run_recorded_it() {
         let scenario = Scenario::paper();
-        let mut run = shared::simulate::simulate(&scenario).expect("the paper runs");
+        let mut run = shared::run::simulate::simulate(&scenario).expect("the paper runs");
         run.faults = FaultKind::ALL
             .iter()
             .enumerate()

@@ -1,11 +1,11 @@
 //! The CSV files of a run folder, made from a run: its rows ([`super::rows`]) in order,
 //! each file with its header.
 
-use shared::geometry::{Point, Pose, wrap_angle_rad};
 use shared::control::kinematics::{car_piece, driving_headings};
-use shared::record::Run;
-use shared::scenario::Scenario;
 use shared::control::vocabulary::Kinematics;
+use shared::geometry::{Point, Pose, wrap_angle_rad};
+use shared::run::record::Run;
+use shared::world::scenario::Scenario;
 
 use super::csv_format::{csv_bytes, csv_bytes_with_columns, header};
 use super::rows::{

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use serde::de::DeserializeOwned;
 use shared::geometry::{Disk, Point, Pose};
 use shared::input_file::{Links, open_input, read_input_text};
-use shared::record::AgentStep;
-use shared::scenario::{MAX_SCENARIO_BYTES, Scenario};
+use shared::run::record::AgentStep;
+use shared::world::scenario::{MAX_SCENARIO_BYTES, Scenario};
 
 pub use crate::output::FaultRecord;
 use crate::output::SummaryRead;

@@ -5,8 +5,8 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::{RGBAColor, TextStyle};
-use shared::scenario::Scenario;
 use shared::control::vocabulary::TurnMode;
+use shared::world::scenario::Scenario;
 
 use super::canvas::Backend;
 use super::font;
@@ -300,7 +300,7 @@ fn draw_swatch<DB: Backend>(
 
 /// The margin obstacles are grown by on maps (the largest agent radius) and the legend
 /// entries for obstacles and their margins.
-pub fn obstacle_legend(scenario: &shared::scenario::Scenario) -> (f64, Vec<LegendItem>) {
+pub fn obstacle_legend(scenario: &shared::world::scenario::Scenario) -> (f64, Vec<LegendItem>) {
     let radii = scenario.agents.iter().map(|a| a.radius_m);
     let max = radii.clone().fold(0.0, f64::max);
     let min = radii.fold(f64::INFINITY, f64::min);

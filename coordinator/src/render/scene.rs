@@ -381,9 +381,9 @@ impl<'c, 'a, DB: Backend> Painter<'c, 'a, DB> {
     }
 
     /// A moving obstacle's route: its waypoints joined (closed for a loop), thin.
-    pub fn route(&self, m: &shared::moving_obstacle::MovingObstacle) -> anyhow::Result<()> {
+    pub fn route(&self, m: &shared::world::moving_obstacle::MovingObstacle) -> anyhow::Result<()> {
         let mut pts: Vec<Xy> = m.waypoints_m.iter().map(|p| (p.x, p.y)).collect();
-        if m.route == shared::moving_obstacle::Route::Loop {
+        if m.route == shared::world::moving_obstacle::Route::Loop {
             pts = geom::closed(pts);
         }
         self.polyline(&pts, line(alpha(palette::MOVING_OBSTACLE, 0.8), 1))

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 
 use mcap::read::{ChunkReader, LinearReader, Options};
 use mcap::records::Record;
-use shared::course::{Replan, Wait};
 use shared::geometry::Pose;
 use shared::input_file::{Links, ReadInputError, read_input};
-use shared::record::{CourseRecord, Fault, Run, Step};
-use shared::scenario::MAX_SCENARIO_BYTES;
+use shared::run::record::{CourseRecord, Fault, Run, Step};
+use shared::world::course::{Replan, Wait};
+use shared::world::scenario::MAX_SCENARIO_BYTES;
 
 use super::Topic;
 use super::records::{

@@ -4,10 +4,10 @@
 //! `f64` in its shortest exact form and reads it back exactly).
 
 use serde::{Deserialize, Serialize};
-use shared::course::{Replan, ReplanReason, Wait, WaitReason};
-use shared::geometry::{Point, Pose};
-use shared::record::{AgentStep, Fault, FaultKind, Step};
 use shared::control::vocabulary::MoveStatus;
+use shared::geometry::{Point, Pose};
+use shared::run::record::{AgentStep, Fault, FaultKind, Step};
+use shared::world::course::{Replan, ReplanReason, Wait, WaitReason};
 
 /// A position, `[x_m, y_m]`.
 pub type XyM = [f64; 2];

@@ -10,8 +10,8 @@
 use std::sync::mpsc::{self, SyncSender};
 use std::thread::JoinHandle;
 
-use shared::course::{Replan, Wait};
-use shared::record::{Fault, Step};
+use shared::run::record::{Fault, Step};
+use shared::world::course::{Replan, Wait};
 
 use super::records::TurnMessage;
 use super::writer::{CourseSoFar, RunLogError, RunLogWriter};

@@ -10,10 +10,10 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde::Serialize;
-use shared::course::{Course, Replan, Wait};
 use shared::geometry::{Point, Pose};
-use shared::record::{Fault, Step};
-use shared::scenario::Scenario;
+use shared::run::record::{Fault, Step};
+use shared::world::course::{Course, Replan, Wait};
+use shared::world::scenario::Scenario;
 
 use super::foxglove;
 use super::reader::LoggedRun;

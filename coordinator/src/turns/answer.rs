@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use shared::record::{FaultKind, Recorder};
+use shared::run::record::{FaultKind, Recorder};
 use wire::{MalformedState, StateKind, StateMsg};
 
 use super::driver::Driver;

@@ -1,6 +1,6 @@
 //! Deterministic deaths ([`super::FaultInjection::deaths`]): an agent killed before its
 //! group's turns are granted, so its death is always detected during its turn, as the
-//! reference simulation has it (`shared::simulate::simulate_along_with_deaths`).
+//! reference simulation has it (`shared::run::simulate::simulate_along_with_deaths`).
 //!
 //! The kill of [`super::FaultInjection::kills`] comes right after the grant instead, and races
 //! with the agent's answer: the move may get out first, and the death is then noticed at
@@ -9,7 +9,7 @@
 
 use std::time::Duration;
 
-use shared::record::{FaultKind, Recorder};
+use shared::run::record::{FaultKind, Recorder};
 
 use super::driver::Driver;
 

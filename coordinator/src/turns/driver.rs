@@ -1,5 +1,5 @@
 //! A run over agent processes while it goes ([`Driver`]): it starts the agents, then
-//! hands the steps to the step loop (`shared::step_loop::run_steps`, the reference
+//! hands the steps to the step loop (`shared::run::step_loop::run_steps`, the reference
 //! simulation's too) as its source of moves, the monitor as an extra judge. Its methods
 //! are spread over `turns/` by concern: the run and its steps' edges here, a group's
 //! turns in `turn.rs`, waiting for an answer in `answer.rs`, handshakes in `startup.rs`,
@@ -9,11 +9,11 @@
 use std::ops::ControlFlow;
 use std::time::Instant;
 
-use shared::course::Course;
 use shared::geometry::Pose;
-use shared::record::{Recorder, replay_course};
-use shared::scenario::Scenario;
-use shared::step_loop::{GroupMoves, GroupTurn, MoveSource, run_steps};
+use shared::run::record::{Recorder, replay_course};
+use shared::run::step_loop::{GroupMoves, GroupTurn, MoveSource, run_steps};
+use shared::world::course::Course;
+use shared::world::scenario::Scenario;
 
 use super::hand_over::HandOver;
 use super::judge::MonitorJudge;

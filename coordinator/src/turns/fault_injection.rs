@@ -13,7 +13,7 @@ pub struct FaultInjection {
     /// Agent `.0` dies at step `.1` before its turn. Its process is killed with SIGKILL
     /// (and waited for) once the step's groups are formed, just before its group's turns
     /// are granted, so the death is always detected during its turn and its group mates
-    /// still move: the run equals [`shared::simulate::simulate_along_with_deaths`] to
+    /// still move: the run equals [`shared::run::simulate::simulate_along_with_deaths`] to
     /// the bit.
     pub deaths: Vec<(usize, usize)>,
     /// Start agent `.0` with `--misbehave .1` (an agent built with its test modes; its

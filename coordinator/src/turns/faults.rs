@@ -2,9 +2,9 @@
 
 use std::time::Duration;
 
-use shared::geometry::Point;
-use shared::record::{FaultKind, Recorder};
 use shared::control::vocabulary::Kinematics;
+use shared::geometry::Point;
+use shared::run::record::{FaultKind, Recorder};
 
 use super::driver::Driver;
 use super::lateness::{Lateness, Verdict};

@@ -1,12 +1,12 @@
 //! Judging a move's safety with the independent monitor (parry): each move alone, then a
 //! group's moves against each other; the world's own checks (plain geometry) come after,
-//! in the step loop (`shared::step_loop`).
+//! in the step loop (`shared::run::step_loop`).
 
-use shared::geometry::Point;
-use shared::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
-use shared::record::{FaultKind, Recorder};
-use shared::step_loop::Judge;
 use shared::control::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus, TurnMode};
+use shared::geometry::Point;
+use shared::run::record::{FaultKind, Recorder};
+use shared::run::step_loop::Judge;
+use shared::world::groups::{GroupMove, Meeting, group_meetings, simultaneous_meetings};
 
 use crate::monitor::{self, MoveUnderCheck, Refusal, SafetyMonitor, Standing};
 
@@ -60,7 +60,7 @@ impl Judge for MonitorJudge {
     /// and two moves meet if they come close at the same time; each move is also checked
     /// against every body that does not move this step (a mate whose move was refused
     /// stands where it is), again after each refusal
-    /// ([`shared::groups::simultaneous_meetings`]).
+    /// ([`shared::world::groups::simultaneous_meetings`]).
     fn judge_group(
         &mut self,
         step: usize,
@@ -75,8 +75,8 @@ impl Judge for MonitorJudge {
         };
         // A move is checked against the bodies near it, found with a grid over them, when
         // there are enough moves to pay for building it (the verdicts are the same).
-        let grid =
-            (moves.len() > 1).then(|| shared::control::safety::bodies_grid(recorder.world().bodies()));
+        let grid = (moves.len() > 1)
+            .then(|| shared::control::safety::bodies_grid(recorder.world().bodies()));
         let mut alone = Vec::with_capacity(moves.len());
         for (agent, mv) in moves {
             let standing = Standing {

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use shared::record::Run;
+use shared::run::record::Run;
 
 use crate::ipc::TurnSplit;
 use crate::output::{GroupTiming, StartupPhases, Timing};

@@ -7,8 +7,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::Instant;
 
 use shared::geometry::Pose;
-use shared::record::Recorder;
-use shared::scenario::Scenario;
+use shared::run::record::Recorder;
+use shared::world::scenario::Scenario;
 
 use super::driver::Driver;
 use super::options::RunOptions;

@@ -7,7 +7,7 @@
 
 use std::time::{Duration, Instant};
 
-use shared::scenario::Scenario;
+use shared::world::scenario::Scenario;
 use wire::cgroup::CgroupDirs;
 use wire::{RunPrefix, RunRoot};
 

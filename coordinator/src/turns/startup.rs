@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use anyhow::bail;
-use shared::record::{Fault, FaultKind, Recorder};
+use shared::run::record::{Fault, FaultKind, Recorder};
 use wire::StateKind;
 
 use super::driver::Driver;

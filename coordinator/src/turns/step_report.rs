@@ -5,8 +5,8 @@
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use shared::course::Course;
-use shared::record::Recorder;
+use shared::run::record::Recorder;
+use shared::world::course::Course;
 
 use super::outcome::TurnSample;
 use crate::ipc::CoordinatorIpc;

@@ -1,15 +1,15 @@
 //! One group's turns over agent processes: every agent of the group granted its turn at
 //! once (each sees the same snapshot, filtered to what it senses), the agent of the next
 //! group told it comes next, then each answer collected in order (the step loop,
-//! `shared::step_loop`, has the group's moves judged and taken).
+//! `shared::run::step_loop`, has the group's moves judged and taken).
 
 use std::time::{Duration, Instant};
 
-use shared::geometry::{Point, Pose};
-use shared::record::{FaultKind, Recorder};
-use shared::sensing::SensedAgents;
-use shared::step_loop::{GroupMoves, GroupTurn};
 use shared::control::vocabulary::Move;
+use shared::geometry::{Point, Pose};
+use shared::run::record::{FaultKind, Recorder};
+use shared::run::step_loop::{GroupMoves, GroupTurn};
+use shared::world::sensing::SensedAgents;
 use wire::{StateMsg, monotonic_ns};
 
 use super::answer::{Answer, Turn};

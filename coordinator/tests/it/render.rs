@@ -311,15 +311,15 @@ fn a_bad_run_dir_is_a_usage_error_naming_the_file() {
 
 #[test]
 fn a_simulated_paper_run_renders() {
-    let scenario = shared::scenario::Scenario::paper();
-    let run = shared::simulate::simulate(&scenario).expect("simulate the paper example");
+    let scenario = shared::world::scenario::Scenario::paper();
+    let run = shared::run::simulate::simulate(&scenario).expect("simulate the paper example");
     let dir = scratch("paper");
     coordinator::output::write_run(
         &dir,
         &scenario,
-        shared::scenario::PAPER_SCENARIO_NAME,
+        shared::world::scenario::PAPER_SCENARIO_NAME,
         &run,
-        &shared::simulate::plan_centre_path(&scenario).expect("the paper's centre path"),
+        &shared::run::simulate::plan_centre_path(&scenario).expect("the paper's centre path"),
         &coordinator::output::Timing::default(),
     )
     .expect("write run");

@@ -53,9 +53,10 @@ fn is_moving_obstacle(c: [u8; 3]) -> bool {
 #[test]
 fn a_changing_world_writes_its_obstacles_and_plans_and_renders_them() {
     use shared::geometry::Pose;
-    let scenario = shared::scenario::Scenario::parse(CHANGING, "changing.toml").expect("scenario");
-    let first_plan = shared::simulate::plan_centre_path(&scenario).expect("first plan");
-    let run = shared::simulate::simulate_along(&scenario, &first_plan).expect("simulate");
+    let scenario =
+        shared::world::scenario::Scenario::parse(CHANGING, "changing.toml").expect("scenario");
+    let first_plan = shared::run::simulate::plan_centre_path(&scenario).expect("first plan");
+    let run = shared::run::simulate::simulate_along(&scenario, &first_plan).expect("simulate");
     let dir = scratch("changing");
     coordinator::output::write_run(
         &dir,
@@ -263,9 +264,10 @@ fn docs_outputs_md_names_every_summary_key_and_every_csv_column() {
         .parent()
         .expect("the repository holds the coordinator crate");
     let doc = std::fs::read_to_string(repo.join("docs").join("outputs.md")).expect("outputs.md");
-    let scenario = shared::scenario::Scenario::parse(CHANGING, "changing.toml").expect("scenario");
-    let first_plan = shared::simulate::plan_centre_path(&scenario).expect("first plan");
-    let run = shared::simulate::simulate_along(&scenario, &first_plan).expect("simulate");
+    let scenario =
+        shared::world::scenario::Scenario::parse(CHANGING, "changing.toml").expect("scenario");
+    let first_plan = shared::run::simulate::plan_centre_path(&scenario).expect("first plan");
+    let run = shared::run::simulate::simulate_along(&scenario, &first_plan).expect("simulate");
     let dir = scratch("doc");
     let written = coordinator::output::write_run(
         &dir,
@@ -303,11 +305,12 @@ fn docs_outputs_md_names_every_summary_key_and_every_csv_column() {
         "mean_heading_error_rad",
     ];
     assert!(HEADING_KEYS.iter().all(|k| summary.get(k).is_none()));
-    let unicycles = shared::scenario::Scenario::load(&repo.join("scenarios/paper-unicycle.toml"))
-        .expect("paper-unicycle.toml");
-    let unicycle_plan = shared::simulate::plan_centre_path(&unicycles).expect("first plan");
+    let unicycles =
+        shared::world::scenario::Scenario::load(&repo.join("scenarios/paper-unicycle.toml"))
+            .expect("paper-unicycle.toml");
+    let unicycle_plan = shared::run::simulate::plan_centre_path(&unicycles).expect("first plan");
     let unicycle_run =
-        shared::simulate::simulate_along(&unicycles, &unicycle_plan).expect("simulate");
+        shared::run::simulate::simulate_along(&unicycles, &unicycle_plan).expect("simulate");
     let unicycle_dir = scratch("doc-unicycles");
     coordinator::output::write_run(
         &unicycle_dir,

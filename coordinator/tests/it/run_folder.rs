@@ -7,8 +7,8 @@
 use std::path::{Path, PathBuf};
 
 use coordinator::render::RunData;
-use shared::record::{Fault, FaultKind, Run};
-use shared::scenario::Scenario;
+use shared::run::record::{Fault, FaultKind, Run};
+use shared::world::scenario::Scenario;
 
 /// A scratch folder of this test, removed when dropped.
 struct Scratch(PathBuf);
@@ -63,8 +63,8 @@ fn check_round_trip(file: &str) -> (usize, usize, usize) {
         .join("../scenarios")
         .join(file);
     let scenario = Scenario::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let first_plan = shared::simulate::plan_centre_path(&scenario).expect("a centre path");
-    let mut run = shared::simulate::simulate(&scenario).expect("simulate");
+    let first_plan = shared::run::simulate::plan_centre_path(&scenario).expect("a centre path");
+    let mut run = shared::run::simulate::simulate(&scenario).expect("simulate");
     // Faults of every kind, so their names are read back too.
     run.faults = FaultKind::ALL
         .iter()

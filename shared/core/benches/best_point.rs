@@ -19,13 +19,13 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::control::best_point::{nearest_free_point, nearest_reachable_free_point};
-use shared::paths::disk_path::{PathsFrom, shortest_path};
-use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
-use shared::record::Recorder;
-use shared::scenario::Scenario;
-use shared::simulate::plan_centre_path;
 use shared::control::turn::{BestPointController, PLANNING_MARGIN_M};
 use shared::control::vocabulary::Body;
+use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Pose, Vector};
+use shared::paths::disk_path::{PathsFrom, shortest_path};
+use shared::run::record::Recorder;
+use shared::run::simulate::plan_centre_path;
+use shared::world::scenario::Scenario;
 
 /// Radius of every (inflated) disk, in metres.
 const DISK_RADIUS_M: f64 = 1.3;

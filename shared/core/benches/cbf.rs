@@ -12,8 +12,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::control::cbf::{CbfController, solve_qp_2d};
 use shared::control::formation::Slot;
-use shared::geometry::{Disk, Field, Point, Pose, Vector};
 use shared::control::vocabulary::{AgentSpec, Body, CbfSettings};
+use shared::geometry::{Disk, Field, Point, Pose, Vector};
 
 /// Queries per case, cycled through by the benchmark loop.
 const QUERY_COUNT: usize = 256;

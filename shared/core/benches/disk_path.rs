@@ -10,8 +10,8 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
+use shared::paths::disk_path::{PathError, shortest_path};
 
 const RADIUS_M: f64 = 1.3;
 /// Field area per obstacle, in square metres (about 15 % covered).

@@ -9,11 +9,11 @@ mod support;
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use shared::geometry::{Point, Pose};
-use shared::scenario::Scenario;
-use shared::simulate::{agent_controllers, simulate};
 use shared::control::turn::{TurnController, TurnRequest};
 use shared::control::vocabulary::{Body, Kinematics};
+use shared::geometry::{Point, Pose};
+use shared::run::simulate::{agent_controllers, simulate};
+use shared::world::scenario::Scenario;
 
 /// One recorded turn: the centre, the agent, where it stood and faced, the others.
 struct Turn {

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use shared::geometry::Vector;
-use shared::maps::{Cell, OccupancyGrid};
+use shared::world::maps::{Cell, OccupancyGrid};
 
 fn depot() -> PathBuf {
     PathBuf::from(concat!(

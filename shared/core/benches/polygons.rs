@@ -12,11 +12,11 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use shared::control::best_point::nearest_free_point;
-use shared::geometry::{Disk, DiskGrid, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose};
-use shared::scenario::Scenario;
-use shared::simulate::{agent_controllers, simulate};
 use shared::control::turn::{TurnController, TurnRequest};
 use shared::control::vocabulary::Body;
+use shared::geometry::{Disk, DiskGrid, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose};
+use shared::run::simulate::{agent_controllers, simulate};
+use shared::world::scenario::Scenario;
 
 /// One recorded turn: the centre, the agent, where it stood, the others.
 struct Turn {

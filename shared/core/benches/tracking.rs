@@ -10,9 +10,9 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 use shared::control::tracking::{first_move_round_obstacles, round_lattice_for};
 use shared::control::turn::PLANNING_MARGIN_M;
+use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 
 mod support;
 

@@ -14,9 +14,9 @@
 
 use rand::{Rng, SeedableRng};
 use shared::geometry::Point;
-use shared::moving_obstacle::{MovingObstacle, Route};
-use shared::scenario::{Scenario, moving_obstacle_table};
-use shared::simulate::simulate;
+use shared::run::simulate::simulate;
+use shared::world::moving_obstacle::{MovingObstacle, Route};
+use shared::world::scenario::{Scenario, moving_obstacle_table};
 
 /// The field, formation and path of every field: four agents crossing from west to east.
 const OPEN_FIELD: &str = include_str!("../../../tests/data/open-field.toml");

@@ -16,7 +16,7 @@
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
 
-use shared::scenario::{Checks, Scenario, ScenarioError};
+use shared::world::scenario::{Checks, Scenario, ScenarioError};
 
 use crate::prefix::{PrefixError, is_valid_prefix};
 use crate::run_folder::{RunFilesError, check_run_root, private_file_problem, run_root};

@@ -51,9 +51,9 @@ pub fn repo_root() -> PathBuf {
 
 /// The large formation under a top speed (`scenarios/large-top-speed.toml`, 64 agents)
 /// with the `orca` controller in its own model: every agent moves at once.
-pub fn orca_crowd() -> shared::scenario::Scenario {
+pub fn orca_crowd() -> shared::world::scenario::Scenario {
     let file = repo_root().join("scenarios/large-top-speed.toml");
-    let mut scenario = shared::scenario::Scenario::load(&file)
+    let mut scenario = shared::world::scenario::Scenario::load(&file)
         .expect("large-top-speed.toml")
         .with_controller(shared::control::vocabulary::ControllerKind::Orca);
     scenario.turns = shared::control::vocabulary::TurnMode::Simultaneous;

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use coordinator::turns::{NetworkOptions, RunOptions};
 use net::Endpoint;
-use shared::record::{FaultKind, Run};
+use shared::run::record::{FaultKind, Run};
 
 use crate::support;
 

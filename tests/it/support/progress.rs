@@ -74,8 +74,8 @@ pub fn latest_hold_step(last_step: usize) -> usize {
 /// The steps of the centre path planned for the scenario in `file` (its last step's
 /// number): the steps a run without waits or replanning has.
 pub fn centre_path_steps(file: &Path) -> usize {
-    let scenario = shared::scenario::Scenario::load(file).expect("the scenario");
-    let path = shared::simulate::plan_centre_path(&scenario).expect("centre path");
+    let scenario = shared::world::scenario::Scenario::load(file).expect("the scenario");
+    let path = shared::run::simulate::plan_centre_path(&scenario).expect("centre path");
     path.len() - 1
 }
 

@@ -1,7 +1,7 @@
 //! The fast tier's `multiprocess` at the largest scale and on the heaviest scenarios.
 
-use shared::scenario::Scenario;
-use shared::simulate::plan_centre_path;
+use shared::run::simulate::plan_centre_path;
+use shared::world::scenario::Scenario;
 
 use crate::multiprocess::{HEAVY_SCENARIOS, options, run_and_compare};
 use crate::support;

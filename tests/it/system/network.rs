@@ -18,9 +18,9 @@ use net::Endpoint;
 use net::zenoh::handlers::FifoChannelHandler;
 use net::zenoh::pubsub::Subscriber;
 use net::zenoh::sample::{Sample, SampleKind};
-use shared::record::FaultKind;
-use shared::scenario::Scenario;
-use shared::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
+use shared::run::record::FaultKind;
+use shared::run::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
+use shared::world::scenario::Scenario;
 
 use network_support::*;
 

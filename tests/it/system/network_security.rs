@@ -11,9 +11,9 @@ use std::time::Duration;
 
 use coordinator::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
-use shared::record::FaultKind;
-use shared::scenario::Scenario;
-use shared::simulate::{plan_centre_path, simulate_along};
+use shared::run::record::FaultKind;
+use shared::run::simulate::{plan_centre_path, simulate_along};
+use shared::world::scenario::Scenario;
 
 use network_support::*;
 

@@ -11,8 +11,8 @@ use std::path::Path;
 use std::time::Duration;
 
 use coordinator::turns::{BetweenSteps, RunOptions, SandboxOptions, run_scenario_with};
-use shared::scenario::Scenario;
-use shared::simulate::{plan_centre_path, simulate_along};
+use shared::run::simulate::{plan_centre_path, simulate_along};
+use shared::world::scenario::Scenario;
 use support::{assert_nothing_left, assert_safe, run_to_end, summary};
 
 /// The first agent's user id in these tests.

@@ -9,8 +9,8 @@
 use serde::Serialize;
 use serde_json::{Value, json};
 use shared::geometry::{Point, Pose};
-use shared::record::Step;
-use shared::scenario::Scenario;
+use shared::run::record::Step;
+use shared::world::scenario::Scenario;
 
 /// The frame every position is in.
 pub const FIELD_FRAME: &str = "field";

@@ -1,7 +1,7 @@
 //! The scene's JSON and what it draws.
 
 use super::*;
-use shared::simulate::{plan_centre_path, simulate_along};
+use shared::run::simulate::{plan_centre_path, simulate_along};
 
 /// The scenes of a run with moving obstacles, sensing and unknown obstacles: the
 /// template's JSON is the value `serde_json` writes of the same message.

@@ -54,8 +54,8 @@ use dodgy_2d::{Agent, AvoidanceOptions, Vec2};
 
 use crate::control::cbf::AT_SLOT_TOLERANCE_M;
 use crate::control::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
 use crate::control::vocabulary::{AgentSpec, Body, Move, MoveStatus, OrcaSettings};
+use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
 
 /// ORCA's time horizon, in steps: velocities that would bring the agent into contact with
 /// a neighbour within this many steps are avoided.

@@ -6,7 +6,7 @@ use super::Point;
 /// Cells of a uniform grid labelled by region: a point in one region cannot reach a
 /// point in another without crossing a cell labelled 0 (surely blocked), so two points
 /// in different regions are in different components of the free space. Made from a map
-/// by [`OccupancyGrid::regions`](crate::maps::OccupancyGrid::regions).
+/// by [`OccupancyGrid::regions`](crate::world::maps::OccupancyGrid::regions).
 ///
 /// ```
 /// use shared::geometry::{Point, RegionGrid};

@@ -15,8 +15,8 @@
 
 use std::f64::consts::TAU;
 
-use crate::paths::curve::{CurvePath, Steer, check_turning_radius, scaled_segment};
 use crate::geometry::Pose;
+use crate::paths::curve::{CurvePath, Steer, check_turning_radius, scaled_segment};
 
 /// The shortest forward-only path from `from` to `to` for turning radius `turning_radius_m`.
 ///

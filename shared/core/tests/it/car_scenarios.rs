@@ -7,10 +7,10 @@
 
 use std::f64::consts::PI;
 
-use shared::geometry::{Point, distance_point_segment};
-use shared::scenario::{Scenario, ScenarioError};
-use shared::simulate::simulate;
 use shared::control::vocabulary::Kinematics;
+use shared::geometry::{Point, distance_point_segment};
+use shared::run::simulate::simulate;
+use shared::world::scenario::{Scenario, ScenarioError};
 
 fn repository(path: &str) -> std::path::PathBuf {
     std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(path)

@@ -6,11 +6,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::control::cbf::{CbfController, ZcbfLogSumExpController, is_deadlocked, solve_qp_2d};
 use shared::control::formation::Slot;
-use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::control::safety::check_move;
 use shared::control::vocabulary::{
     AgentSpec, Body, CbfSettings, DEFAULT_LSE_SHARPNESS_PER_M, MAX_WAYPOINTS, Move, MoveStatus,
 };
+use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 
 /// An agent whose slot is the formation centre itself, so the centre pose is the slot.
 fn spec(radius_m: f64) -> AgentSpec {
@@ -384,7 +384,7 @@ fn the_cbf_table_sets_the_pieces_of_a_turn() {
         std::fs::read_to_string(&file).expect("paper.toml")
     );
     let with = |substeps: u32| format!("{text}\n[cbf]\nsubsteps = {substeps}\n");
-    let load = |t: &str| shared::scenario::Scenario::parse(t, "paper-cbf.toml");
+    let load = |t: &str| shared::world::scenario::Scenario::parse(t, "paper-cbf.toml");
     let default = load(&text).expect("loads");
     assert_eq!(
         default.controller.cbf.substeps,
@@ -394,8 +394,8 @@ fn the_cbf_table_sets_the_pieces_of_a_turn() {
     let three = load(&with(3)).expect("loads");
     assert_eq!(one.controller.cbf.substeps, 1);
     let (a, b) = (
-        shared::simulate::simulate(&one).expect("runs"),
-        shared::simulate::simulate(&three).expect("runs"),
+        shared::run::simulate::simulate(&one).expect("runs"),
+        shared::run::simulate::simulate(&three).expect("runs"),
     );
     assert_eq!(a.summary().collisions, 0);
     assert_eq!(b.summary().collisions, 0);
@@ -419,14 +419,17 @@ fn the_cbf_table_turns_the_deadlock_escape_off_and_on() {
         .expect("dense.toml")
         .replacen("[formation]", "[formation]\nmax_step_m = 0.5", 1);
     let text = format!("controller = \"cbf\"\n{text}");
-    let load = |t: &str| shared::scenario::Scenario::parse(t, "dense-cbf.toml").expect("loads");
+    let load =
+        |t: &str| shared::world::scenario::Scenario::parse(t, "dense-cbf.toml").expect("loads");
     let escaping = load(&text);
     assert!(escaping.controller.cbf.deadlock_escape);
     let plain = load(&format!("{text}\n[cbf]\ndeadlock_escape = false\n"));
     assert!(!plain.controller.cbf.deadlock_escape);
     let (a, b) = (
-        shared::simulate::simulate(&plain).expect("runs").summary(),
-        shared::simulate::simulate(&escaping)
+        shared::run::simulate::simulate(&plain)
+            .expect("runs")
+            .summary(),
+        shared::run::simulate::simulate(&escaping)
             .expect("runs")
             .summary(),
     );

@@ -8,11 +8,11 @@
 //!
 //! Random fields are in `changing_world_random.rs`.
 
-use shared::geometry::distance_polyline_polyline;
-use shared::record::{FaultKind, Run};
 use shared::control::safety::SAFETY_TOLERANCE_M;
-use shared::scenario::Scenario;
-use shared::simulate::simulate;
+use shared::geometry::distance_polyline_polyline;
+use shared::run::record::{FaultKind, Run};
+use shared::run::simulate::simulate;
+use shared::world::scenario::Scenario;
 
 fn scenarios_dir() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios")
@@ -100,7 +100,7 @@ fn the_discovered_wall_forces_a_replan_and_the_followed_path_avoids_it() {
     let found: Vec<_> = run.course.replans.iter().filter(|r| r.found).collect();
     assert!(!found.is_empty(), "no replan");
     // The first plan went straight through the wall; the followed path does not.
-    let first = shared::simulate::plan_centre_path(&scenario).expect("first plan");
+    let first = shared::run::simulate::plan_centre_path(&scenario).expect("first plan");
     let clearance_m = scenario.path.centre_clearance_m;
     let through = |path: &[shared::geometry::Pose]| {
         path.iter().any(|p| {
@@ -171,7 +171,7 @@ max_lag_m = 0.5
         .course
         .waits
         .iter()
-        .filter(|w| w.reason == shared::course::WaitReason::Lag)
+        .filter(|w| w.reason == shared::world::course::WaitReason::Lag)
         .map(|w| w.step)
         .collect();
     assert!(!lag_waits.is_empty(), "the agents never lagged");
@@ -188,8 +188,9 @@ max_lag_m = 0.5
         // The centre moved on at step k only if every agent was within the lag at the end
         // of step k - 1 (the bounded hold aside).
         if moved {
-            let held_long = k > shared::course::MAX_LAG_WAIT_STEPS
-                && (k - shared::course::MAX_LAG_WAIT_STEPS..k).all(|j| lag_waits.contains(&j));
+            let held_long = k > shared::world::course::MAX_LAG_WAIT_STEPS
+                && (k - shared::world::course::MAX_LAG_WAIT_STEPS..k)
+                    .all(|j| lag_waits.contains(&j));
             assert!(
                 lag_of(k - 1) <= 0.5 + 1e-12 || held_long,
                 "step {k}: moved on with a lag of {} m",

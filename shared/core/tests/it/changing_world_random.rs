@@ -12,13 +12,13 @@
 //! - A moving obstacle faster than the agents is refused.
 
 use proptest::prelude::*;
-use shared::geometry::{Point, distance_polyline_polyline, polyline_length_m};
-use shared::moving_obstacle::{MovingObstacle, Route};
-use shared::record::{FaultKind, Run};
 use shared::control::safety::SAFETY_TOLERANCE_M;
-use shared::scenario::{Scenario, moving_obstacle_table};
-use shared::simulate::simulate;
 use shared::control::turn::TurnRequest;
+use shared::geometry::{Point, distance_polyline_polyline, polyline_length_m};
+use shared::run::record::{FaultKind, Run};
+use shared::run::simulate::simulate;
+use shared::world::moving_obstacle::{MovingObstacle, Route};
+use shared::world::scenario::{Scenario, moving_obstacle_table};
 
 /// A random moving obstacle: radius, waypoints, speed, and whether its route loops.
 type MoverSpec = (f64, Vec<(f64, f64)>, f64, bool);
@@ -431,7 +431,7 @@ step_m = 0.25
 centre_clearance_m = 0.5
 "#;
         let scenario = Scenario::parse(text, "sensing-turns.toml").expect("scenario");
-        let controller = &shared::simulate::agent_controllers(&scenario).expect("controllers")[0];
+        let controller = &shared::run::simulate::agent_controllers(&scenario).expect("controllers")[0];
         // The agent near the obstacle (so it often has to escape), others around it.
         let obstacle = scenario.moving[0].position_at(step);
         let me = Point::new(

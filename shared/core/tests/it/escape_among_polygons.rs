@@ -2,11 +2,11 @@
 //! wall right behind it, the straight way out of the obstacle's reach would run into the
 //! wall, and the escape goes round instead.
 
-use shared::geometry::{Point, Pose};
 use shared::control::safety::check_move_against_polygons;
-use shared::scenario::Scenario;
-use shared::simulate::agent_controllers;
 use shared::control::turn::TurnRequest;
+use shared::geometry::{Point, Pose};
+use shared::run::simulate::agent_controllers;
+use shared::world::scenario::Scenario;
 
 /// One agent (radius 0.3 m, at most 0.8 m a step) with a wall 0.15 m to its right and a
 /// moving obstacle coming at it from the left.

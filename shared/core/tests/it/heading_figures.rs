@@ -3,8 +3,8 @@
 //! and back as both ways.
 
 use shared::geometry::Vector;
-use shared::scenario::Scenario;
-use shared::simulate::simulate;
+use shared::run::simulate::simulate;
+use shared::world::scenario::Scenario;
 
 fn scenario(name: &str) -> Scenario {
     let path = format!("{}/../../scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"));

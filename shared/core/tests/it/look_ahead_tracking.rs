@@ -4,11 +4,11 @@
 
 use std::path::PathBuf;
 
-use shared::geometry::polyline_length_m;
-use shared::record::Run;
-use shared::scenario::Scenario;
-use shared::simulate::simulate;
 use shared::control::vocabulary::TurnOrder;
+use shared::geometry::polyline_length_m;
+use shared::run::record::Run;
+use shared::run::simulate::simulate;
+use shared::world::scenario::Scenario;
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/data")).join(name)

@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
-use shared::control::best_point::{BestPointError, nearest_free_point, nearest_reachable_free_point};
+use shared::control::best_point::{
+    BestPointError, nearest_free_point, nearest_reachable_free_point,
+};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
 
 /// The oracle's tolerance on distances and feasibility, in metres.

@@ -8,10 +8,10 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::control::formation::Slot;
-use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
 use shared::control::orca::OrcaController;
 use shared::control::safety::check_move;
 use shared::control::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
+use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
 
 /// The agent's slot is the formation centre itself.
 fn spec(radius_m: f64) -> AgentSpec {
@@ -310,16 +310,17 @@ fn the_orca_table_sets_rvo2s_parameters_of_its_own_model() {
         "/../../tests/data/dense-orca.toml"
     ));
     let text = std::fs::read_to_string(&file).expect("dense-orca.toml");
-    let default = shared::scenario::Scenario::parse(&text, "dense-orca.toml").expect("loads");
+    let default =
+        shared::world::scenario::Scenario::parse(&text, "dense-orca.toml").expect("loads");
     assert_eq!(default.controller.orca.time_horizon_steps, 5.0);
     assert_eq!(default.controller.orca.max_neighbours, 20);
     let short = format!("{text}\n[orca]\ntime_horizon_steps = 2.0\nmax_neighbours = 3\n");
-    let short = shared::scenario::Scenario::parse(&short, "short.toml").expect("loads");
+    let short = shared::world::scenario::Scenario::parse(&short, "short.toml").expect("loads");
     assert_eq!(short.controller.orca.time_horizon_steps, 2.0);
     assert_eq!(short.controller.orca.max_neighbours, 3);
     let (a, b) = (
-        shared::simulate::simulate(&default).expect("runs"),
-        shared::simulate::simulate(&short).expect("runs"),
+        shared::run::simulate::simulate(&default).expect("runs"),
+        shared::run::simulate::simulate(&short).expect("runs"),
     );
     assert_eq!(a.summary().collisions, 0);
     assert_eq!(b.summary().collisions, 0);
@@ -335,9 +336,12 @@ fn in_its_own_model_no_two_agents_meet_at_any_instant() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../tests/data/dense-orca.toml"
     ));
-    let scenario = shared::scenario::Scenario::load(&file).expect("dense-orca.toml");
-    assert_eq!(scenario.turns, shared::control::vocabulary::TurnMode::Simultaneous);
-    let run = shared::simulate::simulate(&scenario).expect("runs");
+    let scenario = shared::world::scenario::Scenario::load(&file).expect("dense-orca.toml");
+    assert_eq!(
+        scenario.turns,
+        shared::control::vocabulary::TurnMode::Simultaneous
+    );
+    let run = shared::run::simulate::simulate(&scenario).expect("runs");
     let mut crossings = 0;
     for step in &run.steps[1..] {
         for (i, a) in step.agents.iter().enumerate() {

@@ -4,7 +4,9 @@
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use shared::control::best_point::{BestPointError, nearest_free_point, nearest_reachable_free_point};
+use shared::control::best_point::{
+    BestPointError, nearest_free_point, nearest_reachable_free_point,
+};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point, Vector};
 
 /// Feasibility and optimality slack, in metres.

@@ -9,8 +9,10 @@
 use std::f64::consts::PI;
 
 use proptest::prelude::*;
+use shared::control::kinematics::{
+    CarLimits, CarMoveError, car_waypoints, check_car_move, curve_prefix,
+};
 use shared::geometry::Pose;
-use shared::control::kinematics::{CarLimits, CarMoveError, car_waypoints, check_car_move, curve_prefix};
 use shared::paths::{dubins, reeds_shepp};
 
 fn pose() -> impl Strategy<Value = Pose> {

@@ -15,9 +15,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::control::cbf::{CbfController, HalfPlane, QpError, solve_qp_2d};
 use shared::control::formation::Slot;
-use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 use shared::control::safety::check_move;
 use shared::control::vocabulary::{AgentSpec, Body, CbfSettings, MAX_WAYPOINTS};
+use shared::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector, distance_point_segment};
 
 /// The returned point must satisfy every row, normalised to a unit normal, to this, in
 /// the units of `u`.

@@ -6,12 +6,12 @@
 //! a grid over the bodies, which finds the bodies near the move or the body only.
 
 use proptest::prelude::*;
-use shared::geometry::{DiskGrid, Field, Point, distance_point_segment};
 use shared::control::safety::{
     Others, SAFETY_TOLERANCE_M, Violation, bodies_grid, check_move, check_move_among,
     clearance_to_others_m, clearances_of_m,
 };
 use shared::control::vocabulary::{Body, MAX_WAYPOINTS};
+use shared::geometry::{DiskGrid, Field, Point, distance_point_segment};
 
 /// The first (segment, body, overlap) by the plain definition, segment by segment.
 fn first_overlap(

@@ -3,8 +3,8 @@
 use std::f64::consts::{FRAC_PI_4, PI, TAU};
 
 use proptest::prelude::*;
-use shared::paths::curve::{CurvePath, Steer};
 use shared::geometry::Pose;
+use shared::paths::curve::{CurvePath, Steer};
 use shared::paths::{dubins, reeds_shepp};
 
 /// Relative tolerance for comparing lengths.

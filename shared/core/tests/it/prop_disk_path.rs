@@ -22,8 +22,8 @@ use std::f64::consts::TAU;
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use shared::control::best_point::nearest_reachable_free_point;
-use shared::paths::disk_path::{DiskPath, PathError, PathPiece, PathsFrom, shortest_path};
 use shared::geometry::{Disk, DiskGrid, Field, FreeSpace, Point};
+use shared::paths::disk_path::{DiskPath, PathError, PathPiece, PathsFrom, shortest_path};
 
 const TOL_M: f64 = 1e-9;
 

@@ -8,9 +8,9 @@
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use shared::control::best_point::nearest_free_point;
-use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Vector};
-use shared::maps::{Cell, OccupancyGrid};
+use shared::paths::disk_path::{PathError, shortest_path};
+use shared::world::maps::{Cell, OccupancyGrid};
 
 const CELLS: usize = 10;
 const CELL_M: f64 = 0.5;

@@ -15,10 +15,10 @@
 use proptest::prelude::*;
 use proptest::test_runner::Config;
 use shared::control::best_point::nearest_free_point;
-use shared::paths::disk_path::{PathError, shortest_path};
 use shared::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer,
 };
+use shared::paths::disk_path::{PathError, shortest_path};
 
 const FIELD_M: f64 = 10.0;
 

@@ -4,9 +4,9 @@
 //! refused; and where no two agents meet, nothing is refused.
 
 use proptest::prelude::*;
-use shared::geometry::{Point, distance_at_the_same_time_m};
-use shared::groups::{GroupMove, Meeting, simultaneous_meetings};
 use shared::control::safety::SAFETY_TOLERANCE_M;
+use shared::geometry::{Point, distance_at_the_same_time_m};
+use shared::world::groups::{GroupMove, Meeting, simultaneous_meetings};
 
 /// One agent of a group: where it stands, its radius, its move (relative offsets of the
 /// waypoints after the first) and whether its move was refused before.

@@ -3,8 +3,8 @@
 //! turn, kept to free points, until it is empty.
 
 use proptest::prelude::*;
-use shared::geometry::{Disk, Point, Vector};
 use shared::control::survival_grid::SurvivalGrid;
+use shared::geometry::{Disk, Point, Vector};
 
 /// A disk moving in a straight line: centre at turn 0, velocity per turn, radius.
 type Mover = ((f64, f64), (f64, f64), f64);

@@ -14,13 +14,13 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use shared::control::formation::Slot;
-use shared::geometry::{
-    Disk, DiskGrid, Field, Point, Pose, Vector, distance_polyline_polyline, polyline_length_m,
-};
-use shared::groups::turn_groups;
 use shared::control::safety::check_move;
 use shared::control::turn::{PLANNING_MARGIN_M, TurnController, TurnRequest};
 use shared::control::vocabulary::{AgentSpec, Body, ControllerSpec, MAX_WAYPOINTS, Move, TurnMode};
+use shared::geometry::{
+    Disk, DiskGrid, Field, Point, Pose, Vector, distance_polyline_polyline, polyline_length_m,
+};
+use shared::world::groups::turn_groups;
 
 /// Slack on lengths and distances, in metres.
 const TOLERANCE_M: f64 = 1e-9;

@@ -6,8 +6,10 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use proptest::prelude::*;
+use shared::control::kinematics::{
+    UnicycleLimits, drive_unicycle, driving_headings, unicycle_step_share,
+};
 use shared::geometry::{Point, polyline_length_m, wrap_angle_rad};
-use shared::control::kinematics::{UnicycleLimits, drive_unicycle, driving_headings, unicycle_step_share};
 
 /// Random polylines, with lattice ones (right angles, half turns, repeated points) that
 /// hit the ties and the degenerate segments.

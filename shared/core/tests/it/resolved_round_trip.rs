@@ -8,8 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
-use shared::scenario::{Checks, Scenario};
 use shared::control::vocabulary::{ControllerKind, TurnMode};
+use shared::world::scenario::{Checks, Scenario};
 
 /// `a` and `b` equal with `==`, and bit for bit: Debug prints every float in its
 /// shortest round-trip form, which tells `-0.0` from `0.0` and any two different finite
@@ -135,7 +135,7 @@ fn every_test_scenario_that_loads_resolves_to_a_file_that_loads_to_the_same_scen
 /// `controller`.
 #[test]
 fn the_older_key_planner_reads_as_controller() {
-    let paper = shared::scenario::PAPER_SCENARIO_TOML;
+    let paper = shared::world::scenario::PAPER_SCENARIO_TOML;
     assert!(
         paper.contains("\n[field]"),
         "the paper example changed shape"
@@ -168,7 +168,7 @@ fn every_shipped_scenario_with_a_moving_obstacle_lists_it_as_its_own_table() {
         let s = Scenario::load(&file).unwrap_or_else(|e| panic!("{e}"));
         let text = s.to_resolved_toml("x").expect("resolved");
         for m in &s.moving {
-            let table = shared::scenario::moving_obstacle_table(m);
+            let table = shared::world::scenario::moving_obstacle_table(m);
             assert!(text.contains(&table), "{}: {table}", file.display());
             seen += 1;
         }

@@ -12,17 +12,17 @@
 //!   need it);
 //! - every `float` key refuses NaN naming itself, a `> 0` key refuses 0, a `≥ 0` key
 //!   refuses -1;
-//! - the limits table gives the values of the constants in `shared::scenario` and
+//! - the limits table gives the values of the constants in `shared::world::scenario` and
 //!   `shared::control::vocabulary`.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
-use shared::scenario::{
+use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
+use shared::run::simulate::plan_centre_path;
+use shared::world::scenario::{
     MAX_ANGLE_DEG, MAX_FIELD_SIDE_M, MAX_MOVING_WAYPOINTS, MAX_ROUTE_WAYPOINTS, MAX_STEPS, Scenario,
 };
-use shared::simulate::plan_centre_path;
-use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 use toml::{Table, Value};
 
 fn repo_root() -> PathBuf {
@@ -221,7 +221,7 @@ fn as_scenario_file(name: &str) -> String {
         .to_string()
 }
 
-fn parse(doc: &Table, what: &str) -> Result<Scenario, shared::scenario::ScenarioError> {
+fn parse(doc: &Table, what: &str) -> Result<Scenario, shared::world::scenario::ScenarioError> {
     let text = toml::to_string(doc).unwrap_or_else(|e| panic!("{what}: cannot write: {e}"));
     Scenario::parse(&text, &as_scenario_file(what))
 }

@@ -4,13 +4,13 @@
 
 use std::path::PathBuf;
 
-use shared::geometry::{DiskGrid, distance_polyline_polyline, polyline_length_m};
-use shared::groups::turn_groups_ordered;
-use shared::record::Run;
 use shared::control::safety::{self, SAFETY_TOLERANCE_M};
-use shared::scenario::Scenario;
-use shared::simulate::simulate;
 use shared::control::vocabulary::{Body, ControllerKind, MAX_WAYPOINTS, MoveStatus};
+use shared::geometry::{DiskGrid, distance_polyline_polyline, polyline_length_m};
+use shared::run::record::Run;
+use shared::run::simulate::simulate;
+use shared::world::groups::turn_groups_ordered;
+use shared::world::scenario::Scenario;
 
 fn scenario_files() -> Vec<PathBuf> {
     let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenarios"));

@@ -1,16 +1,18 @@
-//! The step loop (`shared::step_loop::run_steps`) with sources and judges of the test's
+//! The step loop (`shared::run::step_loop::run_steps`) with sources and judges of the test's
 //! own: it asks the judge about every move, takes only what the judge and the world
 //! accept, and stops where the source says, closing the step or not as the contract has
 //! it.
 
-use shared::course::Course;
-use shared::geometry::Pose;
-use shared::record::{FaultKind, Recorder};
-use shared::scenario::Scenario;
-use shared::simulate::{agent_controllers, plan_centre_path, simulate_along};
-use shared::step_loop::{GroupMoves, GroupTurn, Judge, MoveSource, WorldChecksOnly, run_steps};
 use shared::control::turn::{TurnController, TurnRequest};
 use shared::control::vocabulary::{Move, MoveStatus};
+use shared::geometry::Pose;
+use shared::run::record::{FaultKind, Recorder};
+use shared::run::simulate::{agent_controllers, plan_centre_path, simulate_along};
+use shared::run::step_loop::{
+    GroupMoves, GroupTurn, Judge, MoveSource, WorldChecksOnly, run_steps,
+};
+use shared::world::course::Course;
+use shared::world::scenario::Scenario;
 
 /// Every agent plans in this process (the paper's holonomic agents need no more than
 /// the centre, where they stand and the others); the run is interrupted at

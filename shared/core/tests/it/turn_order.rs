@@ -1,9 +1,9 @@
 //! The order of the turns within a step (`[turns] order`): safety never depends on it,
 //! the deviation under a top speed does.
 
-use shared::scenario::Scenario;
-use shared::simulate::simulate;
 use shared::control::vocabulary::TurnOrder;
+use shared::run::simulate::simulate;
+use shared::world::scenario::Scenario;
 
 /// Three agents in a column driving east, 0.7 m apart with radii of 0.3 m, numbered from
 /// the back; each step the centre moves 0.25 m, within the top speed.
@@ -105,7 +105,7 @@ fn omitted_the_order_is_front_first_with_a_top_speed_and_a_look_ahead() {
 /// a name it does not know, naming the key.
 #[test]
 fn without_a_top_speed_the_order_is_the_agents_and_an_unknown_name_is_refused() {
-    let text = shared::scenario::PAPER_SCENARIO_TOML;
+    let text = shared::world::scenario::PAPER_SCENARIO_TOML;
     let paper = Scenario::parse(text, "paper.toml").expect("paper");
     assert_eq!(paper.turn_order, TurnOrder::Agent);
     let bad = format!("{text}\n[turns]\norder = \"back-first\"\n");

@@ -6,10 +6,10 @@
 
 use std::f64::consts::PI;
 
-use shared::geometry::{Point, polyline_length_m};
-use shared::scenario::Scenario;
-use shared::simulate::simulate;
 use shared::control::vocabulary::Kinematics;
+use shared::geometry::{Point, polyline_length_m};
+use shared::run::simulate::simulate;
+use shared::world::scenario::Scenario;
 
 fn repository(path: &str) -> std::path::PathBuf {
     std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(path)

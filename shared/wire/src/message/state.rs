@@ -7,8 +7,8 @@
 
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
-use shared::geometry::Point;
 use shared::control::vocabulary::{MAX_WAYPOINTS, MoveStatus};
+use shared::geometry::Point;
 
 use crate::{CapacityError, WirePoint};
 

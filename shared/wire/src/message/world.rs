@@ -2,9 +2,9 @@
 
 use iceoryx2::prelude::*;
 use iceoryx2_bb_container::vector::{StaticVec, Vector};
-use shared::geometry::{self, Pose};
 use shared::control::tracking::MAX_HORIZON_STEPS;
 use shared::control::vocabulary::{Body, MAX_AGENTS};
+use shared::geometry::{self, Pose};
 
 use crate::{CapacityError, WirePoint, WirePose};
 

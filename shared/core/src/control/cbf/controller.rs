@@ -1,10 +1,10 @@
 //! The safe control-barrier-function controller.
 
 use crate::control::formation::Slot;
-use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
 use crate::control::vocabulary::{
     AgentSpec, Body, CBF_MARGIN_M, CBF_STALL_SHARE, CbfSettings, CbfSettingsError, Move,
 };
+use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, Vector};
 
 use super::*;
 

@@ -1,7 +1,7 @@
 //! The paper's failed zeroing barrier with a LogSumExp-smoothed max, kept for comparison.
 
-use crate::geometry::{Disk, Field, Point, Pose, Vector};
 use crate::control::vocabulary::{AgentSpec, Body, CbfSettings, CbfSettingsError, Move};
+use crate::geometry::{Disk, Field, Point, Pose, Vector};
 
 use super::*;
 

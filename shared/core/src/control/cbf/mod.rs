@@ -78,8 +78,8 @@ pub use qp::{HalfPlane, QpError, solve_qp_2d};
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{DiskGrid, Point, Vector};
 use crate::control::vocabulary::{Body, CbfSettings, Move, MoveStatus};
+use crate::geometry::{DiskGrid, Point, Vector};
 
 /// An agent within this distance of its slot, in metres, is at its slot.
 pub const AT_SLOT_TOLERANCE_M: f64 = 1e-9;

@@ -31,9 +31,9 @@
 //! move may cut into a margin: the recorder and the safety monitor check every move and
 //! refuse those, as for any controller.
 
-use crate::geometry::{Point, Pose, Vector, wrap_angle_rad};
 use crate::control::kinematics::UnicycleLimits;
 use crate::control::vocabulary::{Body, Move};
+use crate::geometry::{Point, Pose, Vector, wrap_angle_rad};
 
 use super::{CbfController, HalfPlane, solve_qp_2d, step_status};
 

@@ -33,9 +33,9 @@ fn parallel_rows_and_single_point_sets() {
 mod unicycle {
     use super::*;
     use crate::control::formation::Slot;
-    use crate::geometry::{Disk, Field, Pose};
     use crate::control::kinematics::{UnicycleLimits, unicycle_step_share};
     use crate::control::vocabulary::AgentSpec;
+    use crate::geometry::{Disk, Field, Pose};
 
     /// A GRITSbot-like agent (radius 0.055 m) whose slot is the centre itself, so the
     /// slot is wherever the centre pose puts it.
@@ -197,8 +197,8 @@ mod unicycle {
 mod substeps {
     use super::*;
     use crate::control::formation::Slot;
-    use crate::geometry::{Field, Pose};
     use crate::control::vocabulary::AgentSpec;
+    use crate::geometry::{Field, Pose};
 
     /// An agent at the origin of a 20 x 20 m field (shifted to its middle) whose slot is
     /// 1.5 m ahead, a mate standing just off the straight line to it.
@@ -266,8 +266,8 @@ mod substeps {
 mod deadlock_escape {
     use super::*;
     use crate::control::formation::Slot;
-    use crate::geometry::{Disk, Field, Pose};
     use crate::control::vocabulary::AgentSpec;
+    use crate::geometry::{Disk, Field, Pose};
 
     /// The obstacle's centre.
     const OBSTACLE: Point = Point::new(12.0, 10.0);

@@ -12,8 +12,8 @@
 //! of at most [`CAR_CHORD_TURN_RAD`] of turning and a chord error of at most the one asked
 //! for ([`car_waypoints`]).
 
-use crate::paths::curve::{CurvePath, Segment, Steer};
 use crate::geometry::{Point, Pose, wrap_angle_rad};
+use crate::paths::curve::{CurvePath, Segment, Steer};
 
 /// Segments shorter than this are left out when a path is drawn: a chord of a few
 /// nanometres has no direction to speak of (its ends are known to about 1e-15 m), and

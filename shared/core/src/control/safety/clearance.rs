@@ -3,8 +3,8 @@
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{Disk, DiskGrid, Point, Polygon};
 use crate::control::vocabulary::Body;
+use crate::geometry::{Disk, DiskGrid, Point, Polygon};
 
 /// Clearance of `body` (distance minus radii) to the nearest obstacle and to the nearest
 /// of `others`, looking for obstacles within `reach_m`: `(obstacle, other)`, each

@@ -7,8 +7,8 @@
 
 use std::ops::ControlFlow;
 
-use crate::geometry::{Disk, DiskGrid, Field, Point, Polygon, Vector, distance_point_segment};
 use crate::control::vocabulary::Body;
+use crate::geometry::{Disk, DiskGrid, Field, Point, Polygon, Vector, distance_point_segment};
 
 mod clearance;
 
@@ -160,7 +160,7 @@ pub struct Others<'a> {
     pub bodies: &'a [Body],
     /// A body `j` with `passing[j]` moves at the same time as the mover (simultaneous
     /// turns) and is not looked at here; the two moves are checked against each other in
-    /// time ([`crate::groups::simultaneous_meetings`]). Empty: none passes.
+    /// time ([`crate::world::groups::simultaneous_meetings`]). Empty: none passes.
     pub passing: &'a [bool],
     /// A grid over exactly `bodies` (same order, same disks), so that a move is checked
     /// against the bodies near it only; `None`: against each body in turn. The verdict is

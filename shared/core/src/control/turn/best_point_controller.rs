@@ -2,15 +2,15 @@
 //! it.
 
 use crate::control::best_point::{self, BestPointError};
-use crate::paths::disk_path::{self, DiskPath};
 use crate::control::formation::Slot;
+use crate::control::tracking;
+use crate::control::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
 use crate::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, Polygon, PolygonLayer, Pose,
     RegionGrid, Vector,
 };
-use crate::scenario::ScenarioMap;
-use crate::control::tracking;
-use crate::control::vocabulary::{AgentSpec, Body, MAX_WAYPOINTS, Move, MoveStatus};
+use crate::paths::disk_path::{self, DiskPath};
+use crate::world::scenario::ScenarioMap;
 
 use super::PLANNING_MARGIN_M;
 #[cfg(doc)]

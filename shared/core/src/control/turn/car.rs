@@ -17,11 +17,11 @@
 
 use std::ops::ControlFlow;
 
-use crate::paths::curve::CurvePath;
-use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, distance_point_segment};
-use crate::paths::hybrid_astar::{self, HybridAStarSettings};
 use crate::control::kinematics::{CarLimits, CarPiece, car_piece, car_waypoints, curve_prefix};
 use crate::control::vocabulary::Body;
+use crate::geometry::{Disk, DiskGrid, Field, Point, Pose, distance_point_segment};
+use crate::paths::curve::CurvePath;
+use crate::paths::hybrid_astar::{self, HybridAStarSettings};
 use crate::paths::{dubins, reeds_shepp};
 
 /// The world headings a car tries to reach its best point with (besides the centre's

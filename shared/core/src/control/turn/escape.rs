@@ -1,13 +1,13 @@
 //! A turn among moving obstacles: the escape of an agent that starts its turn inside an
 //! obstacle's reach, and the plan round the reach disks with a step to spare.
 
-use crate::paths::disk_path;
+use crate::control::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
 use crate::geometry::{
     Disk, DiskGrid, Field, FreeSpace, InflatedPolygon, Point, PolygonLayer, Pose, Vector,
     distance_point_segment, polyline_length_m,
 };
-use crate::moving_obstacle::MovingObstacle;
-use crate::control::vocabulary::{Body, MAX_WAYPOINTS, Move, MoveStatus};
+use crate::paths::disk_path;
+use crate::world::moving_obstacle::MovingObstacle;
 
 use super::{Aim, PLANNING_MARGIN_M, TurnController};
 

@@ -12,11 +12,11 @@
 //! reference simulation and in the agent process. The prediction only chooses among
 //! safe moves; the move is still free of every body standing and within the top speed.
 
+use crate::control::tracking;
+use crate::control::vocabulary::{Body, Move};
 use crate::geometry::{
     Disk, DiskGrid, Field, FreeSpace, Point, PolygonLayer, Pose, RegionGrid, Vector,
 };
-use crate::control::tracking;
-use crate::control::vocabulary::{Body, Move};
 
 use super::{Controller, PLANNING_MARGIN_M, TurnController};
 

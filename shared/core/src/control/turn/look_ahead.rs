@@ -2,10 +2,10 @@
 //! where an obstacle's reach soon will be, the straight move from whose end the agent can
 //! keep clear longest.
 
-use crate::geometry::{Disk, Point, Vector};
-use crate::moving_obstacle::MovingObstacle;
 use crate::control::survival_grid::SurvivalGrid;
 use crate::control::vocabulary::{Body, Move, MoveStatus};
+use crate::geometry::{Disk, Point, Vector};
+use crate::world::moving_obstacle::MovingObstacle;
 
 use super::{PLANNING_MARGIN_M, TurnController};
 

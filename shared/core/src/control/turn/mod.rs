@@ -14,18 +14,18 @@
 use std::borrow::Cow;
 
 use crate::control::cbf::{CbfController, ZcbfLogSumExpController};
-use crate::geometry::{
-    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, Vector,
-    polyline_prefix,
-};
 use crate::control::kinematics::{CarLimits, UnicycleLimits, drive_unicycle};
-use crate::moving_obstacle::MovingObstacle;
 use crate::control::orca::OrcaController;
-use crate::scenario::ScenarioMap;
 use crate::control::tracking;
 use crate::control::vocabulary::{
     AgentSpec, Body, CbfSettingsError, ControllerKind, ControllerSpec, Kinematics, Move, MoveStatus,
 };
+use crate::geometry::{
+    Disk, DiskGrid, Field, InflatedPolygon, Point, Polygon, PolygonLayer, Pose, Vector,
+    polyline_prefix,
+};
+use crate::world::moving_obstacle::MovingObstacle;
+use crate::world::scenario::ScenarioMap;
 
 mod best_point_controller;
 mod car;
@@ -65,7 +65,7 @@ pub struct Velocities {
 
 impl Velocities {
     /// Agent `agent`'s view of `all` (every agent's, by index): its own, and the others'
-    /// in index order, as [`crate::world::World::others`] lists their bodies.
+    /// in index order, as [`crate::run::World::others`] lists their bodies.
     pub fn of_agent(all: &[Vector], agent: usize) -> Self {
         Self {
             me: all.get(agent).copied().unwrap_or_default(),
@@ -228,7 +228,7 @@ impl TurnController {
     /// when it stops short of the best point.
     ///
     /// **Moving obstacles** stand where they are at `turn.step`
-    /// ([`crate::moving_obstacle`]). The agent plans around each one it senses as around a
+    /// ([`crate::world::moving_obstacle`]). The agent plans around each one it senses as around a
     /// disk grown by twice the obstacle's speed, or as much of that as leaves it outside:
     /// at least the obstacle's reach ([`MovingObstacle::reach_disk_at`], where it can be
     /// until the agent's next turn), so a move that ends outside it is still clear after

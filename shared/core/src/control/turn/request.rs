@@ -1,8 +1,8 @@
 //! [`TurnRequest`]: everything an agent knows when its turn comes, the one input of
 //! [`TurnController::plan`](super::TurnController::plan).
 
-use crate::geometry::{Point, Pose};
 use crate::control::vocabulary::Body;
+use crate::geometry::{Point, Pose};
 
 use super::{MateView, Velocities};
 
@@ -30,7 +30,7 @@ use super::{MateView, Velocities};
 #[derive(Clone, Copy, Debug)]
 pub struct TurnRequest<'a> {
     /// The step this turn belongs to (0 is the start): where the moving obstacles stand
-    /// ([`crate::moving_obstacle::MovingObstacle::position_at`]).
+    /// ([`crate::world::moving_obstacle::MovingObstacle::position_at`]).
     pub step: usize,
     /// The formation centre's pose this step (metres, radians): with the agent's slot it
     /// gives the ideal position.

@@ -14,7 +14,7 @@ pub enum TurnMode {
     #[default]
     Sequential,
     /// Agents that cannot meet within the step move at once: each step the live agents
-    /// are split into groups ([`crate::groups::turn_groups`]); a group's agents plan
+    /// are split into groups ([`crate::world::groups::turn_groups`]); a group's agents plan
     /// against the same snapshot and the groups follow one another. Needs a top speed.
     Parallel,
     /// Every live agent moves at once, knowing how each body moved over the last step:

@@ -204,9 +204,9 @@ impl BarrierGraph {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::{Disk, DiskGrid};
     use crate::paths::disk_path::barrier::separated;
     use crate::paths::disk_path::tests::packed_block;
-    use crate::geometry::{Disk, DiskGrid};
 
     #[test]
     fn barrier_graph_agrees_with_the_barrier_test() {

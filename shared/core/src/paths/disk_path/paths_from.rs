@@ -87,9 +87,9 @@ const BARRIER_PAD_RADII: f64 = 4.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::DiskGrid;
     use crate::paths::disk_path::shortest_path::shortest_path;
     use crate::paths::disk_path::tests::packed_block;
-    use crate::geometry::DiskGrid;
 
     #[test]
     fn paths_from_a_pocket_match_shortest_path() {

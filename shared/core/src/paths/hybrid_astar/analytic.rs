@@ -4,9 +4,9 @@
 use super::collision::Checker;
 use super::primitive::Piece;
 use super::settings::HybridAStarSettings;
+use crate::geometry::{Pose, wrap_angle_rad};
 use crate::paths::curve::{CurvePath, Steer};
 use crate::paths::dubins;
-use crate::geometry::{Pose, wrap_angle_rad};
 use crate::paths::reeds_shepp;
 
 /// The curve path (Reeds-Shepp, or Dubins when forward only) from `from` to `goal` as

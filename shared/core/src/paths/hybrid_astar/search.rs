@@ -13,9 +13,9 @@ use super::heuristic::Holonomic;
 use super::primitive::{Piece, Primitive, dense_path};
 use super::resample::path_length_m;
 use super::settings::HybridAStarSettings;
-use crate::paths::dubins;
 use crate::geometry::{Field, Pose};
 use crate::ordered::TotalF64;
+use crate::paths::dubins;
 use crate::paths::reeds_shepp;
 use rustc_hash::FxHashMap;
 

@@ -1,8 +1,8 @@
 //! The entry points: the shortest Reeds-Shepp path between two poses, and its length.
 
 use super::word::solve;
-use crate::paths::curve::{CurvePath, check_turning_radius};
 use crate::geometry::Pose;
+use crate::paths::curve::{CurvePath, check_turning_radius};
 
 /// The shortest Reeds-Shepp path from `from` to `to` for turning radius `turning_radius_m`.
 ///

@@ -11,8 +11,8 @@ use super::formulas::{
     Formula, Goal, lp_rm_l, lp_rm_s_lm_rp, lp_rm_sm_lm, lp_rm_sm_rm, lp_rum_lum_rp, lp_rup_lum_rm,
     lp_sp_lp, lp_sp_rp,
 };
-use crate::paths::curve::{Segment, Steer, scaled_segment};
 use crate::geometry::Pose;
+use crate::paths::curve::{Segment, Steer, scaled_segment};
 
 /// A candidate word in normalized units: up to five steers with signed lengths.
 #[derive(Clone, Copy, Debug)]

@@ -1,8 +1,8 @@
 //! Helpers shared by the property tests of `shared`.
 
 use rand::Rng;
-use shared::geometry::{Disk, Field, Point, Vector};
 use shared::control::vocabulary::Body;
+use shared::geometry::{Disk, Field, Point, Vector};
 
 /// Draw a start for an agent of radius `radius_m` where controllers are put to the test:
 /// touching an obstacle or another agent, on the field's left edge, or anywhere, until
