@@ -20,7 +20,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use coordinator::validate::load_and_plan;
+use runner::loaded::load_and_plan;
 use shared::control::vocabulary::{MAX_AGENTS, MAX_OBSTACLES};
 use shared::world::scenario::{Scenario, ScenarioError};
 

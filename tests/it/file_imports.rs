@@ -24,10 +24,13 @@ fn source_dirs() -> Vec<PathBuf> {
         "shared/net",
         "shared/testkit",
         "agent",
-        "coordinator",
+        "coordinator/runner",
+        "coordinator/tools",
+        "coordinator/cli",
     ]
     .iter()
     .map(|c| root.join(c).join("src"))
+    .inspect(|src| assert!(src.is_dir(), "{} is no folder", src.display()))
     .collect()
 }
 

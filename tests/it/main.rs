@@ -26,6 +26,7 @@ mod file_imports;
 mod multiprocess;
 mod outputs;
 mod parallel_kill;
+mod plotting_apart;
 mod resume;
 mod rogue;
 mod rogue_parallel;

@@ -4,7 +4,7 @@
 
 use crate::support;
 
-use coordinator::turns::{FaultInjection, RunOptions, WaitMode, WakeMode, run_scenario};
+use runner::turns::{FaultInjection, RunOptions, WaitMode, WakeMode, run_scenario};
 use shared::run::record::{FaultKind, Run};
 use shared::run::simulate::{plan_centre_path, simulate_along};
 use shared::world::scenario::Scenario;
@@ -114,7 +114,7 @@ fn an_agent_deaf_to_the_prepare_notice_is_rung_after_the_spin_budget() {
     assert_eq!(outcome.run.steps, reference.steps);
     // Granted without a ring, a deaf agent wakes only when the budget is spent: most of
     // its turns (all but those whose notice came too long before) take that long.
-    let budget_us = coordinator::turns::SPIN_BUDGET.as_secs_f64() * 1e6;
+    let budget_us = runner::turns::SPIN_BUDGET.as_secs_f64() * 1e6;
     for agent in [2, 5] {
         let mut turns: Vec<f64> = outcome.turn_latencies_us(agent).collect();
         turns.sort_by(f64::total_cmp);
@@ -364,7 +364,7 @@ fn concurrent_runs_of_the_same_scenario_do_not_see_each_other() {
 
 #[test]
 fn a_failing_coordinator_stops_its_agents_cleans_up_and_keeps_the_steps_done() {
-    use coordinator::turns::run_scenario_with;
+    use runner::turns::run_scenario_with;
     let scenario = Scenario::paper();
     let path = plan_centre_path(&scenario).expect("centre path");
     let reference = simulate_along(&scenario, &path).expect("reference simulation");

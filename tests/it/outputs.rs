@@ -223,7 +223,7 @@ fn moves_csv_gives_the_exact_arc_that_reaches_each_waypoint() {
         let file = support::repo_root().join("scenarios").join(name);
         let scenario = Scenario::load(&file).expect("shipped scenario");
         let run = shared::run::simulate::simulate(&scenario).expect("simulate");
-        let bytes = coordinator::output::moves_csv(&scenario, &run).expect("moves.csv");
+        let bytes = runner::output::moves_csv(&scenario, &run).expect("moves.csv");
         let mut reader = csv::Reader::from_reader(bytes.as_slice());
         let headers = reader.headers().expect("headers").clone();
         let col = |n: &str| headers.iter().position(|h| h == n).expect(n);

@@ -7,7 +7,7 @@
 
 use crate::support;
 
-use coordinator::turns::{FaultInjection, RunOptions, run_scenario};
+use runner::turns::{FaultInjection, RunOptions, run_scenario};
 use shared::control::vocabulary::{Body, MoveStatus, TurnMode};
 use shared::run::record::{FaultKind, Run};
 use shared::run::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};

@@ -9,11 +9,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use coordinator::run_log::RUN_LOG_FILE;
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use runner::run_log::RUN_LOG_FILE;
 use serde_json::Value;
 use support::progress::{self, Watched};
 use support::{assert_nothing_left, coordinator, run_to_end, summary};
@@ -98,7 +98,7 @@ fn resume_refuses_a_folder_that_is_not_a_killed_run_and_changes_nothing() {
     let (output, pid) = run_to_end(&[], &finished);
     assert!(output.status.success());
     let log = finished.join(RUN_LOG_FILE);
-    let version = coordinator::run_log::LOG_FORMAT_VERSION as u64;
+    let version = runner::run_log::LOG_FORMAT_VERSION as u64;
 
     let empty = dir.path().join("empty");
     std::fs::create_dir(&empty).expect("folder");
@@ -297,7 +297,7 @@ fn resume_and_render_write_nothing_through_links_and_read_nothing_unbounded() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
-    let version = coordinator::run_log::LOG_FORMAT_VERSION as u64;
+    let version = runner::run_log::LOG_FORMAT_VERSION as u64;
     let victim = dir.path().join("victim.txt");
     std::fs::write(&victim, b"not the run's").expect("write");
 
@@ -318,7 +318,7 @@ fn resume_and_render_write_nothing_through_links_and_read_nothing_unbounded() {
     // render with `plots` linked to another folder: refused, nothing written there.
     let elsewhere = dir.path().join("elsewhere");
     std::fs::create_dir(&elsewhere).expect("folder");
-    let plots = linked.join(coordinator::render::PLOTS_DIR);
+    let plots = linked.join(runner::output::PLOTS_DIR);
     if plots.exists() {
         std::fs::remove_dir_all(&plots).expect("remove plots");
     }
@@ -340,7 +340,7 @@ fn resume_and_render_write_nothing_through_links_and_read_nothing_unbounded() {
     let sparse_log = dir.path().join("sparse-log");
     std::fs::create_dir(&sparse_log).expect("folder");
     std::fs::File::create(sparse_log.join(RUN_LOG_FILE))
-        .and_then(|f| f.set_len(coordinator::run_log::MAX_RUN_LOG_BYTES + 1))
+        .and_then(|f| f.set_len(runner::run_log::MAX_RUN_LOG_BYTES + 1))
         .expect("a sparse log");
     let mut command = Command::new(support::coordinator_bin());
     command.args(["run", "--resume"]).arg(&sparse_log);
@@ -356,7 +356,7 @@ fn resume_and_render_write_nothing_through_links_and_read_nothing_unbounded() {
     // render of a finished run whose table is sparse over the bound, or a FIFO.
     let sparse_table = |path: &Path| {
         std::fs::File::create(path)
-            .and_then(|f| f.set_len(coordinator::run_log::MAX_RUN_LOG_BYTES + 1))
+            .and_then(|f| f.set_len(runner::run_log::MAX_RUN_LOG_BYTES + 1))
             .expect("a sparse table");
     };
     let fifo_table = |path: &Path| {

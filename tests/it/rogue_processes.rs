@@ -12,9 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use coordinator::turns::{
-    BetweenSteps, FaultInjection, RunOptions, run_scenario, run_scenario_with,
-};
+use runner::turns::{BetweenSteps, FaultInjection, RunOptions, run_scenario, run_scenario_with};
 use shared::geometry::Pose;
 use shared::run::simulate::plan_centre_path;
 use shared::world::scenario::Scenario;

@@ -11,12 +11,12 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-use coordinator::output::{moves_csv, trajectory_csv};
-use coordinator::run_log::{RUN_LOG_FILE, read_run_log};
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use runner::output::{moves_csv, trajectory_csv};
+use runner::run_log::{RUN_LOG_FILE, read_run_log};
 use serde_json::Value;
 use shared::run::record::Run;
 use shared::run::simulate::{plan_centre_path, simulate_along};
@@ -325,7 +325,7 @@ pub(crate) fn coordinator_killed_at_seeded_moments(
         .spawn()
         .expect("start");
     support::wait_until(Duration::from_secs(300), "no plot drawn", || {
-        out.join(coordinator::render::PLOTS_DIR).is_dir()
+        out.join(runner::output::PLOTS_DIR).is_dir()
     });
     kill(Pid::from_raw(child.id() as i32), Signal::SIGKILL).expect("kill");
     let _ = child.wait();

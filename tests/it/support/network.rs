@@ -6,8 +6,8 @@ use std::net::{Ipv4Addr, TcpListener};
 use std::process::Child;
 use std::time::{Duration, Instant};
 
-use coordinator::turns::{NetworkOptions, RunOptions};
 use net::Endpoint;
+use runner::turns::{NetworkOptions, RunOptions};
 use shared::run::record::{FaultKind, Run};
 
 use crate::support;

@@ -2,7 +2,7 @@
 //! the steps it has run rather than by a guess of how long a run takes.
 //!
 //! The coordinator logs `step N done` on stderr as each step ends when `RUST_LOG` lets
-//! the target [`coordinator::turns::PROGRESS_TARGET`] through at `info`. [`Watched`]
+//! the target [`runner::turns::PROGRESS_TARGET`] through at `info`. [`Watched`]
 //! runs it with that filter and its stderr on a pipe of [`PIPE_BYTES`], read by a
 //! thread that keeps every byte (for the assertions, so nothing blocks on a full pipe)
 //! and stops reading at each step the test asked to hold at until the test has acted.
@@ -55,7 +55,7 @@ const HOLD_DEADLINE: Duration = Duration::from_secs(300);
 /// The `RUST_LOG` a watched coordinator runs with: the default level for everything
 /// (warnings, as a user sees them) and the progress lines.
 pub fn progress_filter() -> String {
-    format!("warn,{}=info", coordinator::turns::PROGRESS_TARGET)
+    format!("warn,{}=info", runner::turns::PROGRESS_TARGET)
 }
 
 /// The latest step to hold at in a run of `last_step` steps so that whatever the test

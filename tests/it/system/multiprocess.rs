@@ -5,10 +5,10 @@ use shared::world::scenario::Scenario;
 
 use crate::multiprocess::{HEAVY_SCENARIOS, options, run_and_compare};
 use crate::support;
-use coordinator::turns::run_scenario;
+use runner::turns::run_scenario;
 
 /// A thousand agent processes. The coordinator holds 15 open files per agent (iceoryx2;
-/// see `raise_fd_limit` in `coordinator/src/agents.rs`): where its hard limit allows the
+/// see `raise_fd_limit` in `coordinator/runner/src/agents.rs`): where its hard limit allows the
 /// 15 064 files (20 000 on the machines this was written on), the run completes safely
 /// and matches the reference; where it does not, the run is refused up front, naming
 /// the figure, with no agent started and nothing left in shared memory.

@@ -12,12 +12,12 @@ use std::net::Ipv4Addr;
 use std::process::Child;
 use std::time::{Duration, Instant};
 
-use coordinator::netns::NetnsHost;
-use coordinator::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
 use net::zenoh::handlers::FifoChannelHandler;
 use net::zenoh::pubsub::Subscriber;
 use net::zenoh::sample::{Sample, SampleKind};
+use runner::netns::NetnsHost;
+use runner::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use shared::run::record::FaultKind;
 use shared::run::simulate::{plan_centre_path, simulate_along, simulate_along_with_deaths};
 use shared::world::scenario::Scenario;

@@ -9,8 +9,8 @@ use crate::support::network as network_support;
 use std::net::Ipv4Addr;
 use std::time::Duration;
 
-use coordinator::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use net::Endpoint;
+use runner::turns::{NetworkOptions, run_scenario, run_scenario_with};
 use shared::run::record::FaultKind;
 use shared::run::simulate::{plan_centre_path, simulate_along};
 use shared::world::scenario::Scenario;

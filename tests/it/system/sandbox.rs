@@ -10,7 +10,7 @@ use crate::support;
 use std::path::Path;
 use std::time::Duration;
 
-use coordinator::turns::{BetweenSteps, RunOptions, SandboxOptions, run_scenario_with};
+use runner::turns::{BetweenSteps, RunOptions, SandboxOptions, run_scenario_with};
 use shared::run::simulate::{plan_centre_path, simulate_along};
 use shared::world::scenario::Scenario;
 use support::{assert_nothing_left, assert_safe, run_to_end, summary};
@@ -372,7 +372,7 @@ fn a_dead_coordinators_control_groups_are_cleaned_by_the_next_run() {
     group.create().expect("the run's group");
     group.child("agent-0-0").create().expect("an agent's group");
     assert!(!run_cgroups(&prefix).is_empty());
-    let cleaned = coordinator::stale_runs::clean_stale_runs();
+    let cleaned = runner::stale_runs::clean_stale_runs();
     assert!(cleaned.contains(&prefix), "{cleaned:?}");
     assert!(
         run_cgroups(&prefix).is_empty(),
