@@ -5,7 +5,9 @@
 //! it runs the same over iceoryx2 ([`ipc::IpcTransport`]) and in-process in tests.
 //!
 //! Features: `zenoh`, agents on other machines; `misbehave`, the test modes
-//! (`--misbehave MODE`, [`misbehave`]), which a shipping agent is built without.
+//! (`--misbehave MODE`, [`misbehave`]), which a shipping agent is built without. A role
+//! meets its test mode as one value (`test_mode.rs`) that opens its transport and serves
+//! turns as the mode has it, so [`run`] reads the same with the feature on or off.
 
 mod args;
 pub mod forward;
@@ -51,7 +53,7 @@ const NO_ZENOH: &str = "this agent was built without Zenoh: build it with `cargo
 /// Open the run's services and serve turns until told to stop or the coordinator is gone.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     launch::die_with_the_coordinator()?;
-    let mode = test_mode::test_mode(args)?;
+    let mode = test_mode::TestMode::asked(args)?;
     let liveness = Duration::from_millis(args.liveness_ms.max(1));
     if args.die_with_parent {
         #[cfg(target_os = "linux")]
@@ -73,7 +75,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         {
             let transport =
                 net_transport::NetTransport::connect(connect, &security, args.agent, liveness)?;
-            return test_mode::serve_as(transport, args.agent, mode);
+            return mode.serve(transport);
         }
         #[cfg(not(feature = "zenoh"))]
         bail!("{NO_ZENOH}");
@@ -89,16 +91,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(root) = wire::run_root(prefix) {
         wire::check_run_root(&root).with_context(|| format!("opening run {prefix}"))?;
     }
-    // The mission is read before the gate, while the coordinator makes the channels (a
-    // trusted agent's test-mode attack on the file comes first; a relay attacks nothing).
-    #[cfg(feature = "misbehave")]
-    if args.sandbox_uid.is_none()
-        && args.relay.is_none()
-        && let Some(mode) = mode
-    {
-        misbehave::before_reading(prefix, args.agent, mode);
-    }
-    let mission = ipc::Mission::read(prefix, args.mission_sha256)
+    // The mission is read before the gate, while the coordinator makes the channels. A
+    // relay has no test mode of its own: it passes its agent's on.
+    let is_relay = args.sandbox_uid.is_some() || args.relay.is_some();
+    let mode = if is_relay { mode.none() } else { mode };
+    let mission = mode
+        .read_mission(prefix, args.mission_sha256)
         .with_context(|| format!("opening run {prefix}"))?;
     if args.gate_stdin {
         launch::pass_the_gate()?;
@@ -113,20 +111,11 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         #[cfg(not(feature = "zenoh"))]
         bail!("{NO_ZENOH}");
     }
-    // A test mode's attacks on other agents' channels come first, to race their owners.
-    #[cfg(feature = "misbehave")]
-    let _held = match mode {
-        Some(mode) => misbehave::before_opening(prefix, args.agent, mode)?,
-        None => Vec::new(),
-    };
     // The agent keeps what it sees of the mission, not the file's text.
     let ipc::Mission { view, text } = mission;
     drop(text);
-    let transport = ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, view)
-        .with_context(|| format!("opening run {prefix}"))?;
-    #[cfg(feature = "misbehave")]
-    if let Some(mode) = mode {
-        return misbehave::serve_ipc(transport, args.agent, mode);
-    }
-    test_mode::serve_as(transport, args.agent, mode)
+    mode.serve_ipc(prefix, || {
+        ipc::IpcTransport::open(prefix, args.agent, args.generation, liveness, view)
+            .with_context(|| format!("opening run {prefix}"))
+    })
 }

@@ -10,12 +10,10 @@ use anyhow::{Context, bail};
 use net::{Down, MAX_MESSAGE_BYTES, Up};
 use shared::world::scenario::Checks;
 
-use wire::misbehave::Misbehave;
-
 use crate::args::Args;
 use crate::link::{mission_view, net_move, turn_input};
 use crate::socket_link::{LinkError, SocketLink};
-use crate::test_mode::serve_as;
+use crate::test_mode::TestMode;
 use crate::transport::{Command, MissionView, Reply, Transport};
 
 /// The agent's end of its relay's socket.
@@ -103,19 +101,10 @@ pub(crate) fn serve_sandboxed_agent(
     args: &Args,
     prefix: &str,
     fd: i32,
-    mode: Option<Misbehave>,
+    mode: TestMode,
 ) -> anyhow::Result<()> {
-    #[cfg(feature = "misbehave")]
-    let _held = match mode {
-        Some(mode) => crate::misbehave::before_opening(prefix, args.agent, mode)?,
-        None => Vec::new(),
-    };
-    #[cfg(not(feature = "misbehave"))]
-    let _ = prefix;
-    if mode == Some(Misbehave::ExitBeforeReady) {
-        std::process::exit(3);
-    }
     // SAFETY: the relay handed this descriptor over; nothing else in this process owns it.
-    let transport = unsafe { SocketTransport::from_fd(fd, args.agent) };
-    serve_as(transport, args.agent, mode)
+    mode.serve_socket(prefix, || unsafe {
+        SocketTransport::from_fd(fd, args.agent)
+    })
 }

@@ -4,7 +4,8 @@
 //! `misbehave` feature (the integration tests turn it on: `cargo test --workspace`); the
 //! shipping agent has none of this code.
 //!
-//! Every mode is a decorator around the honest agent, which runs unchanged inside it:
+//! Every mode is a decorator around the honest agent, which runs unchanged inside it; the
+//! roles reach these through the agent's `TestMode` (`test_mode.rs`), never directly:
 //! - [`Misbehaving`], a [`Transport`](crate::Transport) decorator: the moves that go out
 //!   (bad moves, moves out of turn); over iceoryx2 and over Zenoh alike;
 //! - [`Tampered`], a decorator of the iceoryx2 ports ([`Channel`](crate::ipc::Channel)):
