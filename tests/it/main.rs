@@ -21,6 +21,7 @@ mod bad_maps;
 mod bench;
 mod bound;
 mod compare;
+mod controller_protocol;
 mod faults;
 mod file_imports;
 mod multiprocess;

@@ -1,6 +1,8 @@
-//! A JSON-schema check of the subset the run log's schemas use: `type` (`object`,
-//! `array`, `number`, `integer`, `string`, `boolean`), `properties`, `required`, `items`
-//! and `minimum`; `{}` allows anything. Enough to tell that a message fits its schema.
+//! A JSON-schema check of the subset the project's schemas use: `type` (`object`,
+//! `array`, `number`, `integer`, `string`, `boolean`, `null`, or a list of them),
+//! `properties`, `required`, `additionalProperties: false`, `items`, `minItems`,
+//! `maxItems`, `enum` and `minimum`; `{}` allows anything. Enough to tell that a message
+//! fits its schema.
 
 use serde_json::Value;
 
@@ -13,18 +15,47 @@ fn check_at(schema: &Value, value: &Value, at: &str) -> Result<(), String> {
     let Some(schema) = schema.as_object() else {
         return Err(format!("{at}: the schema is not an object"));
     };
-    if let Some(kind) = schema.get("type").and_then(Value::as_str) {
-        let fits = match kind {
-            "object" => value.is_object(),
-            "array" => value.is_array(),
-            "number" => value.is_number(),
-            "integer" => value.is_u64() || value.is_i64(),
-            "string" => value.is_string(),
-            "boolean" => value.is_boolean(),
-            other => return Err(format!("{at}: unknown type {other} in the schema")),
-        };
+    let kinds: Vec<&str> = match schema.get("type") {
+        Some(Value::String(kind)) => vec![kind.as_str()],
+        Some(Value::Array(kinds)) => kinds.iter().filter_map(Value::as_str).collect(),
+        _ => Vec::new(),
+    };
+    if !kinds.is_empty() {
+        let mut fits = false;
+        for kind in &kinds {
+            fits |= match *kind {
+                "object" => value.is_object(),
+                "array" => value.is_array(),
+                "number" => value.is_number(),
+                "integer" => value.is_u64() || value.is_i64(),
+                "string" => value.is_string(),
+                "boolean" => value.is_boolean(),
+                "null" => value.is_null(),
+                other => return Err(format!("{at}: unknown type {other} in the schema")),
+            };
+        }
         if !fits {
-            return Err(format!("{at}: {value} is not of type {kind}"));
+            return Err(format!(
+                "{at}: {value} is not of type {}",
+                kinds.join(" or ")
+            ));
+        }
+    }
+    if let Some(allowed) = schema.get("enum").and_then(Value::as_array)
+        && !allowed.contains(value)
+    {
+        return Err(format!("{at}: {value} is not one of {allowed:?}"));
+    }
+    if let Some(array) = value.as_array() {
+        if let Some(least) = schema.get("minItems").and_then(Value::as_u64)
+            && (array.len() as u64) < least
+        {
+            return Err(format!("{at}: fewer than {least} items"));
+        }
+        if let Some(most) = schema.get("maxItems").and_then(Value::as_u64)
+            && (array.len() as u64) > most
+        {
+            return Err(format!("{at}: more than {most} items"));
         }
     }
     if let (Some(minimum), Some(number)) = (
@@ -51,6 +82,11 @@ fn check_at(schema: &Value, value: &Value, at: &str) -> Result<(), String> {
                 if let Some(v) = object.get(key) {
                     check_at(sub, v, &format!("{at}.{key}"))?;
                 }
+            }
+            if schema.get("additionalProperties") == Some(&Value::Bool(false))
+                && let Some(extra) = object.keys().find(|k| !properties.contains_key(*k))
+            {
+                return Err(format!("{at}: `{extra}` is no property of the schema"));
             }
         }
     }

@@ -15,6 +15,8 @@
 //! - [`orca`]: the reactive baseline ORCA (RVO2, on `dodgy_2d`), cut to stay safe;
 //! - [`survival_grid`]: for how many turns an agent can keep out of the moving obstacles'
 //!   reach;
+//! - [`protocol`]: how an agent talks to a controller that is a program of the user's
+//!   (one JSON object a line over its standard input and output);
 //! - [`turn`]: one agent's turn: the turn request and every controller behind one
 //!   interface, shared by the reference simulation and the agents.
 
@@ -23,6 +25,7 @@ pub mod cbf;
 pub mod formation;
 pub mod kinematics;
 pub mod orca;
+pub mod protocol;
 pub mod safety;
 pub mod survival_grid;
 pub mod tracking;
