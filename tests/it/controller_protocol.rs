@@ -62,7 +62,16 @@ fn hello(scenario: &Scenario, agent: usize) -> Message {
 /// Agent `agent`'s turns along the first `steps` steps of the paper's centre path, each
 /// agent standing in its slot of the step before; and where its slot is at each step.
 fn paper_turns(agent: usize, steps: usize) -> (Scenario, Vec<Message>, Vec<Point>) {
-    let scenario = Scenario::paper();
+    turns_of(Scenario::paper(), agent, steps)
+}
+
+/// Agent `agent`'s turns along the first `steps` steps of `scenario`'s centre path, as
+/// [`paper_turns`].
+fn turns_of(
+    scenario: Scenario,
+    agent: usize,
+    steps: usize,
+) -> (Scenario, Vec<Message>, Vec<Point>) {
     let path = plan_centre_path(&scenario).expect("the paper's centre path");
     let slot_at = |a: usize, step: usize| scenario.agents[a].slot.ideal_position(&path[step]);
     let mut turns = Vec::new();
@@ -125,50 +134,73 @@ fn the_agent_sides_lines_fit_the_schema() {
     );
 }
 
-#[test]
-fn a_python_controller_answers_the_agent_with_moves_to_its_slot() {
-    let schema = schema();
-    let agent = 2;
-    let (scenario, turns, slots) = paper_turns(agent, 5);
-    let mut child = python()
-        .arg("examples/python/go_to_slot.py")
+/// Start `program`, send it `hello` and `turns` one line at a time, and return its
+/// answers (the ready first); it must leave cleanly when its input closes.
+fn converse(mut program: Command, hello: &Message, turns: &[Message]) -> Vec<String> {
+    let mut child = program
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
+        .stderr(Stdio::inherit())
         .spawn()
-        .expect("start python3");
+        .expect("start the controller program");
     let mut stdin = child.stdin.take().expect("stdin");
     let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
-    let mut answer = || {
+    let mut answers = Vec::new();
+    for message in std::iter::once(hello).chain(turns) {
+        stdin
+            .write_all(message.to_line().as_bytes())
+            .expect("write a line");
         let mut line = String::new();
         stdout
             .read_line(&mut line)
             .expect("a line from the program");
         assert!(line.ends_with('\n'), "an unfinished line: {line:?}");
-        line
-    };
+        answers.push(line);
+    }
+    drop(stdin); // the run ends: the program leaves
+    let status = child.wait().expect("the program ends");
+    assert!(status.success(), "the program exited with {status}");
+    answers
+}
 
-    stdin
-        .write_all(hello(&scenario, agent).to_line().as_bytes())
-        .expect("hello");
-    let ready = answer();
-    fits_schema(&schema, &ready);
-    match read_reply(ready.trim_end().as_bytes()) {
+fn python_go_to_slot() -> Command {
+    let mut c = python();
+    c.arg("examples/python/go_to_slot.py");
+    c
+}
+
+fn rust_go_to_slot() -> Command {
+    let program = crate::support::target_dir().join("examples/go_to_slot");
+    assert!(
+        program.is_file(),
+        "{} is missing: `cargo test --workspace` builds the examples",
+        program.display()
+    );
+    Command::new(program)
+}
+
+#[test]
+fn a_python_controller_answers_the_agent_with_moves_to_its_slot() {
+    let schema = schema();
+    let agent = 2;
+    let (scenario, turns, slots) = paper_turns(agent, 5);
+    let answers = converse(python_go_to_slot(), &hello(&scenario, agent), &turns);
+    for line in &answers {
+        fits_schema(&schema, line);
+    }
+    match read_reply(answers[0].trim_end().as_bytes()) {
         Ok(Reply::Ready(r)) => {
             assert_eq!(r.protocol, PROTOCOL_VERSION);
             assert_eq!(r.name.as_deref(), Some("go-to-slot"));
         }
         other => panic!("expected ready, got {other:?}"),
     }
-    for (turn, slot) in turns.iter().zip(&slots) {
-        stdin.write_all(turn.to_line().as_bytes()).expect("turn");
-        let line = answer();
-        fits_schema(&schema, &line);
+    // No top speed in the paper: the naive move ends at the slot.
+    assert!(scenario.agents[agent].max_step_m.is_none());
+    for (line, slot) in answers[1..].iter().zip(&slots) {
         match read_reply(line.trim_end().as_bytes()) {
-            Ok(Reply::Move { waypoints_m, .. }) => {
-                let [x, y] = *waypoints_m.last().expect("a waypoint");
-                // No top speed in the paper: the naive move ends at the slot.
-                assert!(scenario.agents[agent].max_step_m.is_none());
+            Ok(Reply::Move(m)) => {
+                let [x, y] = *m.waypoints_m.last().expect("a waypoint");
                 assert!(
                     (x - slot.x).abs() < 1e-9 && (y - slot.y).abs() < 1e-9,
                     "ended at ({x}, {y}), the slot is {slot:?}"
@@ -177,9 +209,51 @@ fn a_python_controller_answers_the_agent_with_moves_to_its_slot() {
             other => panic!("expected a move, got {other:?}"),
         }
     }
-    drop(stdin); // the run ends: the program leaves
-    let status = child.wait().expect("python3 ends");
-    assert!(status.success(), "the program exited with {status}");
+}
+
+#[test]
+fn the_rust_and_the_python_sdks_answer_alike() {
+    // A top speed short of the slot, so that both cut the move.
+    let mut scenario = Scenario::paper();
+    for a in &mut scenario.agents {
+        a.max_step_m = Some(0.05);
+    }
+    let agent = 4;
+    let (scenario, turns, _) = turns_of(scenario, agent, 6);
+    let hello = hello(&scenario, agent);
+    let python = converse(python_go_to_slot(), &hello, &turns);
+    let rust = converse(rust_go_to_slot(), &hello, &turns);
+    assert_eq!(python.len(), rust.len());
+    let replies = |lines: &[String]| -> Vec<Reply> {
+        lines
+            .iter()
+            .map(|l| read_reply(l.trim_end().as_bytes()).unwrap_or_else(|e| panic!("{l}: {e}")))
+            .collect()
+    };
+    let (python, rust) = (replies(&python), replies(&rust));
+    assert_eq!(python[0], rust[0], "the ready lines differ");
+    for (step, (p, r)) in python[1..].iter().zip(&rust[1..]).enumerate() {
+        let (Reply::Move(p), Reply::Move(r)) = (p, r) else {
+            panic!("turn {step}: {p:?} and {r:?}");
+        };
+        assert_eq!(p.waypoints_m.len(), r.waypoints_m.len());
+        for (a, b) in p.waypoints_m.iter().zip(&r.waypoints_m) {
+            assert!(
+                (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12,
+                "turn {step}: python {a:?}, rust {b:?}"
+            );
+        }
+        let [x, y] = *r.waypoints_m.last().expect("a waypoint");
+        let Message::Turn(turn) = &turns[step] else {
+            unreachable!("turns_of makes turns")
+        };
+        let [x0, y0] = turn.position_m;
+        assert!(
+            ((x - x0).hypot(y - y0) - 0.05).abs() < 1e-9,
+            "turn {step}: a move of {} m, not the top speed",
+            (x - x0).hypot(y - y0)
+        );
+    }
 }
 
 #[test]

@@ -278,6 +278,19 @@ impl Turn {
     }
 }
 
+impl Turn {
+    /// Where `agent`'s slot is this turn: the paper's ideal position, the slot turned by
+    /// the centre's heading (`x + r cos(h + theta)`, `y + r sin(h + theta)`, as the Python
+    /// SDK's `Turn.slot_position_m`).
+    pub fn slot_position_m(&self, agent: &AgentInfo) -> XY {
+        let angle = self.centre.heading_rad + agent.slot_theta_rad;
+        [
+            self.centre.position_m[0] + agent.slot_r_m * angle.cos(),
+            self.centre.position_m[1] + agent.slot_r_m * angle.sin(),
+        ]
+    }
+}
+
 fn mate_info(m: &MateView) -> MateInfo {
     MateInfo {
         index: m.agent,

@@ -19,16 +19,19 @@
 //! through the same checks as any controller's (the recorder's and the monitor's).
 //!
 //! `docs/controllers.md` is the reference a user writes a controller from; the Python
-//! and Rust SDKs speak this protocol.
+//! SDK (`shared/python`) and the Rust one ([`ProgramController`] and [`serve`]) speak
+//! this protocol.
 
 mod messages;
+mod program;
 mod reply;
 
 pub use messages::{
     AgentInfo, Circle, Hello, KinematicsInfo, MateInfo, Message, MissionInfo, PoseInfo, Ready,
     Turn, VelocitiesInfo, XY,
 };
-pub use reply::{MAX_NAME_CHARS, Reply, ReplyError, read_reply};
+pub use program::{ProgramController, ServeError, serve};
+pub use reply::{MAX_NAME_CHARS, MoveReply, Reply, ReplyError, read_reply};
 
 /// The version of the protocol the agent speaks: a program answers [`Ready`] with the
 /// same number, or the agent stops it.

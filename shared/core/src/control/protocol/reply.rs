@@ -17,19 +17,32 @@ pub const MAX_NAME_CHARS: usize = 64;
 pub enum Reply {
     /// The answer to the hello.
     Ready(Ready),
-    /// A move: the polyline the agent follows this turn, from where it stands (its first
-    /// waypoint may be where it stands, or the first point it goes to).
-    Move {
-        /// The waypoints, metres: at least one, at most
-        /// [`MAX_WAYPOINTS`](crate::control::vocabulary::MAX_WAYPOINTS).
-        waypoints_m: Vec<XY>,
-        /// The heading the agent ends with, radians, for a unicycle or a car (required
-        /// for them, ignored for a holonomic agent).
-        #[serde(default)]
-        end_heading_rad: Option<f64>,
-    },
+    /// A move.
+    Move(MoveReply),
     /// The agent stays where it stands this turn.
     Stay,
+}
+
+/// A move: the polyline the agent follows this turn, from where it stands (its first
+/// waypoint may be where it stands, or the first point it goes to).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MoveReply {
+    /// The waypoints, metres: at least one, at most
+    /// [`MAX_WAYPOINTS`](crate::control::vocabulary::MAX_WAYPOINTS).
+    pub waypoints_m: Vec<XY>,
+    /// The heading the agent ends with, radians, for a unicycle or a car (required for
+    /// them, ignored for a holonomic agent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_heading_rad: Option<f64>,
+}
+
+impl Reply {
+    /// The reply as one line of JSON, its newline included.
+    pub fn to_line(&self) -> String {
+        let mut line = serde_json::to_string(self).unwrap_or_else(|_| String::from("{}"));
+        line.push('\n');
+        line
+    }
 }
 
 /// Why a line from a program is not a reply.
@@ -74,7 +87,7 @@ pub enum ReplyError {
 /// use shared::control::protocol::{Reply, ReplyError, read_reply};
 ///
 /// let reply = read_reply(br#"{"type": "move", "waypoints_m": [[1.0, 2.0], [1.5, 2.0]]}"#);
-/// assert!(matches!(reply, Ok(Reply::Move { ref waypoints_m, .. }) if waypoints_m.len() == 2));
+/// assert!(matches!(reply, Ok(Reply::Move(ref m)) if m.waypoints_m.len() == 2));
 /// assert_eq!(read_reply(br#"{"type": "stay"}"#), Ok(Reply::Stay));
 /// assert!(matches!(read_reply(b"stay"), Err(ReplyError::Malformed { .. })));
 /// ```
@@ -98,10 +111,10 @@ fn check(reply: &Reply) -> Result<(), ReplyError> {
                 return Err(ReplyError::BadName);
             }
         }
-        Reply::Move {
+        Reply::Move(MoveReply {
             waypoints_m,
             end_heading_rad,
-        } => {
+        }) => {
             if waypoints_m.is_empty() {
                 return Err(ReplyError::NoWaypoints);
             }
@@ -204,10 +217,10 @@ mod tests {
         );
         assert_eq!(
             read_reply(br#"{"type": "move", "waypoints_m": [[1, 2]], "end_heading_rad": 0.5}"#),
-            Ok(Reply::Move {
+            Ok(Reply::Move(MoveReply {
                 waypoints_m: vec![[1.0, 2.0]],
                 end_heading_rad: Some(0.5)
-            })
+            }))
         );
     }
 
@@ -222,7 +235,7 @@ mod tests {
             x in proptest::num::f64::ANY, y in proptest::num::f64::ANY, h in proptest::num::f64::ANY,
         ) {
             let line = serde_json::json!({"type": "move", "waypoints_m": [[x, y]], "end_heading_rad": h});
-            if let Ok(Reply::Move { waypoints_m, end_heading_rad }) = read_reply(line.to_string().as_bytes()) {
+            if let Ok(Reply::Move(MoveReply { waypoints_m, end_heading_rad })) = read_reply(line.to_string().as_bytes()) {
                 proptest::prop_assert!(waypoints_m.iter().flatten().all(|v| v.is_finite()));
                 proptest::prop_assert!(end_heading_rad.is_none_or(f64::is_finite));
             }
