@@ -24,6 +24,7 @@ mod compare;
 mod controller_protocol;
 mod faults;
 mod file_imports;
+mod file_sizes;
 mod multiprocess;
 mod outputs;
 mod parallel_kill;
