@@ -2,7 +2,7 @@
 //! that outgrows this is split along its parts (the vendored Zenoh TLS link, not ours,
 //! keeps its own files).
 
-use std::path::{Path, PathBuf};
+use testkit::rust_source::files_under;
 
 use crate::support::repo_root;
 
@@ -12,27 +12,9 @@ const MAX_LINES: usize = 600;
 /// Folders that hold no source of the project's own.
 const SKIPPED: [&str; 5] = ["target", ".git", "runs", "zenoh-link-tls", "__pycache__"];
 
-/// Every `.rs` and `.py` file under `dir`, the skipped folders left out.
-fn source_files(dir: &Path, found: &mut Vec<PathBuf>) {
-    let entries = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-    for entry in entries {
-        let path = entry.expect("a folder entry").path();
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        if path.is_dir() {
-            if !SKIPPED.contains(&name) {
-                source_files(&path, found);
-            }
-        } else if name.ends_with(".rs") || name.ends_with(".py") {
-            found.push(path);
-        }
-    }
-}
-
 #[test]
 fn no_source_file_is_over_600_lines() {
-    let root = repo_root();
-    let mut files = Vec::new();
-    source_files(&root, &mut files);
+    let files = files_under(&repo_root(), &["rs", "py"], &SKIPPED);
     assert!(
         files.len() > 200,
         "only {} source files found: the walk is wrong",

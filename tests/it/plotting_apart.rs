@@ -9,29 +9,29 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use crate::support::repo_root;
 
-/// Every package of `Cargo.lock` and the names of the packages it depends on.
+/// Every package of `Cargo.lock` and the names of the packages it depends on (an entry
+/// is `"name"` or `"name version"`).
 fn lock_graph(lock: &str) -> BTreeMap<String, Vec<String>> {
+    let lock: toml::Table = lock.parse().expect("Cargo.lock is TOML");
+    let packages = lock
+        .get("package")
+        .and_then(toml::Value::as_array)
+        .expect("Cargo.lock lists its packages");
     let mut graph = BTreeMap::new();
-    for block in lock.split("[[package]]").skip(1) {
-        let mut name = None;
-        let mut deps = Vec::new();
-        let mut in_deps = false;
-        for line in block.lines().map(str::trim) {
-            if let Some(n) = line.strip_prefix("name = ") {
-                name = Some(n.trim_matches('"').to_string());
-            } else if line == "dependencies = [" {
-                in_deps = true;
-            } else if in_deps && line == "]" {
-                in_deps = false;
-            } else if in_deps {
-                // `"name"` or `"name version"` or `"name version (source)"`.
-                let entry = line.trim_end_matches(',').trim_matches('"');
-                let dep = entry.split(' ').next().unwrap_or(entry);
-                deps.push(dep.to_string());
-            }
-        }
-        let name = name.expect("every [[package]] of Cargo.lock has a name");
-        graph.entry(name).or_insert_with(Vec::new).extend(deps);
+    for package in packages {
+        let name = package["name"].as_str().expect("a package's name");
+        let deps = package
+            .get("dependencies")
+            .and_then(toml::Value::as_array)
+            .into_iter()
+            .flatten()
+            .filter_map(toml::Value::as_str)
+            .filter_map(|entry| entry.split(' ').next())
+            .map(str::to_string);
+        graph
+            .entry(name.to_string())
+            .or_insert_with(Vec::new)
+            .extend(deps);
     }
     graph
 }

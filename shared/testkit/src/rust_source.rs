@@ -6,14 +6,27 @@ use std::path::{Path, PathBuf};
 
 /// Every `.rs` file under `dir`, sorted.
 pub fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    files_under(dir, &["rs"], &[])
+}
+
+/// Every file under `dir` whose extension is one of `extensions`, sorted, the folders
+/// named in `skipped` (anywhere below `dir`) left out.
+pub fn files_under(dir: &Path, extensions: &[&str], skipped: &[&str]) -> Vec<PathBuf> {
     let mut files = Vec::new();
     let mut pending = vec![dir.to_path_buf()];
     while let Some(dir) = pending.pop() {
         for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
             let path = entry.expect("directory entry").path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
             if path.is_dir() {
-                pending.push(path);
-            } else if path.extension().is_some_and(|x| x == "rs") {
+                if !skipped.contains(&name) {
+                    pending.push(path);
+                }
+            } else if path
+                .extension()
+                .and_then(|x| x.to_str())
+                .is_some_and(|x| extensions.contains(&x))
+            {
                 files.push(path);
             }
         }

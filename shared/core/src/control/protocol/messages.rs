@@ -166,21 +166,13 @@ impl MissionInfo {
             obstacles: obstacles.iter().map(Circle::of_disk).collect(),
             polygons_m: polygons.iter().map(corners).collect(),
             agents: agents.iter().map(AgentInfo::from).collect(),
-            turns: turn_mode_name(turns).to_string(),
+            turns: turns.name().to_string(),
         }
     }
 }
 
 fn corners(p: &Polygon) -> Vec<XY> {
     p.vertices().iter().copied().map(xy).collect()
-}
-
-fn turn_mode_name(mode: TurnMode) -> &'static str {
-    match mode {
-        TurnMode::Sequential => "sequential",
-        TurnMode::Parallel => "parallel",
-        TurnMode::Simultaneous => "simultaneous",
-    }
 }
 
 /// The first line an agent sends its program.
@@ -283,11 +275,9 @@ impl Turn {
     /// the centre's heading (`x + r cos(h + theta)`, `y + r sin(h + theta)`, as the Python
     /// SDK's `Turn.slot_position_m`).
     pub fn slot_position_m(&self, agent: &AgentInfo) -> XY {
-        let angle = self.centre.heading_rad + agent.slot_theta_rad;
-        [
-            self.centre.position_m[0] + agent.slot_r_m * angle.cos(),
-            self.centre.position_m[1] + agent.slot_r_m * angle.sin(),
-        ]
+        let [x, y] = self.centre.position_m;
+        let centre = Pose::new(x, y, self.centre.heading_rad);
+        xy(Slot::new(agent.slot_r_m, agent.slot_theta_rad).ideal_position(&centre))
     }
 }
 
@@ -312,10 +302,6 @@ pub enum Message {
 impl Message {
     /// The message as one line of JSON, its newline included.
     pub fn to_line(&self) -> String {
-        // Serialising plain numbers, strings and lists cannot fail; a non-finite number
-        // (which the agent never sends) would be written `null`.
-        let mut line = serde_json::to_string(self).unwrap_or_else(|_| String::from("{}"));
-        line.push('\n');
-        line
+        super::json_line(self)
     }
 }

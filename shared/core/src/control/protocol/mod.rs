@@ -40,3 +40,11 @@ pub const PROTOCOL_VERSION: u32 = 1;
 /// The longest line either side may send, in bytes, its newline included: a mission with
 /// thousands of polygon corners fits, a flood does not.
 pub const MAX_LINE_BYTES: usize = 4 << 20;
+
+/// `value` as one line of JSON, its newline included. Serialising the protocol's plain
+/// numbers, strings and lists cannot fail; a non-finite number would be written `null`.
+fn json_line(value: &impl serde::Serialize) -> String {
+    let mut line = serde_json::to_string(value).unwrap_or_else(|_| String::from("{}"));
+    line.push('\n');
+    line
+}

@@ -39,9 +39,7 @@ pub struct MoveReply {
 impl Reply {
     /// The reply as one line of JSON, its newline included.
     pub fn to_line(&self) -> String {
-        let mut line = serde_json::to_string(self).unwrap_or_else(|_| String::from("{}"));
-        line.push('\n');
-        line
+        super::json_line(self)
     }
 }
 
